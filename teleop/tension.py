@@ -1,0 +1,72 @@
+"""Tension distribution: feasible cable tensions t in [t_min, t_max] with A t + f = 0 (seed 000 eq 8).
+
+With six cables and five cable-controlled degrees of freedom, A has a one-dimensional null space n > 0:
+t = t_p + lambda n, where t_p is the minimum-norm particular solution. Among feasible tensions the one
+closest to a reference pretension level t_ref is chosen (closed form for one null direction, a small QP
+otherwise). Used by the simulated robot and for pretension; pure numpy/scipy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from teleop.errors import InfeasibleError
+
+
+def wrench2tensions(f, A: np.ndarray, t_min: float, t_max: float, t_ref: float | None = None,
+                    tol: float = 1e-9) -> np.ndarray:
+    """(6,) cable tensions [N] that balance the external wrench f (6,) [N, N m]: A t + f = 0.
+
+    Raises InfeasibleError when f is outside the wrench-feasible set: either no tension vector produces it
+    (e.g. a moment about the shaft axis) or every one that does violates [t_min, t_max].
+    """
+    f = np.asarray(f, dtype=float)
+    if f.shape != (6,) or not np.isfinite(f).all():
+        raise InfeasibleError(f"wrench must be 6 finite numbers, got {np.asarray(f).tolist()}")
+    if t_ref is None:
+        t_ref = 0.5 * (t_min + t_max)
+    U, s, Vt = np.linalg.svd(A)
+    rank = int((s > tol * max(1.0, s[0])).sum())
+    # t_p = -A^+ f (minimum norm), N = null-space basis (6 x k)
+    t_p = -(Vt[:rank].T @ ((U[:, :rank].T @ f) / s[:rank]))
+    resid = A @ t_p + f
+    scale = max(1.0, float(np.abs(f).max()))
+    if np.abs(resid).max() > 1e-7 * scale:
+        raise InfeasibleError(
+            f"wrench {np.round(f, 6).tolist()} has a component no cable tensions can produce "
+            f"(residual {np.abs(resid).max():.3g}); for this robot that is a moment about the shaft axis")
+    N = Vt[rank:].T
+    k = N.shape[1]
+    if k == 0:
+        t = t_p
+    elif k == 1:
+        n = N[:, 0] * np.sign(N[:, 0].sum() or 1.0)
+        lo, hi = -np.inf, np.inf
+        for ti, ni in zip(t_p, n):
+            if abs(ni) < 1e-12:
+                if not (t_min - 1e-9 <= ti <= t_max + 1e-9):
+                    lo, hi = np.inf, -np.inf
+                continue
+            a, b = (t_min - ti) / ni, (t_max - ti) / ni
+            lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
+        if lo > hi + 1e-12:
+            raise InfeasibleError(
+                f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set for tensions in "
+                f"[{t_min:g}, {t_max:g}] N")
+        lam = float(np.clip(n @ (t_ref - t_p) / (n @ n), lo, hi))  # closest to t_ref, clipped
+        t = t_p + lam * n
+    else:
+        from scipy.optimize import minimize
+
+        res = minimize(lambda z: np.sum((t_p + N @ z - t_ref) ** 2), np.zeros(k), method="SLSQP",
+                       constraints=[{"type": "ineq", "fun": lambda z: t_p + N @ z - t_min},
+                                    {"type": "ineq", "fun": lambda z: t_max - (t_p + N @ z)}])
+        t = t_p + N @ res.x
+        if not res.success or (t < t_min - 1e-6).any() or (t > t_max + 1e-6).any():
+            raise InfeasibleError(f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set")
+    return np.clip(t, t_min, t_max)
+
+
+def tensions2wrench(t, A: np.ndarray) -> np.ndarray:
+    """(6,) external wrench f = -A t balanced by cable tensions t (6,) [N] (eq 8)."""
+    return -(A @ np.asarray(t, dtype=float))
