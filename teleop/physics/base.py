@@ -1,0 +1,272 @@
+"""The pieces every effect is made of: named signals, parameter specs, the Effect record and the registry.
+
+- `Signals`: a frozen bundle of equal-length 1-D arrays over time (SI units), the input of every effect.
+- `ParamSpec`: one parameter's name, unit, fit bounds, typical value and meaning.
+- `Effect`: one model = pure array function `simulate(signals, params) -> (n,)`, a per-sample `Step`
+  class with the same math, a `guess(signals, y) -> params` for fitting, and its parameter specs.
+- `REGISTRY` / `get_effect(name)`: the catalogue by canonical name (DESIGN.md).
+
+Parameters travel as plain ``{name: float}`` dicts so they map one-to-one to JSON and to fit vectors.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+import numpy as np
+
+from teleop.errors import InputError
+
+#: channel name -> meaning and unit; every Signals field except t is optional.
+CHANNELS: dict[str, str] = {
+    "t": "time [s]",
+    "x": "input (motor, proximal) position [m or rad]; increasing x = the motor hauls the cable in (pulling)",
+    "v": "velocity of x [m/s or rad/s]; derived from x by central differences when not given",
+    "load": "distal (tip) force [N or N m]",
+    "force": "a force channel the effect modifies (sensor reading, contact force) [N or N m]",
+    "temperature": "temperature at the sensor [degC]",
+    "theta": "accumulated sheath bend angle along the cable route [rad]",
+    "d": "contact indentation [m]; d <= 0 means no contact",
+    "d_dot": "indentation rate [m/s]; derived from d when not given",
+}
+
+LINKS = ("position", "force", "sensor", "contact")
+
+
+@dataclass(frozen=True, eq=False)
+class Signals:
+    """Equal-length (n,) float arrays over time. Missing channels are None.
+
+    `v` is derived from `x`, and `d_dot` from `d`, with `np.gradient` (central differences) when absent.
+    """
+
+    t: np.ndarray
+    x: np.ndarray | None = None
+    v: np.ndarray | None = None
+    load: np.ndarray | None = None
+    force: np.ndarray | None = None
+    temperature: np.ndarray | None = None
+    theta: np.ndarray | None = None
+    d: np.ndarray | None = None
+    d_dot: np.ndarray | None = None
+
+    def __post_init__(self):
+        t = np.asarray(self.t, dtype=float)
+        if t.ndim != 1 or t.size < 2:
+            raise InputError(f"signals: 't' must be a 1-D array of at least 2 samples, got shape {t.shape}")
+        if not np.isfinite(t).all() or np.any(np.diff(t) <= 0):
+            raise InputError("signals: 't' must be finite and strictly increasing")
+        object.__setattr__(self, "t", t)
+        for name in CHANNELS:
+            if name == "t":
+                continue
+            a = getattr(self, name)
+            if a is None:
+                continue
+            a = np.asarray(a, dtype=float)
+            if a.ndim == 0:
+                a = np.full(t.shape, float(a))
+            if a.shape != t.shape:
+                raise InputError(f"signals: channel '{name}' has shape {a.shape}, expected {t.shape} like 't'")
+            if not np.isfinite(a).all():
+                raise InputError(f"signals: channel '{name}' holds NaN or inf")
+            object.__setattr__(self, name, a)
+        if self.x is not None and self.v is None:
+            object.__setattr__(self, "v", np.gradient(self.x, t))
+        if self.d is not None and self.d_dot is None:
+            object.__setattr__(self, "d_dot", np.gradient(self.d, t))
+
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return int(self.t.shape[0])
+
+    def __getitem__(self, name: str) -> np.ndarray | None:
+        if name not in CHANNELS:
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def channels(self) -> tuple[str, ...]:
+        """Names of the channels present."""
+        return tuple(c for c in CHANNELS if getattr(self, c) is not None)
+
+    def replace(self, **changes) -> "Signals":
+        """A copy with channels replaced; replacing x (or d) without v (or d_dot) re-derives the rate."""
+        if "x" in changes and "v" not in changes:
+            changes["v"] = None
+        if "d" in changes and "d_dot" not in changes:
+            changes["d_dot"] = None
+        return dataclasses.replace(self, **changes)
+
+    def window(self, index) -> "Signals":
+        """Samples `index` (slice or index array) of every channel."""
+        kw = {c: getattr(self, c)[index] for c in self.channels()}
+        return Signals(**kw)
+
+    def require(self, names, who: str) -> None:
+        """Raise InputError naming `who` and the first missing channel."""
+        for name in names:
+            if getattr(self, name) is None:
+                raise InputError(f"{who}: needs signal channel '{name}' ({CHANNELS[name]})")
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One model parameter: SI unit, fit bounds [lower, upper], a typical value, and its meaning.
+
+    `log=True` fits it on a log scale (for quantities spanning decades; then lower > 0).
+    """
+
+    name: str
+    unit: str
+    lower: float
+    upper: float
+    default: float
+    doc: str
+    log: bool = False
+
+    def __post_init__(self):
+        if not self.lower < self.upper or (self.log and self.lower <= 0):
+            raise ValueError(f"ParamSpec {self.name}: bad bounds [{self.lower}, {self.upper}]")
+
+    def to_unit(self, value: float) -> float:
+        """Map a value in [lower, upper] to [0, 1] (linearly or in log)."""
+        if self.log:
+            return (math.log(value) - math.log(self.lower)) / (math.log(self.upper) - math.log(self.lower))
+        return (value - self.lower) / (self.upper - self.lower)
+
+    def from_unit(self, u: float) -> float:
+        """Inverse of `to_unit`."""
+        if self.log:
+            return math.exp(math.log(self.lower) + u * (math.log(self.upper) - math.log(self.lower)))
+        return self.lower + u * (self.upper - self.lower)
+
+    def dvalue_du(self, value: float) -> float:
+        """d value / d u at `value` (for standard errors)."""
+        if self.log:
+            return value * (math.log(self.upper) - math.log(self.lower))
+        return self.upper - self.lower
+
+    def clip(self, value: float) -> float:
+        """`value` clipped into [lower, upper]."""
+        return float(min(max(value, self.lower), self.upper))
+
+
+class Step:
+    """Per-sample (real-time) form of an effect: same math as the array form, state held here.
+
+    Subclasses set `effect_name`, implement `reset()` and `step(<channels>) -> float` whose keyword names
+    are the effect's input channels (e.g. `BacklashStep.step(x)`), and read parameters from
+    `self.params`. The first `step` call initialises the state exactly as the array form does.
+    """
+
+    effect_name: str = ""
+
+    def __init__(self, params: Mapping[str, float] | None = None):
+        self.params = get_effect(self.effect_name).check(params)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the state; the next `step` starts afresh."""
+        raise NotImplementedError
+
+    def step(self, **u) -> float:
+        """Advance one sample and return the output channel's value."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One named model of the catalogue.
+
+    name: canonical name (registry key); link: 'position' | 'force' | 'sensor' | 'contact';
+    inputs: channels `simulate` and `Step.step` need; optional: channels used when present;
+    output: the channel the result stands for (chaining writes it back there);
+    simulate(signals, params) -> (n,) array; guess(signals, y) -> params dict; step_class: Step subclass.
+    """
+
+    name: str
+    link: str
+    doc: str
+    params: tuple[ParamSpec, ...]
+    inputs: tuple[str, ...]
+    output: str
+    simulate: Callable[[Signals, Mapping[str, float]], np.ndarray]
+    guess: Callable[[Signals, np.ndarray], dict]
+    step_class: type
+    optional: tuple[str, ...] = field(default=())
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.params)
+
+    def spec(self, name: str) -> ParamSpec:
+        """The ParamSpec called `name`."""
+        for p in self.params:
+            if p.name == name:
+                return p
+        raise InputError(f"effect '{self.name}': unknown parameter '{name}' (expected {list(self.param_names)})")
+
+    def defaults(self) -> dict:
+        """Typical parameter values."""
+        return {p.name: p.default for p in self.params}
+
+    def check(self, params: Mapping[str, float] | None) -> dict:
+        """A full, validated {name: float} dict: missing names take defaults, unknown names raise."""
+        out = self.defaults()
+        if params is None:
+            return out
+        for k, v in dict(params).items():
+            if k not in out:
+                raise InputError(f"effect '{self.name}': unknown parameter '{k}' "
+                                 f"(expected {list(self.param_names)})")
+            v = float(v)
+            if not math.isfinite(v):
+                raise InputError(f"effect '{self.name}': parameter '{k}' must be finite, got {v}")
+            out[k] = v
+        return out
+
+    def apply(self, signals: Signals, params: Mapping[str, float] | None = None) -> np.ndarray:
+        """The output channel (n,) for `signals` under `params` (defaults where missing)."""
+        signals.require(self.inputs, f"effect '{self.name}'")
+        return self.simulate(signals, self.check(params))
+
+    def make_step(self, params: Mapping[str, float] | None = None) -> Step:
+        """A fresh per-sample simulator with these parameters."""
+        return self.step_class(params)
+
+    def initial_guess(self, signals: Signals, y: np.ndarray) -> dict:
+        """Data-driven starting point for a fit, clipped into the bounds."""
+        g = self.check(self.guess(signals, np.asarray(y, dtype=float)))
+        return {p.name: p.clip(g[p.name]) for p in self.params}
+
+
+REGISTRY: dict[str, Effect] = {}
+
+
+def register(effect: Effect) -> Effect:
+    """Add `effect` to REGISTRY under its name (once) and return it."""
+    if effect.name in REGISTRY:
+        raise ValueError(f"effect '{effect.name}' registered twice")
+    if effect.link not in LINKS:
+        raise ValueError(f"effect '{effect.name}': link must be one of {LINKS}")
+    REGISTRY[effect.name] = effect
+    return effect
+
+
+def get_effect(name: str) -> Effect:
+    """The registered effect called `name`; InputError listing the known names otherwise."""
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise InputError(f"unknown effect '{name}' (known: {', '.join(sorted(REGISTRY))})") from None
+
+
+def motion_sign(x: np.ndarray) -> np.ndarray:
+    """(n,) sign of the increment x_k - x_{k-1} (first sample: 0)."""
+    s = np.zeros(x.shape)
+    s[1:] = np.sign(np.diff(x))
+    return s

@@ -1,0 +1,172 @@
+"""Capstan (tendon-sheath) friction: T_load = T_hold exp(mu Theta) (seed 000 eqs 3, 7; seed 001 eqs 4-7).
+
+Conventions: the motor (proximal) force F_m and the tip (distal) force F_t; x increasing means the motor
+hauls the cable in (pulling phase, seed 001 xi > 0), decreasing means it pays out (releasing phase).
+While pulling F_m = F_t exp(+mu Theta); while releasing F_m = F_t exp(-mu Theta). During a reversal
+the cable sticks in the sheath: the tip force stays constant while the motor force travels between the
+two lines (seed 001 Fig 2b, "flat transitions"). This is modelled as a play operator in force: the motor
+force follows the cable stretch, F_m <- F_m + k dx, clamped to the band
+[F_t exp(-mu Theta), F_t exp(+mu Theta)]; k [N/m] is the stick stiffness seen at the motor. k -> inf
+gives the plain sign(dx) switch. The inverse (compensation) needs no k: the tip force is the play of the
+motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from teleop.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.physics.scan import clamp_scan, clamp_step
+
+
+def capstan_out(T_in, mu, theta):
+    """Output tension of a capstan driven by T_in: T_out = T_in exp(-mu theta). Broadcasts (e.g. (6,) cables)."""
+    return np.asarray(T_in, dtype=float) * np.exp(-np.asarray(mu, dtype=float) * np.asarray(theta, dtype=float))
+
+
+def capstan_in(T_out, mu, theta):
+    """Inverse of `capstan_out`: the driving tension that holds T_out, T_in = T_out exp(mu theta)."""
+    return np.asarray(T_out, dtype=float) * np.exp(np.asarray(mu, dtype=float) * np.asarray(theta, dtype=float))
+
+
+def _direction(pulling):
+    """+1 for pulling, -1 for releasing; accepts bools or signed numbers (0 counts as pulling, seed 001 eq 5)."""
+    p = np.asarray(pulling)
+    if p.dtype == bool:
+        return np.where(p, 1.0, -1.0)
+    return np.where(p >= 0, 1.0, -1.0)
+
+
+def tip2motor(F_tip, mu, theta, pulling):
+    """Motor force [N] from tip force [N]: F_m = F_t exp(+/- mu theta), + while pulling (sign(dx) switch)."""
+    return np.asarray(F_tip, dtype=float) * np.exp(_direction(pulling) * np.asarray(mu) * np.asarray(theta))
+
+
+def motor2tip(F_motor, mu, theta, pulling):
+    """Compensation, inverse of `tip2motor`: F_t = F_m exp(-/+ mu theta) (seed 000 eq 7: T_hold = T_load e^-mu theta)."""
+    return np.asarray(F_motor, dtype=float) * np.exp(-_direction(pulling) * np.asarray(mu) * np.asarray(theta))
+
+
+def capstan_band(F_tip, mu, theta):
+    """(lo, hi) motor forces reachable for tip force F_tip: the releasing and pulling lines, lo <= hi."""
+    a = np.asarray(F_tip, dtype=float) * np.exp(-np.asarray(mu) * np.asarray(theta))
+    b = np.asarray(F_tip, dtype=float) * np.exp(np.asarray(mu) * np.asarray(theta))
+    return np.minimum(a, b), np.maximum(a, b)
+
+
+def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
+    """(n,) motor force [N] with stick transitions at reversals.
+
+    x (n,) motor position [m], F_tip (n,) tip force [N], theta scalar or (n,) [rad], k stick stiffness
+    [N/m]; F0 initial motor force (default F_tip[0], inside the band).
+    F_m,k = clamp(F_m,k-1 + k (x_k - x_k-1), F_t,k e^-mu theta, F_t,k e^+mu theta).
+    """
+    x = np.asarray(x, dtype=float)
+    lo, hi = capstan_band(F_tip, mu, theta)
+    lo = np.broadcast_to(lo, x.shape)
+    hi = np.broadcast_to(hi, x.shape)
+    S = np.zeros(x.shape)
+    np.cumsum(k * np.diff(x), out=S[1:])
+    # z = F_m - S turns clamp(F + k dx) into a pure clamp recursion
+    y0 = float(np.asarray(F_tip, dtype=float).ravel()[0]) if F0 is None else float(F0)
+    return clamp_scan(y0, lo - S, hi - S) + S
+
+
+def motor2tip_transitions(F_motor, mu, theta, F0=None):
+    """(n,) tip force [N] estimated from motor force (n,) [N] with flat transitions (direction-free).
+
+    F_t,k = clamp(F_t,k-1, F_m,k e^-mu theta, F_m,k e^+mu theta); F0 default F_motor[0].
+    Inverts `tip2motor_transitions` whenever the tip force is constant during reversals.
+    """
+    F_motor = np.asarray(F_motor, dtype=float)
+    lo, hi = capstan_band(F_motor, mu, theta)
+    y0 = float(F_motor.ravel()[0]) if F0 is None else float(F0)
+    return clamp_scan(y0, np.broadcast_to(lo, F_motor.shape), np.broadcast_to(hi, F_motor.shape))
+
+
+def _theta(signals: Signals, params: Mapping[str, float]):
+    return signals.theta if signals.theta is not None else params["theta"]
+
+
+def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return tip2motor_transitions(signals.x, signals.load, p["mu"], _theta(signals, p), p["k"])
+
+
+def _guess(signals: Signals, y: np.ndarray) -> dict:
+    th = _theta(signals, {"theta": PARAMS[1].default})
+    ok = (np.abs(signals.load) > 1e-3 * max(np.abs(signals.load).max(), 1e-12)) & (np.abs(y) > 0)
+    ratio = np.abs(np.log(np.abs(y[ok]) / np.abs(signals.load[ok]))) if ok.any() else np.array([0.1])
+    mu = float(np.percentile(ratio, 90) / np.mean(th)) if np.mean(th) > 0 else 0.1
+    # stick stiffness: band width over the motor travel needed to cross it, from the largest dF/dx
+    dx = np.diff(signals.x)
+    dF = np.diff(y)
+    moving = np.abs(dx) > 1e-12
+    k = float(np.percentile(np.abs(dF[moving] / dx[moving]), 95)) if moving.sum() > 10 else PARAMS[2].default
+    return {"mu": mu, "theta": float(np.mean(th)), "k": k}
+
+
+PARAMS = (
+    ParamSpec("mu", "1", 0.0, 1.5, 0.056, "sheath friction coefficient"),
+    ParamSpec("theta", "rad", 0.0, 8 * np.pi, np.deg2rad(140.0),
+              "total wrap angle Theta (ignored when the signals carry a 'theta' channel; "
+              "mu and theta are identifiable only as a product: fix one when fitting)"),
+    ParamSpec("k", "N/m", 1.0, 1e8, 2e4, "stick stiffness during reversals (motor force per motor travel)",
+              log=True),
+)
+
+
+class CapstanStep(Step):
+    """Per-sample capstan_friction: step(x, load, theta=None) -> motor force [N]."""
+
+    effect_name = "capstan_friction"
+
+    def reset(self) -> None:
+        self.x_prev = None
+        self.F = 0.0
+
+    def step(self, x: float, load: float, theta: float | None = None) -> float:
+        p = self.params
+        th = p["theta"] if theta is None else theta
+        e = np.exp(p["mu"] * th)
+        a, b = load / e, load * e
+        lo, hi = (a, b) if a <= b else (b, a)
+        if self.x_prev is None:
+            self.F = clamp_step(load, lo, hi)
+        else:
+            self.F = clamp_step(self.F + p["k"] * (x - self.x_prev), lo, hi)
+        self.x_prev = x
+        return float(self.F)
+
+
+class CapstanCompensator:
+    """Per-sample tip-force estimate from the motor (proximal) force with flat transitions.
+
+    step(F_motor, theta=None) -> F_tip [N]; same math as `motor2tip_transitions`.
+    """
+
+    def __init__(self, mu: float, theta: float, F0: float | None = None):
+        self.mu, self.theta, self.F = float(mu), float(theta), F0
+
+    def step(self, F_motor: float, theta: float | None = None) -> float:
+        e = np.exp(self.mu * (self.theta if theta is None else theta))
+        a, b = F_motor / e, F_motor * e
+        lo, hi = (a, b) if a <= b else (b, a)
+        self.F = clamp_step(F_motor if self.F is None else self.F, lo, hi)
+        return float(self.F)
+
+
+CAPSTAN_FRICTION = register(Effect(
+    name="capstan_friction",
+    link="force",
+    doc="motor force from tip load: F_t exp(+mu Theta) pulling, exp(-mu Theta) releasing, "
+        "stick transitions of stiffness k at reversals",
+    params=PARAMS,
+    inputs=("x", "load"),
+    optional=("theta",),
+    output="load",
+    simulate=_simulate,
+    guess=_guess,
+    step_class=CapstanStep,
+))
