@@ -9,20 +9,46 @@ Every effect is registered under its canonical name and used three ways:
     st = eff.make_step({"width": 1e-3})                  # (b) real time: st.step(x=...) per sample
     res = fit(eff, sig, measured_tip)                    # (c) identify: res.params, res.stderr, res.rmse
 
-Inputs are `Signals` channels (t, x, v, load, force, temperature, theta, d, d_dot; see base.CHANNELS);
-`Effect.inputs` names the ones an effect needs, and the same names are the keywords of its `Step.step`.
-The pure math lives in module-level functions (e.g. `capstan.tip2motor_transitions`, `backlash.backlash`);
-stateful models are solved by vectorised prefix scans (`scan.py`), not Python loops.
+Inputs are `Signals` channels (t, x, v, load, force, temperature, theta, d, d_dot; see base.CHANNELS).
+`Effect.inputs` names the channels an effect needs (`Effect.optional` those it uses when present), and
+the same names are the keywords of its `Step.step`. `Effect.output` is the channel its result stands
+for; `chain(...)` feeds one effect's output to the next. Parameters are {name: float} dicts in SI units;
+`Effect.params` holds their `ParamSpec` (unit, fit bounds, default, meaning).
+
+Catalogue (registry key: inputs -> output, parameters):
+- position link, motor -> tip position:
+  backlash (x -> x; width), cable_compliance (x, load -> x; k)
+- force link, tip load -> motor force (x increasing = pulling):
+  capstan_friction (x, load [, theta] -> load; mu, theta, k), coulomb_friction (v, load; Fc),
+  viscous_friction (v, load; b), stribeck_friction (v, load; Fc, Fs, vs), dahl_hysteresis (x, load; sigma, Fc)
+- sensor, true force -> reading:
+  sensor_hysteresis (force; h, delta), thermal_drift (force, temperature; c, T0),
+  thermal_drift_time (t, force; offset, rate)
+- contact, indentation -> pad force:
+  linear_contact (d; k), hertz_contact (d; k), viscoelasticity (t, force, d; g, tau),
+  contact_damping (force, d, d_dot; c)
+
+The pure math lives in module-level functions (capstan_out/capstan_in, tip2motor/motor2tip and their
+`_transitions` forms, backlash, cable_stretch, coulomb, viscous, stribeck, dahl, hysteresis_offset,
+thermal_offset, linear_force, hertz_force, sls_force, damped_force). Stateful models are solved over whole
+signals by vectorised prefix scans (`scan.py`), not Python loops.
 """
 
-from teleop.physics.base import CHANNELS, REGISTRY, Effect, ParamSpec, Signals, Step, get_effect, register
+from teleop.physics.base import (CHANNELS, REGISTRY, Effect, ParamSpec, Signals, Step, chain, get_effect,
+                                 register)
 from teleop.physics.capstan import (CapstanCompensator, capstan_band, capstan_in, capstan_out, motor2tip,
                                     motor2tip_transitions, tip2motor, tip2motor_transitions)
 from teleop.physics.backlash import backlash
+from teleop.physics.compliance import cable_stretch
+from teleop.physics.friction import coulomb, dahl, stribeck, viscous
+from teleop.physics.sensor_effects import hysteresis_offset, thermal_offset
+from teleop.physics.contact import damped_force, hertz_force, linear_force, sls_force
 from teleop.physics.fit import FitResult, fit, rmse
 
 __all__ = [
-    "CHANNELS", "REGISTRY", "Effect", "ParamSpec", "Signals", "Step", "get_effect", "register",
+    "CHANNELS", "REGISTRY", "Effect", "ParamSpec", "Signals", "Step", "chain", "get_effect", "register",
     "CapstanCompensator", "capstan_band", "capstan_in", "capstan_out", "motor2tip", "motor2tip_transitions",
-    "tip2motor", "tip2motor_transitions", "backlash", "FitResult", "fit", "rmse",
+    "tip2motor", "tip2motor_transitions", "backlash", "cable_stretch", "coulomb", "dahl", "stribeck",
+    "viscous", "hysteresis_offset", "thermal_offset", "damped_force", "hertz_force", "linear_force",
+    "sls_force", "FitResult", "fit", "rmse",
 ]

@@ -164,9 +164,11 @@ class Step:
     """
 
     effect_name: str = ""
+    _effect: "Effect | None" = None  # set for effects outside the registry (chains)
 
     def __init__(self, params: Mapping[str, float] | None = None):
-        self.params = get_effect(self.effect_name).check(params)
+        effect = type(self)._effect or get_effect(self.effect_name)
+        self.params = effect.check(params)
         self.reset()
 
     def reset(self) -> None:
@@ -263,6 +265,64 @@ def get_effect(name: str) -> Effect:
         return REGISTRY[name]
     except KeyError:
         raise InputError(f"unknown effect '{name}' (known: {', '.join(sorted(REGISTRY))})") from None
+
+
+def chain(*effects: "Effect | str", name: str | None = None) -> Effect:
+    """One effect applying `effects` in order, each one's output written into its `output` channel for the
+    next (e.g. chain("linear_contact", "viscoelasticity", "contact_damping"), or capstan then coulomb).
+
+    Parameters are namespaced "<effect>.<param>"; inputs are the channels no earlier effect produces.
+    Channels are replaced as they are (rates such as v are not re-derived), identically in the Step form.
+    The guess uses defaults for all but the last effect. Not registered.
+    """
+    effs = tuple(get_effect(e) if isinstance(e, str) else e for e in effects)
+    if not effs or len({e.name for e in effs}) != len(effs):
+        raise InputError("chain: needs one or more distinct effects")
+    cname = name or "+".join(e.name for e in effs)
+    params = tuple(dataclasses.replace(p, name=f"{e.name}.{p.name}") for e in effs for p in e.params)
+    produced: set[str] = set()
+    inputs: list[str] = []
+    optional: list[str] = []
+    for e in effs:
+        inputs += [c for c in e.inputs if c not in produced and c not in inputs]
+        optional += [c for c in e.optional if c not in produced and c not in optional]
+        produced.add(e.output)
+
+    def split(p: Mapping[str, float]) -> list[dict]:
+        return [{k.split(".", 1)[1]: v for k, v in p.items() if k.split(".", 1)[0] == e.name} for e in effs]
+
+    def simulate(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+        for e, sub in zip(effs, split(p)):
+            y = e.simulate(s, sub)
+            s = dataclasses.replace(s, **{e.output: y})
+        return y
+
+    def guess(s: Signals, y: np.ndarray) -> dict:
+        out = {}
+        for e in effs[:-1]:
+            out.update({f"{e.name}.{k}": v for k, v in e.defaults().items()})
+            s = dataclasses.replace(s, **{e.output: e.simulate(s, e.defaults())})
+        out.update({f"{effs[-1].name}.{k}": v for k, v in effs[-1].initial_guess(s, y).items()})
+        return out
+
+    class ChainStep(Step):
+        """Per-sample chain: step(**channels) -> the last effect's output."""
+
+        def reset(self) -> None:
+            self.steps = [e.make_step(sub) for e, sub in zip(effs, split(self.params))]
+
+        def step(self, **u) -> float:
+            for e, st in zip(effs, self.steps):
+                y = st.step(**{c: u[c] for c in e.inputs + e.optional if c in u and u[c] is not None})
+                u[e.output] = y
+            return y
+
+    eff = Effect(name=cname, link=effs[-1].link, doc=" then ".join(e.doc for e in effs), params=params,
+                 inputs=tuple(inputs), output=effs[-1].output, simulate=simulate, guess=guess,
+                 step_class=ChainStep, optional=tuple(optional))
+    ChainStep._effect = eff
+    ChainStep.effect_name = cname
+    return eff
 
 
 def motion_sign(x: np.ndarray) -> np.ndarray:

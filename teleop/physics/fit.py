@@ -64,10 +64,11 @@ def fit(effect: Effect | str, signals: Signals, y, fixed: Mapping[str, float] | 
         max_nfev: int = 200) -> FitResult:
     """Identify `effect`'s free parameters so that effect.apply(signals, p) matches y (n,).
 
-    fixed: parameters held at given values; guess: starting values overriding the effect's data-driven
-    guess; mask: (n,) bool or index array of samples that enter the residual (the model always runs over
-    the whole signal, so stateful effects see their full history — use it for held-out validation);
-    n_starts: number of starts (first = the guess); seed: for the perturbed starts.
+    fixed: parameters held at given values; guess: starting values tried first (the effect's
+    data-driven guess is tried as well); mask: (n,) bool or index array of samples that enter the
+    residual (the model always runs over the whole signal, so stateful effects see their full history:
+    use it for held-out validation);
+    n_starts: number of starts (guesses, then seeded perturbations of the first); seed: for those.
     """
     effect = get_effect(effect) if isinstance(effect, str) else effect
     y = np.asarray(y, dtype=float)
@@ -84,8 +85,9 @@ def fit(effect: Effect | str, signals: Signals, y, fixed: Mapping[str, float] | 
     if m <= len(free):
         raise InputError(f"fit '{effect.name}': {m} samples for {len(free)} free parameters")
 
-    g = effect.initial_guess(signals, y)
-    g.update({k: v for k, v in (guess or {}).items()})
+    g_data = effect.initial_guess(signals, y)
+    g_data.update(fixed)
+    g = effect.check(dict(g_data, **(guess or {})))
     g.update(fixed)
     scale = max(float(np.std(y[sel])), 1e-12)
 
@@ -105,8 +107,11 @@ def fit(effect: Effect | str, signals: Signals, y, fixed: Mapping[str, float] | 
                          "all parameters fixed")
 
     u0 = np.array([spec.to_unit(spec.clip(g[spec.name])) for spec in free])
+    starts = [u0]
+    if guess:  # a caller's guess may be poor: the data-driven guess is always tried as well
+        starts.append(np.array([spec.to_unit(spec.clip(g_data[spec.name])) for spec in free]))
     rng = np.random.default_rng(seed)
-    starts = [u0] + [u0 + rng.normal(0.0, 0.2, u0.shape) for _ in range(max(n_starts, 1) - 1)]
+    starts += [u0 + rng.normal(0.0, 0.2, u0.shape) for _ in range(max(n_starts - len(starts), 0))]
     best = None
     for s in starts:
         s = np.clip(s, 1e-6, 1 - 1e-6)

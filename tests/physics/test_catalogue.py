@@ -1,0 +1,113 @@
+"""Conformance over every registered effect: round-trip fits within 5 %, Step == apply, specs, errors."""
+
+import numpy as np
+import pytest
+
+from teleop.errors import InputError
+from teleop.physics import REGISTRY, Signals, chain, fit, get_effect
+
+from ._scenarios import scenario
+from ._signals import assert_params_close, noisy, step_matches_apply
+
+CATALOGUE = ("backlash", "cable_compliance", "capstan_friction", "coulomb_friction", "viscous_friction",
+             "stribeck_friction", "dahl_hysteresis", "sensor_hysteresis", "thermal_drift",
+             "hertz_contact", "viscoelasticity", "contact_damping", "linear_contact")
+NAMES = sorted(REGISTRY)
+
+
+def test_catalogue_names_are_registered():
+    assert set(CATALOGUE) <= set(REGISTRY)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_round_trip_fit_recovers_parameters_within_5_percent(name):
+    eff = get_effect(name)
+    sc = scenario(name)
+    y = noisy(eff.apply(sc.signals, dict(sc.truth, **sc.fixed)), sc.sigma, seed=11)
+    res = fit(eff, sc.signals, y, fixed=sc.fixed)
+    assert_params_close(res.params, sc.truth, rel=0.05)
+    # the residual is the noise, and the reported standard errors cover the actual error
+    assert res.rmse == pytest.approx(sc.sigma, rel=0.05)
+    for k, v in sc.truth.items():
+        assert abs(res.params[k] - v) <= 5 * res.stderr[k] + 1e-12 * abs(v), (k, res.stderr[k])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_round_trip_from_a_bad_guess(name):
+    eff = get_effect(name)
+    sc = scenario(name)
+    y = noisy(eff.apply(sc.signals, dict(sc.truth, **sc.fixed)), sc.sigma, seed=12)
+    bad = {k: eff.spec(k).clip(v * 8.0) for k, v in sc.truth.items()}
+    res = fit(eff, sc.signals, y, fixed=sc.fixed, guess=bad)
+    assert_params_close(res.params, sc.truth, rel=0.05)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_step_equals_apply_sample_by_sample(name):
+    eff = get_effect(name)
+    sc = scenario(name)
+    sig = sc.signals.window(slice(0, 3000))
+    step_matches_apply(eff, sig, dict(sc.truth, **sc.fixed), rtol=1e-9, atol=1e-9)
+    st = eff.make_step(dict(sc.truth, **sc.fixed))
+    st.reset()  # reset gives the same run again
+    names = eff.inputs + tuple(c for c in eff.optional if sig[c] is not None)
+    first = [st.step(**{c: float(sig[c][k]) for c in names}) for k in range(50)]
+    np.testing.assert_allclose(first, eff.apply(sig, dict(sc.truth, **sc.fixed))[:50], rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_specs_are_consistent(name):
+    eff = get_effect(name)
+    assert eff.name == name and eff.output in eff.inputs + ("x", "load", "force")
+    for p in eff.params:
+        assert p.lower <= p.default <= p.upper and p.unit and p.doc
+        for v in (p.lower, p.default, p.upper):
+            assert p.from_unit(p.to_unit(v)) == pytest.approx(v, rel=1e-12, abs=1e-12)
+    y = eff.apply(scenario(name).signals)  # defaults work
+    assert y.shape == scenario(name).signals.t.shape and np.isfinite(y).all()
+
+
+def test_bad_inputs_give_one_line_input_errors():
+    with pytest.raises(InputError, match="unknown effect 'nope'"):
+        get_effect("nope")
+    t = np.arange(10) * 1e-3
+    with pytest.raises(InputError, match="needs signal channel 'load'"):
+        get_effect("capstan_friction").apply(Signals(t=t, x=t))
+    with pytest.raises(InputError, match="unknown parameter 'w'"):
+        get_effect("backlash").apply(Signals(t=t, x=t), {"w": 1.0})
+    with pytest.raises(InputError, match="channel 'x' has shape"):
+        Signals(t=t, x=np.zeros(3))
+    with pytest.raises(InputError, match="NaN"):
+        Signals(t=t, x=np.full(10, np.nan))
+    with pytest.raises(InputError, match="strictly increasing"):
+        Signals(t=t[::-1])
+    with pytest.raises(InputError, match="target must be"):
+        fit("backlash", Signals(t=t, x=t), np.zeros(3))
+
+
+def test_mask_fits_on_selected_samples_only():
+    eff = get_effect("backlash")
+    sc = scenario("backlash")
+    y = eff.apply(sc.signals, sc.truth)
+    y_bad = y.copy()
+    y_bad[: y.size // 2] += 1e-3  # a corrupted first half must not matter when masked out
+    res = fit(eff, sc.signals, y_bad, mask=np.arange(y.size) >= y.size // 2)
+    assert_params_close(res.params, sc.truth, rel=1e-3)
+    assert res.m == y.size - y.size // 2
+
+
+def test_chain_fits_contact_stack_jointly_and_steps_like_apply():
+    sc = scenario("viscoelasticity")
+    sls = chain("linear_contact", "viscoelasticity")
+    assert sls.inputs == ("d", "t") and sls.param_names == ("linear_contact.k", "viscoelasticity.g",
+                                                            "viscoelasticity.tau")
+    truth = {"linear_contact.k": 800.0, "viscoelasticity.g": 0.6, "viscoelasticity.tau": 0.7}
+    sig = Signals(t=sc.signals.t, d=sc.signals.d)
+    y = noisy(sls.apply(sig, truth), 0.01, seed=3)
+    res = fit(sls, sig, y, guess={"linear_contact.k": 500.0})
+    assert_params_close(res.params, truth)
+    step_matches_apply(sls, sig.window(slice(0, 2000)), truth, rtol=1e-9, atol=1e-9)
+    # a single-effect chain is that effect
+    one = chain("linear_contact")
+    np.testing.assert_array_equal(one.apply(sig, {"linear_contact.k": 800.0}),
+                                  get_effect("linear_contact").apply(sig, {"k": 800.0}))
