@@ -1,0 +1,41 @@
+"""The world's contact force: direction, friction sign, compliant drive reaching spring equilibrium."""
+
+import numpy as np
+import pytest
+
+from scenes.pads import z_test_pad
+from scenes.world import PadWorld, WorldParams
+
+PARAMS = WorldParams()
+
+
+def test_no_contact_above_surface_and_push_back_below():
+    with PadWorld(z_test_pad(), PARAMS) as w:
+        for _ in range(50):
+            w.step([0.0, 0.0, PARAMS.surface_z - 0.001])
+        assert np.allclose(w.contact_force(), 0.0)
+        for _ in range(200):
+            w.step([0.0, 0.0, PARAMS.surface_z + 0.001])
+        F = w.contact_force()
+        assert F[2] < -0.3 and abs(F[0]) < 1e-9
+
+
+def test_friction_opposes_sliding():
+    with PadWorld(z_test_pad(), PARAMS) as w:
+        for _ in range(200):
+            w.step([0.0, 0.0, PARAMS.surface_z + 0.001])
+        for i in range(200):
+            w.step([1e-5 * i, 0.0, PARAMS.surface_z + 0.001])
+        assert w.contact_force()[0] < 0
+
+
+def test_compliant_drive_settles_at_series_stiffness():
+    k_r = 400.0
+    K, C = np.eye(3) * k_r, np.eye(3) * 3.0
+    pad = z_test_pad()
+    k_p = pad.stiffness_at(np.zeros(2), PARAMS.tip_radius)
+    with PadWorld(pad, PARAMS, stiffness=K, damping=C) as w:
+        for _ in range(1500):
+            w.step([0.0, 0.0, PARAMS.surface_z + 0.004])
+        F = -w.contact_force()[2]
+    assert F == pytest.approx(0.004 * k_r * k_p / (k_r + k_p), rel=0.03)
