@@ -1,0 +1,104 @@
+"""Simulated participants and the study driver against a spring test double (the logic, not the chain:
+the chain is tested through the real loop in test_blind_rig.py)."""
+
+import numpy as np
+import pytest
+
+from teleop.protocols.blind.participants import ParticipantParams, SimulatedParticipant, weber_sigma
+from teleop.protocols.blind.probe import Poke
+from teleop.protocols.blind.protocol import HARDER, SOFTER, UNSURE, Compare, check_ratings
+from teleop.protocols.blind.study import Area, run_simulated_study
+
+AREAS = (Area("pla", "rigid PLA", 1.0e5), Area("dragon_skin_30", "Dragon Skin 30", 6671.0),
+         Area("ecoflex_00_50", "Ecoflex 00-50", 827.0), Area("ecoflex_00_20", "Ecoflex 00-20", 393.0))
+
+
+class SpringRig:
+    """Test double: the stylus feels gain * k of the area under the slot, capped like a device."""
+
+    def __init__(self, areas, gain=0.05, cap=3.0):
+        self.areas = areas
+        self.k = {a.name: a.stiffness for a in areas}
+        self.gain, self.cap = gain, cap
+        self.layout = None
+        self.requests = []
+
+    def arrange(self, layout):
+        self.layout = layout
+
+    def poke(self, slot, request):
+        self.requests.append(request)
+        n = 100
+        x = np.r_[np.linspace(0, request.depth, n), np.linspace(request.depth, 0, n)]
+        k = self.gain * self.k[self.layout[slot]]
+        f = np.minimum(k * np.maximum(x - 0.0005, 0), self.cap)
+        t = np.r_[np.linspace(0, 1, 2 * n)] * 2 * request.depth / request.speed
+        return Poke(t=t, x=x, f=f)
+
+
+def test_weber_sigma_gives_75_percent_at_one_jnd():
+    from scipy.stats import norm
+
+    for j in (0.1, 0.23, 0.4):
+        s = weber_sigma(j)
+        assert norm.cdf(np.log1p(j) / (np.sqrt(2) * s)) == pytest.approx(0.75)
+
+
+def test_perfect_rendering_every_participant_ranks_right():
+    rig = SpringRig(AREAS)
+    res = run_simulated_study(rig, 10, seed=1, params=ParticipantParams())
+    assert res.correct_ranking_rate == 1.0 and res.kendall_tau_mean == 1.0
+    for r in res.records:
+        check_ratings(range(4), [r.ratings[a.name] for a in AREAS])
+    assert res.kendall_w == pytest.approx(1.0)
+    # rendered slopes follow the rig: neighbour ratios as rendered by the (uncapped) double
+    assert res.rendered_stiffness()["ecoflex_00_50"] == pytest.approx(0.05 * 827.0, rel=0.02)
+
+
+def test_participants_vary_their_pushes():
+    rig = SpringRig(AREAS)
+    run_simulated_study(rig, 5, seed=3, params=ParticipantParams())
+    depths = np.array([r.depth for r in rig.requests])
+    speeds = np.array([r.speed for r in rig.requests])
+    assert depths.std() / depths.mean() > 0.08 and speeds.std() / speeds.mean() > 0.08
+
+
+def test_flat_rendering_gives_chance_rankings():
+    flat = tuple(Area(a.name, a.label, 500.0) for a in AREAS)  # the rig renders every area alike
+    rig = SpringRig(flat)
+    res = run_simulated_study(rig, 40, seed=2, params=ParticipantParams())
+    res = type(res)(areas=AREAS, records=res.records)  # score against the real order
+    assert res.correct_ranking_rate < 0.2
+    assert abs(res.kendall_tau_mean) < 0.35
+
+
+def test_unsure_participant_asks_for_more_pokes_then_answers():
+    n_unsure = []
+    for seed in range(12):
+        calls = []
+
+        def palpate(zone, request):
+            calls.append(zone)
+            x = np.linspace(0, request.depth, 50)
+            return Poke(t=x / request.speed, x=x, f=100.0 * x)  # the same spring under every zone
+
+        p = SimulatedParticipant(ParticipantParams(max_repeats=2), palpate, (seed, 1))
+        step, answers = Compare(1, 0, 0), []
+        while True:
+            answers.append(p.compare(step))
+            if answers[-1] != UNSURE:
+                break
+            step = Compare(1, 0, step.repeat + 1)
+        assert answers[-1] in (HARDER, SOFTER) and len(answers) <= 3  # after max_repeats it must answer
+        assert len(calls) == 2 + 2 * (len(answers) - 1)                # each unsure pokes both zones again
+        n_unsure.append(len(answers) - 1)
+    assert 0 < sum(n_unsure)  # equal springs leave participants unsure at times
+
+
+def test_larger_jnd_lowers_accuracy_on_close_stiffnesses():
+    close = (Area("a", "A", 1300.0), Area("b", "B", 1000.0), Area("c", "C", 770.0), Area("d", "D", 600.0))
+    acc = {}
+    for jnd in (0.1, 0.6):
+        res = run_simulated_study(SpringRig(close, gain=1.0, cap=100.0), 40, seed=5, params=ParticipantParams(jnd=jnd))
+        acc[jnd] = res.correct_ranking_rate
+    assert acc[0.1] >= acc[0.6] + 0.3
