@@ -324,9 +324,3 @@ def chain(*effects: "Effect | str", name: str | None = None) -> Effect:
     ChainStep.effect_name = cname
     return eff
 
-
-def motion_sign(x: np.ndarray) -> np.ndarray:
-    """(n,) sign of the increment x_k - x_{k-1} (first sample: 0)."""
-    s = np.zeros(x.shape)
-    s[1:] = np.sign(np.diff(x))
-    return s

@@ -13,6 +13,7 @@ motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)).
 
 from __future__ import annotations
 
+import math
 from typing import Mapping
 
 import numpy as np
@@ -129,7 +130,7 @@ class CapstanStep(Step):
     def step(self, x: float, load: float, theta: float | None = None) -> float:
         p = self.params
         th = p["theta"] if theta is None else theta
-        e = np.exp(p["mu"] * th)
+        e = math.exp(p["mu"] * th)
         a, b = load / e, load * e
         lo, hi = (a, b) if a <= b else (b, a)
         if self.x_prev is None:
@@ -143,18 +144,26 @@ class CapstanStep(Step):
 class CapstanCompensator:
     """Per-sample tip-force estimate from the motor (proximal) force with flat transitions.
 
-    step(F_motor, theta=None) -> F_tip [N]; same math as `motor2tip_transitions`.
+    Same math as `motor2tip_transitions`; works per cable on arrays: mu, theta scalars or (c,), and
+    step(F_motor (c,) [N], theta=None (c,) [rad]) -> F_tip (c,) [N] (floats in, float out).
     """
 
-    def __init__(self, mu: float, theta: float, F0: float | None = None):
-        self.mu, self.theta, self.F = float(mu), float(theta), F0
+    def __init__(self, mu, theta, F0=None):
+        self.mu, self.theta = np.asarray(mu, dtype=float), np.asarray(theta, dtype=float)
+        self.F = None if F0 is None else np.asarray(F0, dtype=float)
 
-    def step(self, F_motor: float, theta: float | None = None) -> float:
-        e = np.exp(self.mu * (self.theta if theta is None else theta))
+    def reset(self, F0=None) -> None:
+        """Forget the held tip force (the next step starts from its motor force, or from F0)."""
+        self.F = None if F0 is None else np.asarray(F0, dtype=float)
+
+    def step(self, F_motor, theta=None):
+        F_motor = np.asarray(F_motor, dtype=float)
+        e = np.exp(self.mu * (self.theta if theta is None else np.asarray(theta, dtype=float)))
         a, b = F_motor / e, F_motor * e
-        lo, hi = (a, b) if a <= b else (b, a)
-        self.F = clamp_step(F_motor if self.F is None else self.F, lo, hi)
-        return float(self.F)
+        prev = F_motor if self.F is None else self.F
+        # F_t = clamp(F_t_prev, lower line, upper line)
+        self.F = np.minimum(np.maximum(prev, np.minimum(a, b)), np.maximum(a, b))
+        return float(self.F) if self.F.ndim == 0 else self.F.copy()
 
 
 CAPSTAN_FRICTION = register(Effect(

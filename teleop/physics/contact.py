@@ -13,6 +13,7 @@ Every contact force is zero without contact and never negative.
 
 from __future__ import annotations
 
+import math
 from typing import Mapping
 
 import numpy as np
@@ -112,7 +113,7 @@ class ViscoelasticityStep(Step):
         g, tau = self.params["g"], self.params["tau"]
         if self.t_prev is not None:
             dt = t - self.t_prev
-            a = np.exp(-dt / tau)
+            a = math.exp(-dt / tau)
             self.q = a * self.q + (1.0 - g) * ((force - self.Fe_prev) / dt) * tau * (1.0 - a)
         self.t_prev, self.Fe_prev = t, force
         return float(max(g * force + self.q, 0.0)) if d > 0 else 0.0

@@ -12,6 +12,7 @@ v is the motor velocity (positive while pulling); sign(0) = 0.
 
 from __future__ import annotations
 
+import math
 from typing import Mapping
 
 import numpy as np
@@ -95,6 +96,10 @@ def _dahl_guess(s: Signals, y: np.ndarray) -> dict:
     return {"Fc": Fc, "sigma": sigma}
 
 
+def _sgn(v: float) -> float:
+    return 1.0 if v > 0 else (-1.0 if v < 0 else 0.0)
+
+
 class CoulombStep(Step):
     """Per-sample coulomb_friction: step(v, load) -> motor force [N]."""
 
@@ -104,7 +109,7 @@ class CoulombStep(Step):
         pass
 
     def step(self, v: float, load: float) -> float:
-        return float(load + coulomb(v, self.params["Fc"]))
+        return float(load + self.params["Fc"] * _sgn(v))
 
 
 class ViscousStep(Step):
@@ -129,7 +134,7 @@ class StribeckStep(Step):
 
     def step(self, v: float, load: float) -> float:
         p = self.params
-        return float(load + stribeck(v, p["Fc"], p["Fs"], p["vs"]))
+        return float(load + (p["Fc"] + (p["Fs"] - p["Fc"]) * math.exp(-(v / p["vs"]) ** 2)) * _sgn(v))
 
 
 class DahlStep(Step):
@@ -145,8 +150,8 @@ class DahlStep(Step):
         if self.x_prev is not None:
             dx = x - self.x_prev
             Fc = self.params["Fc"]
-            a = np.exp(-self.params["sigma"] * abs(dx) / Fc)
-            self.F = a * self.F + np.sign(dx) * Fc * (1.0 - a)
+            a = math.exp(-self.params["sigma"] * abs(dx) / Fc)
+            self.F = a * self.F + _sgn(dx) * Fc * (1.0 - a)
         self.x_prev = x
         return float(load + self.F)
 
