@@ -1,0 +1,278 @@
+"""`sim://` simulated stylus: a Geomagic-Touch-like device held by a model operator.
+
+The operator's hand and the stylus are one mass m [kg] pulled by a spring-damper (k [N/m], b [N s/m])
+towards a scripted target; the commanded stylus force acts on the same mass, so the operator feels it
+(pushing into a stiff pad stops the hand short of its target):
+
+    m a = k (p_target(t) - p) - b v + F_cmd + F_tremor(t)
+
+integrated with semi-implicit Euler at a fixed step h (so a run is deterministic for a seed whatever the
+read timing). Scripts: `hold`, `sine` (amplitude along an axis), `pokes` (press down by a depth and
+release, periodically), `recorded` (targets from an (N, 4) array of t, x, y, z). Buttons: bit 0 deadman
+(operator present), bit 1 clutch, each from a list of (t0, t1) intervals. Time comes from `clock` (default
+time.perf_counter, relative to open()); tests pass a manual clock.
+
+URL: ``sim://?script=pokes&depth_mm=8&period_s=2&seed=1&clutch=1.0-1.5&absent=3-3.2&spec=touch``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from devices.base import OMEGA_SPEC, TOUCH_SPEC, ContextDevice, DeviceError, DeviceSpec, HapticSample
+from teleop.errors import InputError
+from teleop.kinematics import rotation_zyx
+
+SCRIPTS = ("hold", "sine", "pokes", "recorded")
+
+
+@dataclass(frozen=True)
+class OperatorParams:
+    """Operator (hand + stylus) model.
+
+    Attributes:
+        m: moving mass of hand and stylus [kg].
+        k: hand stiffness towards the target [N/m].
+        b: hand damping [N s/m].
+        tremor: standard deviation of the hand's random force [N] (Ornstein-Uhlenbeck, 0.05 s).
+        h: integration step [s].
+    """
+
+    m: float = 0.15
+    k: float = 150.0
+    b: float = 6.0
+    tremor: float = 0.005
+    h: float = 0.0005
+
+    def __post_init__(self):
+        for name in ("m", "k", "b", "h"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise InputError(f"sim stylus: {name} must be > 0, got {v}")
+        if not (math.isfinite(self.tremor) and self.tremor >= 0):
+            raise InputError(f"sim stylus: tremor must be >= 0, got {self.tremor}")
+
+
+@dataclass(frozen=True)
+class Script:
+    """Target trajectory of the operator's hand in the device frame [m, s].
+
+    Attributes:
+        kind: one of SCRIPTS.
+        center: (3,) rest position [m].
+        axis: (3,) unit direction of sine / poke motion.
+        amplitude: sine amplitude, or poke depth [m].
+        period: sine period or poke period [s].
+        duty: fraction of a poke period spent pressed.
+        points: (N, 4) rows t, x, y, z for `recorded` (linear interpolation, held at the ends).
+        clutch, absent: ((t0, t1), ...) intervals with the clutch pressed / the operator's hand off.
+        tilt: constant stylus tilt about x [rad] (0: aligned).
+    """
+
+    kind: str = "sine"
+    center: tuple = (0.0, 0.0, 0.0)
+    axis: tuple = (0.0, 0.0, -1.0)
+    amplitude: float = 0.01
+    period: float = 2.0
+    duty: float = 0.5
+    points: np.ndarray | None = None
+    clutch: tuple = ()
+    absent: tuple = ()
+    tilt: float = 0.0
+
+    def __post_init__(self):
+        if self.kind not in SCRIPTS:
+            raise InputError(f"sim stylus: script '{self.kind}' unknown (expected one of: {', '.join(SCRIPTS)})")
+        if self.kind == "recorded":
+            pts = np.asarray(self.points, dtype=float) if self.points is not None else np.zeros((0, 4))
+            if pts.ndim != 2 or pts.shape[1] != 4 or len(pts) < 1 or not np.isfinite(pts).all():
+                raise InputError("sim stylus: script 'recorded' needs points of shape (N, 4): t, x, y, z")
+        if not (self.period > 0 and 0 < self.duty <= 1 and math.isfinite(self.amplitude)):
+            raise InputError("sim stylus: need period > 0, 0 < duty <= 1, finite amplitude")
+
+    def target(self, t: float) -> np.ndarray:
+        """(3,) hand target at time t [s]."""
+        c, a = np.asarray(self.center, dtype=float), np.asarray(self.axis, dtype=float)
+        if self.kind == "hold":
+            return c
+        if self.kind == "sine":
+            return c + a * (self.amplitude * math.sin(2 * math.pi * t / self.period))
+        if self.kind == "pokes":
+            phase = (t / self.period) % 1.0
+            # smooth press (raised cosine) during the duty part of the period
+            s = 0.5 - 0.5 * math.cos(2 * math.pi * phase / self.duty) if phase < self.duty else 0.0
+            return c + a * (self.amplitude * s)
+        pts = np.asarray(self.points, dtype=float)
+        return np.array([np.interp(t, pts[:, 0], pts[:, j]) for j in (1, 2, 3)])
+
+    def buttons(self, t: float) -> tuple[int, bool]:
+        """(button mask, operator present) at time t."""
+        present = not any(t0 <= t < t1 for t0, t1 in self.absent)
+        clutch = any(t0 <= t < t1 for t0, t1 in self.clutch)
+        return (1 if present else 0) | (2 if clutch else 0), present
+
+
+class SimulatedStylus(ContextDevice):
+    """A simulated haptic stylus (HapticDevice) driven by an operator model."""
+
+    def __init__(self, script: Script | None = None, operator: OperatorParams | None = None,
+                 spec: DeviceSpec = TOUCH_SPEC, seed: int = 0, clock=None):
+        self.script = script or Script()
+        self.operator = operator or OperatorParams()
+        self.spec = spec
+        self.seed = int(seed)
+        self._clock = clock
+        self.is_open = False
+        self.p = np.zeros(3)
+        self.v = np.zeros(3)
+
+    def open(self) -> None:
+        self.rng = np.random.default_rng(self.seed)
+        self.clock = self._clock if self._clock is not None else time.perf_counter
+        self.t0 = float(self.clock())
+        self.t = 0.0
+        self.p = self.script.target(0.0).astype(float).copy()
+        self.v = np.zeros(3)
+        self.F_cmd = np.zeros(3)
+        self.F_tremor = np.zeros(3)
+        self.R = rotation_zyx(0.0, 0.0, self.script.tilt)
+        self.is_open = True
+
+    def close(self) -> None:
+        self.F_cmd = np.zeros(3)
+        self.is_open = False
+
+    def _advance(self, t_now: float) -> None:
+        op = self.operator
+        h, m, k, b = op.h, op.m, op.k, op.b
+        n = int((t_now - self.t) / h)
+        if n <= 0:
+            return
+        n = min(n, int(1.0 / h))  # a long pause: integrate at most 1 s (the hand has settled anyway)
+        a_ou = math.exp(-h / 0.05)
+        s_ou = op.tremor * math.sqrt(1.0 - a_ou * a_ou)
+        noise = self.rng.standard_normal((n, 3)) * s_ou if op.tremor > 0 else None
+        p, v, Fr = self.p, self.v, self.F_tremor
+        F_cmd = self.F_cmd
+        t = self.t
+        for i in range(n):
+            t += h
+            if noise is not None:
+                Fr = a_ou * Fr + noise[i]
+            present = not any(t0 <= t < t1 for t0, t1 in self.script.absent)
+            if present:
+                acc = (k * (self.script.target(t) - p) - b * v + F_cmd + Fr) / m
+            else:  # hand off: the stylus alone (light, heavily damped by the device's friction)
+                acc = (F_cmd - 20.0 * v) / 0.05
+            v = v + h * acc
+            p = p + h * v
+        lo, hi = np.asarray(self.spec.workspace_min), np.asarray(self.spec.workspace_max)
+        clipped = np.clip(p, lo, hi)
+        v = np.where(clipped != p, 0.0, v)
+        self.p, self.v, self.F_tremor, self.t = clipped, v, Fr, t
+
+    def read(self) -> HapticSample:
+        if not self.is_open:
+            raise DeviceError("sim stylus: read() before open()")
+        self._advance(float(self.clock()) - self.t0)
+        buttons, present = self.script.buttons(self.t)
+        return HapticSample(t=self.t, measured_cp=self.p.copy(), orientation=self.R, measured_cv=self.v.copy(),
+                            buttons=buttons, operator_present=present)
+
+    def servo_cf(self, force) -> None:
+        if not self.is_open:
+            raise DeviceError("sim stylus: servo_cf() before open()")
+        F = np.asarray(force, dtype=float)
+        if F.shape != (3,):
+            raise DeviceError(f"sim stylus: force must have 3 components, got shape {F.shape}")
+        if not np.isfinite(F).all():
+            F = np.zeros(3)  # the device's own guard: never apply NaN
+        n = float(np.linalg.norm(F))
+        peak = self.spec.max_force_peak
+        self.F_cmd = F if n <= peak else F * (peak / n)
+
+
+def _intervals(text: str, key: str) -> tuple:
+    out = []
+    for part in filter(None, text.split(",")):
+        try:
+            a, b = (float(s) for s in part.split("-"))
+        except ValueError:
+            raise InputError(f"sim stylus option '{key}': expected t0-t1[,t0-t1...] in seconds, got '{text}'") \
+                from None
+        if not b > a:
+            raise InputError(f"sim stylus option '{key}': interval {part} must have t1 > t0")
+        out.append((a, b))
+    return tuple(out)
+
+
+_OPTIONS = {"script", "seed", "amp_mm", "depth_mm", "period_s", "duty", "axis", "clutch", "absent", "tilt_deg",
+            "spec", "k", "m", "b", "tremor_N", "file"}
+
+
+def from_url(parsed, options: dict) -> SimulatedStylus:
+    """Factory for ``sim://`` (see module docstring); unknown options raise InputError."""
+    unknown = set(options) - _OPTIONS - {"clock"}
+    if unknown:
+        raise InputError(f"sim:// stylus: unknown option(s) {', '.join(sorted(unknown))} "
+                         f"(expected: {', '.join(sorted(_OPTIONS))})")
+
+    def num(key, default):
+        try:
+            v = float(options.get(key, default))
+        except (TypeError, ValueError):
+            raise InputError(f"sim:// stylus option '{key}': expected a number, got {options.get(key)!r}") from None
+        if not math.isfinite(v):
+            raise InputError(f"sim:// stylus option '{key}': expected a finite number")
+        return v
+
+    kind = str(options.get("script", "pokes"))
+    axes = {"x": (1.0, 0, 0), "y": (0, 1.0, 0), "z": (0, 0, 1.0), "-x": (-1.0, 0, 0), "-y": (0, -1.0, 0),
+            "-z": (0, 0, -1.0)}
+    axis = str(options.get("axis", "-z"))
+    if axis not in axes:
+        raise InputError(f"sim:// stylus option 'axis': expected one of {', '.join(axes)}, got '{axis}'")
+    points = None
+    if kind == "recorded":
+        if "file" not in options:
+            raise InputError("sim:// stylus script=recorded needs file=PATH (CSV t_s,x_m,y_m,z_m or a recording)")
+        points = load_points(str(options["file"]))
+    amp = num("depth_mm", 12.0) if kind == "pokes" else num("amp_mm", 10.0)
+    script = Script(kind=kind, axis=axes[axis], amplitude=amp * 1e-3, period=num("period_s", 2.0),
+                    duty=num("duty", 0.5), points=points, clutch=_intervals(str(options.get("clutch", "")), "clutch"),
+                    absent=_intervals(str(options.get("absent", "")), "absent"),
+                    tilt=math.radians(num("tilt_deg", 0.0)))
+    op = OperatorParams(m=num("m", 0.15), k=num("k", 150.0), b=num("b", 6.0), tremor=num("tremor_N", 0.005))
+    spec_name = str(options.get("spec", "touch"))
+    specs = {"touch": TOUCH_SPEC, "omega": OMEGA_SPEC}
+    if spec_name not in specs:
+        raise InputError(f"sim:// stylus option 'spec': expected touch or omega, got '{spec_name}'")
+    return SimulatedStylus(script, op, spec=specs[spec_name], seed=int(num("seed", 0)), clock=options.get("clock"))
+
+
+def load_points(path: str) -> np.ndarray:
+    """(N, 4) t, x, y, z [s, m] from a CSV (header t_s,x_m,y_m,z_m) or a session recording's stylus track."""
+    if path.endswith(".mcap"):
+        from teleop.recording import read_session
+
+        s = read_session(path)
+        rows = [(m["t"], *m["measured_cp"]) for m in s.messages("/stylus")]
+        if not rows:
+            raise InputError(f"{path}: recording has no /stylus messages")
+        return np.array(rows, dtype=float)
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True)
+    except OSError:
+        raise InputError(f"{path}: file not found") from None
+    names = data.dtype.names or ()
+    need = ("t_s", "x_m", "y_m", "z_m")
+    if any(n not in names for n in need):
+        raise InputError(f"{path}: expected CSV columns {', '.join(need)}, got {', '.join(names)}")
+    pts = np.column_stack([np.atleast_1d(data[n]) for n in need])
+    if not np.isfinite(pts).all():
+        raise InputError(f"{path}: non-numeric or missing values in t_s,x_m,y_m,z_m")
+    return pts

@@ -1,0 +1,101 @@
+"""The loop's compute step, as pure functions of numpy arrays, plus the default estimator.
+
+Force path (robot frame {B} -> stylus frame):  F = k_f R_reg^T f[:3], optional zeroing of -z, ramp-in
+factor, then the safety clamp to the device's continuous limit (NaN/inf -> zero and a fault).
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+from teleop.geometry import Geometry
+from teleop.kinematics import rotation_zyx
+
+
+class Estimator(Protocol):
+    """Raw robot readings -> cable tensions t (6,) [N] and external wrench f (6,) [N, N m]."""
+
+    def reset(self) -> None: ...
+    def update(self, reading, pose, dt: float) -> tuple[np.ndarray, np.ndarray]: ...
+    def describe(self) -> dict:
+        """Calibration and settings, stored in the session metadata."""
+
+
+class FsrWrenchEstimator:
+    """FSR counts -> tensions (teleop.sensors calibration, loading/unloading branches) -> f = -A t (eq 8).
+
+    No friction compensation and no filter: the plain estimator of seed 000 used when no better one is given.
+    """
+
+    def __init__(self, geom: Geometry, cal=None):
+        from teleop.sensors import FsrConverter, default_fsr_calibration
+
+        self.geom = geom
+        self.cal = cal if cal is not None else default_fsr_calibration()
+        self.converter = FsrConverter(self.cal, n=len(geom.B))
+        self._orientation = None
+
+    def reset(self) -> None:
+        self.converter.reset()
+
+    def update(self, reading, pose, dt: float):
+        t = np.asarray(self.converter.update(reading.fsr_counts), dtype=float)
+        q = np.asarray(pose, dtype=float)
+        if self._orientation is None or (q[3:] != self._orientation).any():
+            self._orientation = q[3:].copy()
+            self._Rr = self.geom.r @ rotation_zyx(*q[3:]).T
+        f = -(structure_matrix_at(q[:3], self._Rr, self.geom.B) @ t)  # f = -A t
+        return t, f
+
+    def describe(self) -> dict:
+        cal = self.cal
+        out = {"estimator": type(self).__name__}
+        for name in ("loading", "unloading", "coef_loading", "coef_unloading", "adc_max", "r_divider", "v_ref",
+                     "source"):
+            v = getattr(cal, name, None)
+            if v is not None:
+                out[name] = np.asarray(v).tolist() if not isinstance(v, str) else v
+        return out
+
+
+def structure_matrix_at(p, Rr: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """(6, 6) structure matrix A (eq 8) at position p (3,) [m] for precomputed R r_i (6, 3) and anchors B (6, 3).
+
+    Same as kinematics.structure_matrix for that orientation: column i = [-u_i; -(R r_i) x u_i].
+    """
+    l = Rr - B + p
+    u = l / np.sqrt(np.einsum("ij,ij->i", l, l))[:, None]
+    A = np.empty((6, len(B)))
+    A[:3] = -u.T
+    A[3] = -(Rr[:, 1] * u[:, 2] - Rr[:, 2] * u[:, 1])
+    A[4] = -(Rr[:, 2] * u[:, 0] - Rr[:, 0] * u[:, 2])
+    A[5] = -(Rr[:, 0] * u[:, 1] - Rr[:, 1] * u[:, 0])
+    return A
+
+
+def render_force(f, R_reg: np.ndarray, force_scale: float, zero_neg_z: bool) -> np.ndarray:
+    """(3,) stylus force [N] from the external wrench f (6,) in {B}: k_f R_reg^T f[:3], -z zeroed if asked."""
+    F = force_scale * (R_reg.T @ np.asarray(f, dtype=float)[:3])
+    if zero_neg_z and F[2] < 0.0:
+        F[2] = 0.0
+    return F
+
+
+def ramp_factor(elapsed: float, ramp_time: float) -> float:
+    """Ramp-in gain in [0, 1]: linear over `ramp_time` [s] after engaging."""
+    if ramp_time <= 0.0:
+        return 1.0
+    return min(1.0, max(0.0, elapsed / ramp_time))
+
+
+def clamp_force(F, limit: float) -> tuple[np.ndarray, bool]:
+    """(F', ok): F scaled down to norm <= limit [N]; any non-finite input gives zeros and ok=False."""
+    F = np.asarray(F, dtype=float)
+    if F.shape != (3,) or not np.isfinite(F).all():
+        return np.zeros(3), False
+    n = float(np.sqrt(F @ F))
+    if n > limit:
+        F = F * (limit / n)
+    return F, True

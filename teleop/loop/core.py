@@ -1,0 +1,327 @@
+"""The master-slave tick: READ -> MAP -> ROBOT I/O -> ESTIMATE -> RENDER -> WRITE -> RECORD.
+
+`Teleop.tick(now)` runs one tick at host time `now` [s]; it never sleeps and never reads a clock for its
+computation (the runner paces it; a replay feeds recorded times), so a session replays bit for bit. Any
+exception at any stage becomes a latched FAULT with the stage and reason; the stylus force is zero in the
+same tick.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from teleop.geometry import Geometry, default_geometry
+from teleop.loop.compute import FsrWrenchEstimator, clamp_force, ramp_factor, render_force
+from teleop.loop.params import LoopParams
+from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
+from teleop.loop.states import BEHAVIOURS, State
+from teleop.mapping import limit_lengths, platform_offsets, position2lengths, stylus2target
+
+STAGES = ("read", "map", "robot", "estimate", "render", "write", "record")
+HOMED, WATCHDOG_STOP, FIRMWARE_FAULT = 1, 2, 4
+
+
+@dataclass
+class TickData:
+    """What one tick saw and decided (overwritten every tick)."""
+
+    k: int = 0
+    now: float = 0.0
+    sample: object = None
+    reading: object = None
+    robot_due: bool = False
+    L_cmd: np.ndarray | None = None
+    dL: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    F_raw: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    F: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    ramp: float = 0.0
+
+
+@dataclass(frozen=True)
+class Event:
+    """A state change: tick index, host time [s], states and the reason."""
+
+    k: int
+    t: float
+    src: str
+    dst: str
+    reason: str
+
+
+class Teleop:
+    """State of one teleoperation session; the math is delegated to teleop.mapping and teleop.loop.compute.
+
+    Args:
+        haptic: HapticDevice (opened by the caller).
+        robot: Robot (opened by the caller).
+        params: LoopParams.
+        geom: CDPR geometry (default_geometry()).
+        estimator: readings -> (tensions, wrench); default FsrWrenchEstimator.
+        on_event: callback(Event) for state changes (the recorder's event channel).
+    """
+
+    def __init__(self, haptic, robot, params: LoopParams | None = None, geom: Geometry | None = None,
+                 estimator=None, on_event=None):
+        self.haptic, self.robot = haptic, robot
+        self.params = params or LoopParams()
+        self.geom = geom or default_geometry()
+        self.estimator = estimator if estimator is not None else FsrWrenchEstimator(self.geom)
+        self.on_event = on_event
+        self.limit = float(haptic.spec.max_force_continuous)
+        p, m = self.params, self.params.mapping
+        self.offsets = platform_offsets(self.geom, m.home[3:])
+        self.stylus_fresh = Freshness("stylus", p.stale_limit, p.startup_timeout)
+        self.robot_fresh = Freshness("robot", p.stale_limit, p.startup_timeout)
+        self.range = TensionRange(p.tension_max, p.tension_slack, p.tension_window, len(self.geom.B))
+        self.stuck = StuckCable(p.stuck_window, p.stuck_rise, p.payout_eps, len(self.geom.B))
+        self.x = TickData()
+        self.events: list[Event] = []
+        self.stage_ns = np.zeros(len(STAGES), dtype=np.int64)
+        self.k = 0
+        self.fault_reason = ""
+        self.state = State.DISABLED
+        self.behaviour = BEHAVIOURS[State.DISABLED]
+        self.enable_requested = False
+        self.reset_requested = False
+        self.small_force_ticks = 0
+        self.boot_id = None
+        self.robot_status = 0
+        self.pose = m.home.astype(float).copy()
+        self.L_last = None  # last commanded lengths [m]
+        self.tensions = np.zeros(len(self.geom.B))
+        self.wrench = np.zeros(6)
+        self.t_engaged = 0.0
+        self.anchor_stylus = np.zeros(3)
+        self.anchor_robot = self.pose[:3].copy()
+        self.tap = None
+
+    # ---- operator commands -------------------------------------------------------------------------------
+    def start(self, now: float) -> None:
+        """Power-on: DISABLED, zero force, no motion command; watchdogs armed from `now`."""
+        self.stylus_fresh.reset(now)
+        self.robot_fresh.reset(now)
+        if self.params.auto_enable:
+            self.enable_requested = True
+
+    def request_enable(self) -> None:
+        self.enable_requested = True
+
+    def request_disable(self) -> None:
+        self.enable_requested = False
+
+    def operator_reset(self) -> None:
+        """Leave FAULT (to DISABLED) on the next tick; teleoperation needs a new enable request."""
+        self.reset_requested = True
+
+    # ---- helpers used by the states ------------------------------------------------------------------------
+    @property
+    def robot_homed(self) -> bool:
+        return bool(self.robot_status & HOMED)
+
+    def telemetry_fresh(self, now: float) -> bool:
+        return self.robot_fresh.is_fresh(now) and self.stylus_fresh.is_fresh(now)
+
+    def ramp(self, now: float) -> float:
+        self.x.ramp = ramp_factor(now - self.t_engaged, self.params.ramp_time)
+        return self.x.ramp
+
+    def anchor(self, now: float) -> None:
+        """Engage: stylus and robot anchors for the incremental mapping, restart the force ramp."""
+        self.anchor_stylus = np.array(self.x.sample.measured_cp, dtype=float)
+        self.anchor_robot = self.pose[:3].copy()
+        self.t_engaged = now
+        if self.L_last is None:
+            r = self.x.reading if self.x.reading is not None else getattr(self, "last_reading", None)
+            L = None if r is None else np.asarray(r.commanded_lengths, dtype=float)
+            self.L_last = L if L is not None and np.isfinite(L).all() and (L > 0).all() else \
+                position2lengths(self.pose[:3], self.offsets)
+
+    def follow(self, x) -> np.ndarray:
+        """ENABLED: stylus -> target -> lengths, step-limited to v_max dt and clipped to the length limits."""
+        m, g = self.params.mapping, self.geom
+        dt = self.params.dt * self.params.robot_every
+        p_t = stylus2target(x.sample.measured_cp, self.anchor_stylus, self.anchor_robot, m)
+        L_t = position2lengths(p_t, self.offsets)
+        step = float(np.max(np.abs(L_t - self.L_last)))
+        dmax = g.v_max * dt
+        if step > dmax:  # move along the straight line as far as the cable speed allows this tick
+            p_t = self.pose[:3] + (p_t - self.pose[:3]) * (dmax / step)
+            L_t = position2lengths(p_t, self.offsets)
+        L = limit_lengths(L_t, self.L_last, g, dt)
+        self.pose[:3] = p_t
+        return L
+
+    def stop_robot(self) -> None:
+        try:
+            self.robot.stop()
+        except Exception as exc:  # noqa: BLE001 - the fault is already being handled; note it and go on
+            self._log(self.state.name, "FAULT", f"robot.stop() failed: {type(exc).__name__}: {exc}")
+
+    # ---- state changes ---------------------------------------------------------------------------------------
+    def _log(self, src: str, dst: str, reason: str) -> None:
+        ev = Event(self.k, self.x.now, src, dst, reason)
+        self.events.append(ev)
+        if self.on_event is not None:
+            try:
+                self.on_event(ev)
+            except Exception:  # noqa: BLE001 - a recorder failure must never break the safety path
+                pass
+
+    def _goto(self, state: State, reason: str) -> None:
+        if state == self.state:
+            return
+        src = self.state
+        self.state = state
+        self.behaviour = BEHAVIOURS[state]
+        self._log(src.name, state.name, reason)
+        if state == State.DISABLED:
+            self.reset_requested = False
+        self.behaviour.enter(self, self.x.now)
+
+    def fault(self, reason: str) -> None:
+        """Enter FAULT (latched) with `reason`; zero force this tick, robot stopped."""
+        if self.state == State.FAULT:
+            return
+        self.fault_reason = reason
+        self.x.L_cmd = None
+        self.x.F[:] = 0.0
+        self._goto(State.FAULT, reason)
+
+    def _reset_from_fault(self) -> None:
+        self.fault_reason = ""
+        self.enable_requested = False
+        self.boot_id = None
+        self.L_last = None
+        self.range.reset()
+        self.stuck.reset()
+        self.estimator.reset()
+        self.robot_fresh.reset(self.x.now)
+        self.stylus_fresh.reset(self.x.now)
+
+    # ---- the tick ----------------------------------------------------------------------------------------------
+    def tick(self, now: float) -> TickData:
+        """One loop iteration at host time `now` [s]."""
+        x, p, ns = self.x, self.params, time.perf_counter_ns
+        x.k, x.now = self.k, now
+        x.robot_due = self.k % p.robot_every == 0
+        x.L_cmd, x.reading = None, None
+        t0 = ns()
+        # READ ------------------------------------------------------------------------------------------------
+        try:
+            x.sample = self.haptic.read()
+            if not is_finite_sample(x.sample):
+                raise ValueError("stylus sample has non-finite values")
+            self.stylus_fresh.update(now, x.sample.t)
+        except Exception as exc:  # noqa: BLE001 - every stage failure is a FAULT
+            x.sample = None
+            self.fault(f"read: {type(exc).__name__}: {exc}")
+        if self.state == State.FAULT and self.reset_requested:
+            self._reset_from_fault()
+        if x.sample is not None or self.state == State.FAULT:
+            nxt = self.behaviour.transition(self, x)
+            if nxt is not None:
+                self._goto(nxt, "operator reset" if self.state == State.FAULT else "")
+        t1 = ns()
+        # MAP -------------------------------------------------------------------------------------------------
+        if x.robot_due and self.state == State.ENABLED:
+            try:
+                L = self.behaviour.command(self, x)
+                if L is not None:
+                    x.dL = L - self.L_last
+                    x.L_cmd = L
+            except Exception as exc:  # noqa: BLE001
+                self.fault(f"map: {type(exc).__name__}: {exc}")
+        elif x.robot_due:
+            x.dL[:] = 0.0
+        t2 = ns()
+        # ROBOT I/O -------------------------------------------------------------------------------------------
+        if x.robot_due:
+            try:
+                if x.L_cmd is not None and self.state == State.ENABLED:
+                    self.robot.command_lengths(x.L_cmd)
+                    self.L_last = x.L_cmd
+                x.reading = self.robot.read()
+            except Exception as exc:  # noqa: BLE001
+                x.reading = None
+                self.fault(f"robot: {type(exc).__name__}: {exc}")
+        t3 = ns()
+        # ESTIMATE + watchdogs ----------------------------------------------------------------------------------
+        try:
+            r = x.reading
+            if r is not None:
+                if not is_finite_reading(r):
+                    raise ValueError("robot reading has non-finite values")
+                self.last_reading = r
+                self.robot_status = int(r.status)
+                if self.boot_id is None:
+                    self.boot_id = r.boot_id
+                elif r.boot_id != self.boot_id and self.state != State.FAULT:
+                    self.robot_status &= ~HOMED
+                    self.fault(f"firmware reset: boot id {self.boot_id} -> {r.boot_id}; re-home before motion")
+                if r.status & (WATCHDOG_STOP | FIRMWARE_FAULT) and self.state != State.FAULT:
+                    self.fault(f"robot status 0x{int(r.status):02x}: "
+                               + ("watchdog stop" if r.status & WATCHDOG_STOP else "firmware fault"))
+                self.robot_fresh.update(now, r.seq)
+                t, f = self.estimator.update(r, self.pose, p.dt * p.robot_every)
+                if not (np.isfinite(t).all() and np.isfinite(f).all()):
+                    raise ValueError("estimated tensions/wrench not finite")
+                self.tensions, self.wrench = t, f
+                if self.state != State.FAULT:
+                    reason = self.range.update(now, t) if self.state != State.DISABLED else None
+                    reason = reason or self.stuck.update(now, t, x.dL)
+                    if reason:
+                        self.fault(reason)
+            if self.state != State.FAULT:
+                reason = self.robot_fresh.check(now) or self.stylus_fresh.check(now)
+                if reason:
+                    self.fault(reason)
+        except Exception as exc:  # noqa: BLE001
+            self.fault(f"estimate: {type(exc).__name__}: {exc}")
+        t4 = ns()
+        # RENDER ------------------------------------------------------------------------------------------------
+        try:
+            x.F_raw = render_force(self.wrench, p.mapping.R_reg, p.force_scale, p.zero_neg_z)
+            if self.state == State.ALIGNING:
+                n = float(np.sqrt(x.F_raw @ x.F_raw))
+                self.small_force_ticks = self.small_force_ticks + 1 if n < p.engage_force else 0
+            x.ramp = 0.0
+            F, ok = clamp_force(self.behaviour.force(self, x), self.limit)
+            if not ok:
+                self.fault("render: commanded force not finite")
+                F = np.zeros(3)
+            x.F = F
+        except Exception as exc:  # noqa: BLE001
+            x.F = np.zeros(3)
+            self.fault(f"render: {type(exc).__name__}: {exc}")
+        if self.state == State.FAULT:
+            x.F = np.zeros(3)
+        t5 = ns()
+        # WRITE -------------------------------------------------------------------------------------------------
+        try:
+            self.haptic.servo_cf(x.F)
+        except Exception as exc:  # noqa: BLE001
+            self.fault(f"write: {type(exc).__name__}: {exc}")
+            try:
+                self.haptic.servo_cf(np.zeros(3))
+            except Exception:  # noqa: BLE001 - already in FAULT; the device's own watchdog takes over
+                pass
+        t6 = ns()
+        # RECORD ------------------------------------------------------------------------------------------------
+        if self.tap is not None:
+            try:
+                self.tap(self)
+            except Exception as exc:  # noqa: BLE001
+                self.fault(f"record: {type(exc).__name__}: {exc}")
+                try:
+                    self.haptic.servo_cf(np.zeros(3))
+                except Exception:  # noqa: BLE001
+                    pass
+        t7 = ns()
+        st = self.stage_ns
+        st[0], st[1], st[2], st[3], st[4], st[5], st[6] = t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5, t7 - t6
+        self.k += 1
+        return x
+

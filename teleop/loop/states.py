@@ -1,0 +1,127 @@
+"""Teleoperation state machine (dVRK mtsTeleOperationPSM style): one object per state with enter / command /
+force / transition, no global run flags.
+
+    DISABLED --enable requested, telemetry fresh, robot homed--> ALIGNING
+    ALIGNING --operator present, stylus aligned, telemetry fresh, computed force small N ticks--> ENABLED
+    ENABLED  --clutch--> CLUTCHED --clutch released--> ENABLED (re-anchored, force ramps in again)
+    ENABLED/CLUTCHED --operator gone--> ALIGNING;  any --disable--> DISABLED
+    any --fault--> FAULT (latched: only operator_reset() leaves it, to DISABLED)
+
+`command` returns the cable lengths to send this tick (or None: no motion command); `force` returns the
+stylus force before the safety clamp. Only ENABLED moves the robot or pushes on the operator.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+import numpy as np
+
+from teleop.mapping import is_aligned
+
+ZERO3 = np.zeros(3)
+ZERO3.setflags(write=False)
+
+
+class State(IntEnum):
+    DISABLED = 0
+    ALIGNING = 1
+    ENABLED = 2
+    CLUTCHED = 3
+    FAULT = 4
+
+
+class Behaviour:
+    """Default behaviour: no motion, zero force, stay."""
+
+    state: State
+
+    def enter(self, tp, now: float) -> None:
+        pass
+
+    def command(self, tp, x):
+        return None
+
+    def force(self, tp, x) -> np.ndarray:
+        return ZERO3
+
+    def transition(self, tp, x) -> State | None:
+        return None
+
+
+class Disabled(Behaviour):
+    state = State.DISABLED
+
+    def transition(self, tp, x):
+        if tp.enable_requested and tp.telemetry_fresh(x.now) and tp.robot_homed:
+            return State.ALIGNING
+        return None
+
+
+class Aligning(Behaviour):
+    state = State.ALIGNING
+
+    def enter(self, tp, now):
+        tp.small_force_ticks = 0
+
+    def transition(self, tp, x):
+        if not tp.enable_requested:
+            return State.DISABLED
+        s = x.sample
+        ready = (s is not None and s.operator_present and not (s.buttons & 2) and tp.telemetry_fresh(x.now)
+                 and tp.robot_homed and is_aligned(s.orientation, tp.params.mapping))
+        if ready and tp.small_force_ticks >= tp.params.engage_ticks:
+            return State.ENABLED
+        return None
+
+
+class Enabled(Behaviour):
+    state = State.ENABLED
+
+    def enter(self, tp, now):
+        tp.anchor(now)
+
+    def command(self, tp, x):
+        return tp.follow(x)
+
+    def force(self, tp, x):
+        return x.F_raw * tp.ramp(x.now)
+
+    def transition(self, tp, x):
+        if not tp.enable_requested:
+            return State.DISABLED
+        s = x.sample
+        if not s.operator_present or not tp.robot_homed:
+            return State.ALIGNING
+        if s.buttons & 2:
+            return State.CLUTCHED
+        return None
+
+
+class Clutched(Behaviour):
+    state = State.CLUTCHED
+
+    def transition(self, tp, x):
+        if not tp.enable_requested:
+            return State.DISABLED
+        s = x.sample
+        if not s.operator_present or not tp.robot_homed:
+            return State.ALIGNING
+        if not s.buttons & 2:
+            return State.ENABLED
+        return None
+
+
+class Fault(Behaviour):
+    state = State.FAULT
+
+    def enter(self, tp, now):
+        tp.stop_robot()
+
+    def transition(self, tp, x):
+        if tp.reset_requested:
+            return State.DISABLED
+        return None
+
+
+BEHAVIOURS = {b.state: b for b in (Disabled(), Aligning(), Enabled(), Clutched(), Fault())}

@@ -1,0 +1,108 @@
+"""In-test fakes: a robot (Robot protocol) with fault injection - an ideal CDPR that reaches commanded lengths
+at once, with a pad at z >= z_pad of stiffness k and linear "FSR" counts (1 count = 0.01 N) - and the
+matching linear estimator, so loop tests exercise the loop, not the sensor model."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from devices.base import ContextDevice, DeviceError, RobotReading, RobotSpec
+from teleop.geometry import default_geometry
+from teleop.kinematics import length_jacobian, pose2lengths, structure_matrix
+from teleop.tension import wrench2tensions
+
+N_PER_COUNT = 0.01
+
+
+class FakeRobot(ContextDevice):
+    """Ideal robot. Fault injection attributes: `frozen` (telemetry seq stops), `boot_id`, `status`,
+    `fail_read` / `fail_command` (exceptions), `nan_counts`, `tension_offset` (6,) [N], `stuck` (cable index
+    whose tension rises with paid-out length)."""
+
+    def __init__(self, z_pad: float = 0.002, k_pad: float = 300.0, pretension: float = 1.0, seed: int = 0):
+        self.spec = RobotSpec(name="fake CDPR")
+        self.geom = default_geometry()
+        self.z_pad, self.k_pad, self.pretension = z_pad, k_pad, pretension
+        self.seed = seed
+        self.is_open = False
+        self.L0 = pose2lengths(np.zeros(6), self.geom)
+        self.Jp_pinv = np.linalg.pinv(length_jacobian(np.zeros(6), self.geom)[:, :3])
+        self.frozen = False
+        self.boot_id = 7
+        self.status = 1
+        self.fail_read = None
+        self.fail_command = None
+        self.nan_counts = False
+        self.tension_offset = np.zeros(6)
+        self.stuck = None
+        self.commands = []
+        self.stops = 0
+
+    def open(self):
+        self.L = self.L0.copy()
+        self.L_stuck0 = self.L0.copy()
+        self.seq = 0
+        self.t = 0.0
+        self.is_open = True
+
+    def close(self):
+        self.is_open = False
+
+    def command_lengths(self, lengths):
+        if self.fail_command is not None:
+            raise self.fail_command
+        L = np.asarray(lengths, dtype=float)
+        if L.shape != (6,) or not np.isfinite(L).all():
+            raise DeviceError(f"bad length command {L}")
+        self.commands.append(L.copy())
+        self.L = L
+
+    def stop(self):
+        self.stops += 1
+
+    def position(self):
+        return self.Jp_pinv @ (self.L - self.L0)
+
+    def tensions(self):
+        p = self.position()
+        f = np.zeros(6)
+        if p[2] > self.z_pad:
+            f[2] = -self.k_pad * (p[2] - self.z_pad)  # the pad pushes the tool back (-z)
+        A = structure_matrix(np.r_[p, 0.0, 0.0, 0.0], self.geom)
+        t = wrench2tensions(f, A, 0.05, 9.0, t_ref=self.pretension)
+        if self.stuck is not None:
+            t[self.stuck] += 400.0 * max(0.0, self.L[self.stuck] - self.L_stuck0[self.stuck])
+        return t + self.tension_offset
+
+    def read(self):
+        if self.fail_read is not None:
+            raise self.fail_read
+        if not self.frozen:
+            self.seq += 1
+            self.t += 0.001
+        t = self.tensions()
+        counts = np.clip(np.round(t / N_PER_COUNT), 0, self.spec.adc_max)
+        if self.nan_counts:
+            counts = counts * np.nan
+        steps = np.round(self.L * self.spec.steps_per_m)
+        return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
+                            commanded_lengths=self.L.copy(), status=self.status, boot_id=self.boot_id,
+                            extras={"tensions_true": t})
+
+
+class LinearEstimator:
+    """counts * 0.01 N -> tensions; f = -A t at the pose (the fake robot's sensor model inverted)."""
+
+    def __init__(self, geom=None):
+        self.geom = geom or default_geometry()
+        self.resets = 0
+
+    def reset(self):
+        self.resets += 1
+
+    def update(self, reading, pose, dt):
+        t = np.asarray(reading.fsr_counts, dtype=float) * N_PER_COUNT
+        return t, -(structure_matrix(pose, self.geom) @ t)
+
+    def describe(self):
+        return {"estimator": "linear", "N_per_count": N_PER_COUNT}
