@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from teleop.errors import InputError
 from teleop.protocols.blind.protocol import (HARDER, SOFTER, UNSURE, Compare, Rate, check_ratings, next_step,
                                              ranking_from_answers, ratings_from_positions)
-from teleop.protocols.blind.stats import SEED_TABLE3, kendall_tau, kendall_w, loading_slope, mean_std
+from teleop.protocols.blind.stats import SEED_TABLE3, average_ranks, kendall_tau, kendall_w, loading_slope, mean_std
 
 
 def truthful(hardness):
@@ -80,6 +80,15 @@ def test_kendall_tau_and_w():
     # the seed's Table 3 (rows = participants): near-perfect agreement
     table = np.array([row["ratings"] for row in SEED_TABLE3]).T
     assert kendall_w(table) == pytest.approx(1.0)
+
+
+def test_average_ranks_match_scipy():
+    from scipy.stats import rankdata
+
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        row = rng.integers(1, 5, size=6)
+        np.testing.assert_allclose(average_ranks(row), rankdata(row))
 
 
 def test_table3_mean_and_std_reproduce_the_seed():

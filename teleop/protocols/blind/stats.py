@@ -5,7 +5,6 @@ Table 3 summary (mean, std per area), and the stiffness rendered on the stylus f
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import rankdata
 
 # Seed 000 Table 3, hardest first (true order rigid > Dragon Skin 30 > Ecoflex 00-50 > Ecoflex 00-20): the
 # ratings of its ten participants and the mean and sample std (ddof=1) per area as printed. The printed std
@@ -30,6 +29,18 @@ def kendall_tau(ranking, truth) -> float:
     return float(s.sum() / (n * (n - 1) / 2))
 
 
+def average_ranks(row) -> np.ndarray:
+    """(n,) ranks 1..n of a row, ties sharing their average rank (as scipy.stats.rankdata)."""
+    v = np.asarray(row, dtype=float)
+    order = np.argsort(v, kind="mergesort")
+    ranks = np.empty(v.size)
+    ranks[order] = np.arange(1, v.size + 1)
+    for value in np.unique(v):
+        tie = v == value
+        ranks[tie] = ranks[tie].mean()
+    return ranks
+
+
 def kendall_w(ratings: np.ndarray) -> float:
     """Kendall's coefficient of concordance W (with the tie correction) of an (m raters, n items) array.
 
@@ -40,7 +51,7 @@ def kendall_w(ratings: np.ndarray) -> float:
     m, n = ratings.shape
     if m < 1 or n < 2:
         return float("nan")
-    ranks = np.vstack([rankdata(row) for row in ratings])
+    ranks = np.vstack([average_ranks(row) for row in ratings])
     R = ranks.sum(axis=0)
     S = float(((R - R.mean()) ** 2).sum())
     T = 0.0

@@ -1,0 +1,188 @@
+"""`teleop blind-test`: the blind stiffness-ranking study of seed 000 §5.2 (Table 3).
+
+Simulated participants (default: 10 of them) poke the four-area pad through the whole simulated chain:
+stylus -> mapping -> kinematics -> simulated CDPR and pybullet pads -> estimation -> rendering -> stylus.
+`--operator human` guides a coordinator through the same protocol for real participants, saving every
+answer so an interrupted study resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import sys
+
+DEFAULT_STATE = "blind_test_state.json"
+
+
+def parse_fraction(text: str) -> float:
+    """'0.23' or '23%' -> 0.23 (argparse type for --jnd)."""
+    import argparse
+    import math
+
+    s = str(text).strip()
+    try:
+        v = float(s[:-1]) / 100.0 if s.endswith("%") else float(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a fraction like 0.23 or a percentage like 23%, got '{text}'")
+    if not (math.isfinite(v) and 0 < v <= 5):
+        raise argparse.ArgumentTypeError(f"expected a JND in (0, 5] (0.23 = 23 %), got '{text}'")
+    return v
+
+
+def positive_int(text: str) -> int:
+    import argparse
+
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {v}")
+    return v
+
+
+def add_rig_options(p) -> None:
+    """Options shared with `teleop bench blind-jnd`: the chain the participants feel."""
+    p.add_argument("--no-compensation", action="store_true",
+                   help="ablation: render the raw FSR wrench (no friction compensation, no Kalman)")
+    p.add_argument("--force-scale", type=float, default=None, metavar="G",
+                   help="stylus force per newton at the tip (default: the rig's; a tiny value degrades the chain)")
+    p.add_argument("--depth-mm", type=float, default=None, metavar="MM",
+                   help="participants' mean stylus push depth [mm]")
+    p.add_argument("--speed-mm-s", type=float, default=None, metavar="MM_S",
+                   help="participants' mean stylus push speed [mm/s]")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "blind-test", help="blind stiffness ranking (seed 000 Table 3): simulated or real participants",
+        description="Participants poke four pad areas (rigid PLA, Dragon Skin 30, Ecoflex 00-50, Ecoflex 00-20) "
+                    "through the haptic stylus without seeing them and rank their hardness.")
+    p.add_argument("--operator", choices=("sim", "human"), default="sim",
+                   help="simulated participants (default) or real ones guided by prompts")
+    p.add_argument("--participants", type=positive_int, default=10, metavar="N", help="number of participants")
+    p.add_argument("--seed", type=int, default=0, help="seed of layouts, orders and participants (default 0)")
+    p.add_argument("--jnd", type=parse_fraction, default=None, metavar="J",
+                   help="participants' stiffness JND as a Weber fraction, e.g. 0.23 or 23%% "
+                        "(default 0.23, Jones & Hunter 1990)")
+    add_rig_options(p)
+    p.add_argument("--haptic", default="sim://", metavar="URL",
+                   help="stylus: sim:// (default); with --operator human also touch://, omega:// or none")
+    p.add_argument("--robot", default="sim://robot", metavar="URL", help="robot (default sim://robot)")
+    p.add_argument("--state", default=DEFAULT_STATE, metavar="FILE",
+                   help=f"--operator human: answers saved here after every step (default {DEFAULT_STATE})")
+    p.add_argument("--json", metavar="PATH", help="write the results as JSON")
+    p.add_argument("--plot", metavar="PATH", help="write a PNG: ratings per area and rendered vs true stiffness")
+    p.set_defaults(func=run)
+
+
+def participant_params(args):
+    from teleop.protocols.blind.participants import ParticipantParams
+
+    kw = {}
+    if args.jnd is not None:
+        kw["jnd"] = args.jnd
+    if args.depth_mm is not None:
+        kw["depth"] = args.depth_mm * 1e-3
+    if args.speed_mm_s is not None:
+        kw["speed"] = args.speed_mm_s * 1e-3
+    return ParticipantParams(**kw)
+
+
+def rig_options(args):
+    from teleop.protocols.blind.rig import RigOptions
+
+    kw = {"compensation": not args.no_compensation}
+    if args.force_scale is not None:
+        kw["force_scale"] = args.force_scale
+    return RigOptions(**kw)
+
+
+def run(args) -> int:
+    if args.operator == "human":
+        return run_human(args)
+    return run_sim(args)
+
+
+def _progress(total: int, desc: str):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="participant", file=sys.stderr, disable=not sys.stderr.isatty())
+
+
+def run_sim(args) -> int:
+    from teleop.errors import InputError
+    from teleop.outputs import write_json
+    from teleop.protocols.blind.rig import SimRig
+    from teleop.protocols.blind.study import run_simulated_study
+
+    if args.haptic != "sim://" or args.robot != "sim://robot":
+        raise InputError("blind-test --operator sim runs on the simulated stylus and robot only "
+                         "(--haptic sim:// --robot sim://robot); use --operator human at a real rig")
+    params = participant_params(args)
+    options = rig_options(args)
+    with SimRig(options) as rig, _progress(args.participants, "blind test") as bar:
+        result = run_simulated_study(rig, args.participants, args.seed, params, progress=bar.update)
+        config = {"operator": "sim", "participants": args.participants, "seed": args.seed,
+                  "participant_params": _asdict(params), "rig": rig.describe()}
+    result = type(result)(areas=result.areas, records=result.records, config=config)
+    print(result.table())
+    print(f"\n(seed 000 Table 3 beside the simulated ratings; {rig.attribution})")
+    if args.json:
+        write_json(args.json, result.to_dict())
+    if args.plot:
+        result.plot(args.plot)
+    return 0
+
+
+def _asdict(obj) -> dict:
+    from dataclasses import asdict
+
+    return asdict(obj)
+
+
+def run_human(args) -> int:
+    from teleop.outputs import write_json
+    from teleop.protocols.blind.human import Coordinator, run_human_study
+    from teleop.protocols.blind.rig import blind_areas
+
+    def write(text: str) -> None:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+
+    def read() -> str:
+        line = sys.stdin.readline()
+        if line and not sys.stdin.isatty():
+            write(line if line.endswith("\n") else line + "\n")  # echo scripted answers into the transcript
+        return line
+
+    coordinator = Coordinator(read, write)
+    station, rig = None, None
+    try:
+        if args.haptic == "sim://" and args.robot == "sim://robot":
+            from teleop.protocols.blind.rig import RehearsalStation
+
+            rig = RehearsalStation(rig_options(args), participant_params(args))
+            rig.open()
+            station = rig.poke_and_describe
+            areas = rig.areas
+        elif args.haptic == "none":
+            areas = blind_areas()
+        else:
+            from teleop.protocols.blind.rig import BackgroundSession
+
+            rig = BackgroundSession(args.haptic, args.robot, rig_options(args))
+            rig.open()
+            areas = blind_areas()
+        result = run_human_study(args.state, args.seed, args.participants, areas, coordinator, station)
+    finally:
+        if rig is not None:
+            rig.close()
+    if result is None:
+        return 1
+    print()
+    print(result.table())
+    if args.json:
+        write_json(args.json, result.to_dict())
+    if args.plot:
+        result.plot(args.plot)
+    return 0

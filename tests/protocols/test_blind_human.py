@@ -1,0 +1,118 @@
+"""`teleop blind-test --operator human` end to end through a pipe: prompts answered by a script, bad answers
+refused, a SIGKILL in the middle, and a resume that loses nothing."""
+
+import json
+import os
+import select
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+P1 = ["h", "s", "x", "h", "r", "h", "s", "h", "11 7 4 2", "10 7 4 2"]   # 'x' and '11 ...' are refused
+P2 = ["s", "s", "maybe", "s", "h", "h", "h", "5 5 5 5", "9 6 4 1"]      # 'maybe' and '5 5 5 5' refused
+ANSWERS = P1 + P2
+PROMPT_ENDS = ("poke both again] ", "decreasing: ")
+
+
+def command(state, out_json, *extra):
+    return [sys.executable, "-m", "teleop.cli", "blind-test", "--operator", "human", "--haptic", "none",
+            "--participants", "2", "--seed", "7", "--state", str(state), "--json", str(out_json), *extra]
+
+
+def read_until_prompts(proc, count, buf, timeout=30.0):
+    """Read stdout until `count` prompts have been shown in total; returns the text so far."""
+    fd = proc.stdout.fileno()
+    end = time.monotonic() + timeout
+    while sum(buf.count(p) for p in PROMPT_ENDS) < count:
+        r, _, _ = select.select([fd], [], [], max(0.0, end - time.monotonic()))
+        if not r:
+            raise AssertionError(f"no prompt within {timeout} s; output so far:\n{buf}")
+        chunk = os.read(fd, 65536).decode()
+        if not chunk:
+            raise AssertionError(f"process ended early:\n{buf}")
+        buf += chunk
+    return buf
+
+
+def test_uninterrupted_and_killed_resumed_studies_give_the_same_results(tmp_path):
+    # reference: every answer through a pipe in one go
+    ref_state, ref_json = tmp_path / "ref_state.json", tmp_path / "ref.json"
+    r = subprocess.run(command(ref_state, ref_json), input="\n".join(ANSWERS) + "\n", capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert "'x' is not an answer" in r.stdout and "'maybe' is not an answer" in r.stdout
+    assert "refused: ratings" in r.stdout and r.stdout.count("refused") == 2
+    ref = json.loads(ref_json.read_text())
+    assert [p["ratings"] for p in ref["participants"]] == [
+        dict(zip(ref["true_order"], [ref["participants"][0]["ratings"][a] for a in ref["true_order"]])),
+        dict(zip(ref["true_order"], [ref["participants"][1]["ratings"][a] for a in ref["true_order"]]))]
+    assert sorted(ref["participants"][0]["ratings"].values()) == [2, 4, 7, 10]
+    assert sorted(ref["participants"][1]["ratings"].values()) == [1, 4, 6, 9]
+
+    # interrupted: answer prompt by prompt, SIGKILL once participant 2 has given two answers
+    state, out = tmp_path / "state.json", tmp_path / "out.json"
+    proc = subprocess.Popen(command(state, out), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    n_before = len(P1) + 2
+    buf = ""
+    try:
+        for i in range(n_before):
+            buf = read_until_prompts(proc, i + 1, buf)
+            proc.stdin.write((ANSWERS[i] + "\n").encode())
+            proc.stdin.flush()
+        buf = read_until_prompts(proc, n_before + 1, buf)  # the next prompt: everything before is saved
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=10)
+    saved = json.loads(state.read_text())
+    assert saved["records"][0]["ratings"] == [10, 7, 4, 2]
+    assert [a[2] for a in saved["records"][1]["answers"]] == ["softer", "softer"]
+    assert not out.exists()
+
+    # resume: only the remaining answers are given
+    rest = ANSWERS[n_before:]
+    r = subprocess.run(command(state, out), input="\n".join(rest) + "\n", capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert "Resuming" in r.stdout and "1 of 2 participants done" in r.stdout
+    assert out.read_bytes() == ref_json.read_bytes()
+    assert json.loads(state.read_text()) == json.loads(ref_state.read_text())
+
+
+def test_input_ending_early_saves_and_says_how_to_resume(tmp_path):
+    state, out = tmp_path / "s.json", tmp_path / "o.json"
+    r = subprocess.run(command(state, out), input="h\ns\n", capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1
+    assert "run the same command again to resume" in r.stdout
+    assert len(json.loads(state.read_text())["records"][0]["answers"]) == 2 and not out.exists()
+
+
+def test_state_of_another_study_is_refused_with_one_line(tmp_path):
+    state, out = tmp_path / "s.json", tmp_path / "o.json"
+    subprocess.run(command(state, out), input="h\n", capture_output=True, text=True, timeout=60)
+    r = subprocess.run(command(state, out, "--seed", "8"), input="h\n", capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "seed" in lines[0] and str(state) in lines[0]
+    state.write_text("{not json")
+    r = subprocess.run(command(state, out), input="h\n", capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "not a blind-test state file" in r.stderr
+
+
+@pytest.mark.parametrize("delay", [0.35, 0.5, 0.65, 0.8])
+def test_killed_at_any_moment_the_state_file_is_whole(tmp_path, delay):
+    state, out = tmp_path / "s.json", tmp_path / "o.json"
+    proc = subprocess.Popen(command(state, out), stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    proc.stdin.write(("\n".join(ANSWERS) + "\n").encode())
+    proc.stdin.flush()
+    time.sleep(delay)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=10)
+    if state.exists():
+        saved = json.loads(state.read_text())  # never half-written
+        assert saved["study"] == "blind-test"
