@@ -2,12 +2,21 @@
 
 Every effect is registered under its canonical name and used three ways:
 
-    from teleop.physics import Signals, get_effect, fit
+    from teleop.physics import Signals, chain, fit, get_effect
     eff = get_effect("backlash")
     sig = Signals(t=t, x=motor_pos)                      # SI arrays (n,); v derived from x
     tip = eff.apply(sig, {"width": 1e-3})                # (a) whole signal -> output channel (n,)
-    st = eff.make_step({"width": 1e-3})                  # (b) real time: st.step(x=...) per sample
+    st = eff.make_step({"width": 1e-3})                  # (b) real time: st.step(x=x_k) per sample,
+    tip_k = st.step(x=0.002)                             #     same math, state kept in st; st.reset()
     res = fit(eff, sig, measured_tip)                    # (c) identify: res.params, res.stderr, res.rmse
+    res = fit("capstan_friction", Signals(t=t, x=x, load=F_tip), F_motor,
+              fixed={"theta": 2.44}, mask=train)        # fixed parameters, residual on `train` only
+    pad = chain("hertz_contact", "viscoelasticity", "contact_damping")   # one effect, params "hertz_contact.k", ...
+
+Conventions: x increasing = the motor hauls its cable in (pulling phase); force-link effects turn the
+tip load into the motor-side force (their `output` is "load": the load seen by the next element towards
+the motor); sensor effects turn the true force into the reading; contact effects give the pad force,
+zero out of contact (d <= 0) and never negative.
 
 Inputs are `Signals` channels (t, x, v, load, force, temperature, theta, d, d_dot; see base.CHANNELS).
 `Effect.inputs` names the channels an effect needs (`Effect.optional` those it uses when present), and

@@ -236,6 +236,13 @@ class Effect:
         signals.require(self.inputs, f"effect '{self.name}'")
         return self.simulate(signals, self.check(params))
 
+    def describe(self) -> dict:
+        """JSON-ready summary: name, link, doc, inputs, output and each parameter's unit, bounds, default."""
+        return {"name": self.name, "link": self.link, "doc": self.doc, "inputs": list(self.inputs),
+                "optional": list(self.optional), "output": self.output,
+                "params": {p.name: {"unit": p.unit, "lower": p.lower, "upper": p.upper, "default": p.default,
+                                    "log": p.log, "doc": p.doc} for p in self.params}}
+
     def make_step(self, params: Mapping[str, float] | None = None) -> Step:
         """A fresh per-sample simulator with these parameters."""
         return self.step_class(params)

@@ -46,7 +46,10 @@ def tip2motor(F_tip, mu, theta, pulling):
 
 
 def motor2tip(F_motor, mu, theta, pulling):
-    """Compensation, inverse of `tip2motor`: F_t = F_m exp(-/+ mu theta) (seed 000 eq 7: T_hold = T_load e^-mu theta)."""
+    """Compensation, inverse of `tip2motor`: F_t = F_m exp(-/+ mu theta), - while pulling.
+
+    Seed 000 eq 7 (T_hold = T_load e^-mu theta) with the load/hold sides picked by the motion.
+    """
     return np.asarray(F_motor, dtype=float) * np.exp(-_direction(pulling) * np.asarray(mu) * np.asarray(theta))
 
 

@@ -1,5 +1,7 @@
 """Conformance over every registered effect: round-trip fits within 5 %, Step == apply, specs, errors."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -63,6 +65,7 @@ def test_specs_are_consistent(name):
         assert p.lower <= p.default <= p.upper and p.unit and p.doc
         for v in (p.lower, p.default, p.upper):
             assert p.from_unit(p.to_unit(v)) == pytest.approx(v, rel=1e-12, abs=1e-12)
+    json.dumps(eff.describe(), allow_nan=False)
     y = eff.apply(scenario(name).signals)  # defaults work
     assert y.shape == scenario(name).signals.t.shape and np.isfinite(y).all()
 
@@ -111,3 +114,16 @@ def test_chain_fits_contact_stack_jointly_and_steps_like_apply():
     one = chain("linear_contact")
     np.testing.assert_array_equal(one.apply(sig, {"linear_contact.k": 800.0}),
                                   get_effect("linear_contact").apply(sig, {"k": 800.0}))
+
+
+def test_package_example_pad_stack_and_fit_plot():
+    sc = scenario("contact_damping")
+    pad = chain("hertz_contact", "viscoelasticity", "contact_damping")
+    assert set(pad.inputs) == {"d", "t", "d_dot"}
+    sig = Signals(t=sc.signals.t, d=sc.signals.d)
+    F = pad.apply(sig)
+    assert np.all(F >= 0) and np.all(F[sig.d <= 0] == 0) and F.max() > 0
+    step_matches_apply(pad, sig.window(slice(0, 500)), pad.defaults(), rtol=1e-9, atol=1e-9)
+    res = fit("linear_contact", sig, noisy(get_effect("linear_contact").apply(sig, {"k": 900.0}), 0.01))
+    ax = res.plot(sig, get_effect("linear_contact").apply(sig, {"k": 900.0}))
+    assert len(ax.get_lines()) == 2
