@@ -50,14 +50,19 @@ class FsrWrenchEstimator:
         return t, f
 
     def describe(self) -> dict:
-        cal = self.cal
-        out = {"estimator": type(self).__name__}
-        for name in ("loading", "unloading", "coef_loading", "coef_unloading", "adc_max", "r_divider", "v_ref",
-                     "source"):
-            v = getattr(cal, name, None)
-            if v is not None:
-                out[name] = np.asarray(v).tolist() if not isinstance(v, str) else v
-        return out
+        from dataclasses import fields
+
+        cal = {f.name: getattr(self.cal, f.name) for f in fields(self.cal) if f.init}
+        cal = {k: list(v) if isinstance(v, (tuple, np.ndarray)) else v for k, v in cal.items()}
+        return {"estimator": type(self).__name__, "fsr": cal}
+
+    @staticmethod
+    def rebuild(desc: dict, geom: Geometry) -> "FsrWrenchEstimator":
+        """The estimator a session recorded (`describe()` output), for replay."""
+        from teleop.sensors import FsrCalibration
+
+        cal = {k: tuple(v) if isinstance(v, list) else v for k, v in desc["fsr"].items()}
+        return FsrWrenchEstimator(geom, FsrCalibration(**cal))
 
 
 def structure_matrix_at(p, Rr: np.ndarray, B: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from teleop.geometry import Geometry, default_geometry
+from teleop.kinematics import lengths2pose
 from teleop.loop.compute import FsrWrenchEstimator, clamp_force, ramp_factor, render_force
 from teleop.loop.params import LoopParams
 from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
@@ -97,6 +98,9 @@ class Teleop:
         self.anchor_stylus = np.zeros(3)
         self.anchor_robot = self.pose[:3].copy()
         self.tap = None
+        self.last_reading = None
+        self.lateness_ns = 0  # set by the runner before each tick (recorded)
+        self.prev_tick_ns = 0
 
     # ---- operator commands -------------------------------------------------------------------------------
     def start(self, now: float) -> None:
@@ -133,11 +137,17 @@ class Teleop:
         self.anchor_stylus = np.array(self.x.sample.measured_cp, dtype=float)
         self.anchor_robot = self.pose[:3].copy()
         self.t_engaged = now
-        if self.L_last is None:
-            r = self.x.reading if self.x.reading is not None else getattr(self, "last_reading", None)
+        if self.L_last is None:  # first engagement: start from where the robot is
+            r = self.x.reading if self.x.reading is not None else self.last_reading
             L = None if r is None else np.asarray(r.commanded_lengths, dtype=float)
-            self.L_last = L if L is not None and np.isfinite(L).all() and (L > 0).all() else \
-                position2lengths(self.pose[:3], self.offsets)
+            if L is not None and np.isfinite(L).all() and (L > 0).all():
+                if np.max(np.abs(L - position2lengths(self.pose[:3], self.offsets))) > 1e-4:
+                    self.pose = lengths2pose(L, self.geom, guess=self.pose)
+                    self.pose[3:] = self.params.mapping.home[3:]  # the mapping holds the home orientation
+                    self.anchor_robot = self.pose[:3].copy()
+                self.L_last = L
+            else:
+                self.L_last = position2lengths(self.pose[:3], self.offsets)
 
     def follow(self, x) -> np.ndarray:
         """ENABLED: stylus -> target -> lengths, step-limited to v_max dt and clipped to the length limits."""

@@ -58,16 +58,14 @@ class RowTap:
             raise ValueError("RowTap needs signal names unique across topics")
         self.stage_sl = slice(self.sl["read_us"].start, self.sl["record_us"].stop)
         self.extras = dict(extras or {})
-        self.lateness_ns = 0
-        self.tick_ns = 0
 
     def __call__(self, tp) -> None:
         r, sl, x = self.row, self.sl, tp.x
         r[sl["tick"]] = x.k
         r[sl["t"]] = x.now
         r[sl["state"]] = int(tp.state)
-        r[sl["lateness_us"]] = self.lateness_ns * 1e-3
-        r[sl["tick_us"]] = self.tick_ns * 1e-3
+        r[sl["lateness_us"]] = tp.lateness_ns * 1e-3
+        r[sl["tick_us"]] = tp.prev_tick_ns * 1e-3  # the previous tick's duration
         r[self.stage_sl] = tp.stage_ns * 1e-3  # this tick's stages; record_us is the previous tick's
         s = x.sample
         if s is not None:

@@ -99,8 +99,10 @@ def run_paced(tp, seconds: float, rate_hz: float, log: TimingLog | None = None, 
             k_sched += int(missed)
             deadline = t0 + k_sched * period
             late = wake - deadline
+        tp.lateness_ns = late
         tp.tick((wake - t0) * 1e-9)
         end = pc()
+        tp.prev_tick_ns = end - wake
         log.add(late, end - wake, tp.stage_ns)
         if on_tick is not None:
             on_tick(tp.k - 1, late)

@@ -1,0 +1,134 @@
+"""Wiring of a session: open the devices by URL, start the recorder process, run the paced loop, close.
+
+Used by `teleop session` and `teleop bench loop`. The loop thread only copies numbers into the recorder's
+shared-memory ring; the garbage collector is paused while the loop runs (a gen-2 collection would be a
+multi-millisecond stall).
+"""
+
+from __future__ import annotations
+
+import gc
+import platform
+import signal
+import subprocess
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+import teleop
+from devices.base import open_device
+from teleop.loop.core import Teleop
+from teleop.loop.params import LoopParams
+from teleop.loop.tap import RowTap, numeric_extras, session_layout
+from teleop.loop.timing import TimingLog, run_paced
+
+
+@dataclass
+class SessionResult:
+    """What a session did: timing summary (bench JSON), state changes, final state, recording health."""
+
+    timing: dict
+    events: list = field(default_factory=list)
+    final_state: str = ""
+    fault_reason: str = ""
+    drops: int = 0
+    alarm: str = ""
+    record: str | None = None
+
+
+def software_version() -> str:
+    """cdpr-teleop version plus the git commit when run from a checkout."""
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, timeout=2,
+                             cwd=Path(teleop.__file__).parent).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        rev = ""
+    return f"cdpr-teleop {teleop.__version__}" + (f" ({rev})" if rev else "")
+
+
+def session_metadata(tp: Teleop, haptic_url: str, robot_url: str, seconds: float, seed: int | None) -> dict:
+    """Configuration, calibration, firmware and software versions of a session (stored in the recording)."""
+    g = tp.geom
+    robot = tp.robot
+    return {
+        "configuration": {"haptic": haptic_url, "robot": robot_url, "seconds": seconds, "seed": seed,
+                          "loop": tp.params.as_dict(),
+                          "geometry": {"B": g.B.tolist(), "r": g.r.tolist(), "theta0": g.theta0, "mu": g.mu,
+                                       "t_min": g.t_min, "t_max": g.t_max, "tip": g.tip.tolist(),
+                                       "l_min": g.l_min, "l_max": g.l_max, "v_max": g.v_max},
+                          "haptic_spec": vars(tp.haptic.spec) if hasattr(tp.haptic.spec, "__dict__") else
+                          str(tp.haptic.spec),
+                          "robot_spec": vars(robot.spec) if hasattr(robot.spec, "__dict__") else str(robot.spec)},
+        "calibration": tp.estimator.describe(),
+        "firmware_version": str(getattr(robot, "firmware_version", None) or f"n/a ({type(robot).__name__})"),
+        "software_version": software_version(),
+        "platform": f"{platform.python_implementation()} {platform.python_version()} {platform.machine()}",
+        "start_time_ns": time.time_ns(),
+    }
+
+
+class _Terminate(Exception):
+    pass
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminate()
+
+
+def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | None = None,
+                params: LoopParams | None = None, estimator=None, seed: int | None = None,
+                spin_us: float = 200.0, flush_interval: float = 0.1, haptic=None, robot=None) -> SessionResult:
+    """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs."""
+    params = params or LoopParams()
+    haptic = haptic if haptic is not None else open_device(haptic_url)
+    robot = robot if robot is not None else open_device(robot_url)
+    recorder = None
+    old = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        with haptic, robot:
+            tp = Teleop(haptic, robot, params, estimator=estimator)
+            first = robot.read()  # telemetry only; no motion command is sent before ENABLED
+            tp.last_reading = first
+            extras = numeric_extras(first)
+            if record:
+                from teleop.recording import Recorder
+
+                layout = session_layout(extras)
+                meta = session_metadata(tp, haptic_url, robot_url, seconds, seed)
+                recorder = Recorder(record, layout, meta, flush_interval=flush_interval,
+                                    t0_ns=meta["start_time_ns"]).start()
+                tap = RowTap(layout, recorder.push, extras)
+                tp.tap = tap
+                tp.on_event = lambda ev: recorder.event(vars(ev))
+            log = TimingLog(int(round(seconds * params.rate_hz)))
+            gc.collect()
+            gc.disable()
+            try:
+                run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us)
+            except (KeyboardInterrupt, _Terminate):
+                pass
+            finally:
+                gc.enable()
+                try:
+                    haptic.servo_cf(np.zeros(3))
+                finally:
+                    try:
+                        robot.stop()
+                    except Exception:  # noqa: BLE001 - closing anyway; the robot's own watchdog stops it
+                        pass
+            timing = log.summary(params.rate_hz)
+            result = SessionResult(timing=timing, events=[vars(e) for e in tp.events], final_state=tp.state.name,
+                                   fault_reason=tp.fault_reason, record=record)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+        if recorder is not None:
+            end = {"timing": timing if "timing" in locals() else {},
+                   "final_state": result.final_state if "result" in locals() else "unknown",
+                   "fault_reason": result.fault_reason if "result" in locals() else "",
+                   "drops": recorder.drops, "event_drops": recorder.event_drops}
+            recorder.close(end)
+            if "result" in locals():
+                result.drops, result.alarm = recorder.drops, recorder.alarm
+    return result
