@@ -1,0 +1,391 @@
+"""Tension sensors: FSR calibration (seed 000 §2.2, eq 2, Fig 7), FBG force with temperature compensation
+(seed 001 eq 3) and the one-sensor-for-all proximal/distal model (seed 001 eqs 4-7).
+
+FSR chain (what the robot's ADC sees, SI inside):
+    tension t [N] --branch polynomial P(t) (eq 2)--> conductance G [S] --voltage divider--> counts [0, adc_max]
+The calibration fits one quintic per branch (loading, unloading); the inverse map reading -> tension is a
+monotone interpolation table per branch built once. `FsrConverter` keeps per-cable state and picks the branch
+from the direction of change of the reading (with a dead band so noise does not flip branches).
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.polynomial import Polynomial
+
+from teleop.errors import InputError
+
+G = 9.80665  # standard gravity [m/s^2], converts the seed's calibration weights to newtons
+LOADING, UNLOADING = 1, -1
+
+
+# --------------------------------------------------------------------------------------------------------
+# FSR: calibration data, quintic fits, inversion
+# --------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class FsrCalibrationData:
+    """Calibration samples of one FSR (seed 000 Fig 6/7 procedure).
+
+    Attributes:
+        tension: (n,) applied tension [N] (weight times g).
+        reading: (n,) sensor conductance [S].
+        branch: (n,) +1 loading (weight added), -1 unloading (weight removed).
+        source: where the data came from (file name or a description).
+    """
+
+    tension: np.ndarray
+    reading: np.ndarray
+    branch: np.ndarray
+    source: str = ""
+
+
+def default_fsr_calibration_data(seed: int = 0, repeats: int = 3, noise_S: float = 0.4e-6) -> FsrCalibrationData:
+    """Synthetic calibration made to look like seed 000 Fig 7 (not measured data).
+
+    0-600 g in 50 g steps up (loading) and 600-0 g down (unloading), each the mean of `repeats` runs like the
+    seed's three. Conductance rises concavely to about 62 uS (loading) at 5.89 N; the unloading branch lies
+    above the loading one at the same weight (friction in the sheath holds the pressed block), by up to
+    ~12 % mid-range and ~4 % at 600 g (the seed's 600 g unloading reading follows 650 g). Both start at 0.
+    """
+    rng = np.random.default_rng(seed)
+    w_g = np.arange(0.0, 601.0, 50.0)
+    t = w_g * 1e-3 * G
+    t_max = t[-1]
+    x = t / t_max
+    g_load = 62e-6 * (1.35 * x - 0.35 * x ** 2) * (1.0 - np.exp(-x / 0.04))
+    g_unload = g_load + 7.5e-6 * np.sin(np.pi * x ** 0.8) + 2.5e-6 * x * (1.0 - np.exp(-x / 0.04))
+    tension, reading, branch = [], [], []
+    for b, curve in ((LOADING, g_load), (UNLOADING, g_unload[::-1])):
+        tt = t if b == LOADING else t[::-1]
+        mean = np.mean([np.maximum(curve + rng.normal(0.0, noise_S, curve.shape), 0.0) for _ in range(repeats)],
+                       axis=0)
+        tension.append(tt)
+        reading.append(mean)
+        branch.append(np.full(tt.shape, b))
+    return FsrCalibrationData(np.concatenate(tension), np.concatenate(reading), np.concatenate(branch),
+                              source="synthetic, shaped after seed 000 Fig 7")
+
+
+_CSV_COLUMNS = ("tension_N", "conductance_uS", "branch")
+
+
+def load_fsr_calibration_csv(path: str | Path) -> FsrCalibrationData:
+    """Read a calibration CSV: columns `tension_N`, `conductance_uS`, `branch` (loading|unloading or +1|-1).
+
+    `#` lines are comments. Missing columns or bad values raise a one-line InputError naming file and column.
+    """
+    path = Path(path)
+    try:
+        lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip() and not ln.startswith("#")]
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    if not lines:
+        raise InputError(f"{path}: empty calibration file (expected columns {', '.join(_CSV_COLUMNS)})")
+    rows = list(csv.reader(lines))
+    header = [h.strip() for h in rows[0]]
+    for col in _CSV_COLUMNS:
+        if col not in header:
+            raise InputError(f"{path}: missing column '{col}' (expected columns {', '.join(_CSV_COLUMNS)})")
+    idx = {c: header.index(c) for c in _CSV_COLUMNS}
+    tension, reading, branch = [], [], []
+    for lineno, row in enumerate(rows[1:], start=2):
+        try:
+            t = float(row[idx["tension_N"]])
+            g = float(row[idx["conductance_uS"]]) * 1e-6
+        except (ValueError, IndexError):
+            raise InputError(f"{path}: data row {lineno}: tension_N and conductance_uS must be numbers") from None
+        raw = row[idx["branch"]].strip().lower() if idx["branch"] < len(row) else ""
+        b = {"loading": LOADING, "unloading": UNLOADING, "+1": LOADING, "1": LOADING, "-1": UNLOADING}.get(raw)
+        if b is None or not (np.isfinite(t) and np.isfinite(g)):
+            raise InputError(f"{path}: data row {lineno}: column 'branch' must be loading or unloading "
+                             f"and values finite, got {row}")
+        tension.append(t)
+        reading.append(g)
+        branch.append(b)
+    data = FsrCalibrationData(np.array(tension), np.array(reading), np.array(branch), source=str(path))
+    for b, name in ((LOADING, "loading"), (UNLOADING, "unloading")):
+        if np.count_nonzero(data.branch == b) < 6:
+            raise InputError(f"{path}: column 'branch' needs at least 6 {name} rows for a quintic fit")
+    return data
+
+
+def write_fsr_calibration_csv(path: str | Path, data: FsrCalibrationData) -> Path:
+    """Write calibration data in the format `load_fsr_calibration_csv` reads (atomically)."""
+    from teleop.outputs import atomic_write
+
+    lines = [f"# source = {data.source}", ",".join(_CSV_COLUMNS)]
+    for t, g, b in zip(data.tension, data.reading, data.branch):
+        lines.append(f"{t:.6f},{g * 1e6:.6f},{'loading' if b == LOADING else 'unloading'}")
+    text = "\n".join(lines) + "\n"
+    return atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+
+
+@dataclass(frozen=True)
+class FsrCalibration:
+    """Quintic reading = P(tension) per branch (seed 000 eq 2, fitted as an ordinary polynomial).
+
+    Attributes:
+        loading, unloading: (6,) power-series coefficients of conductance [S] in tension [N], lowest first.
+        t_max: upper end of the calibrated tension range [N].
+        r_divider: divider resistor of the ADC circuit [ohm] (counts = adc_max G R / (1 + G R)).
+        adc_max: ADC full scale [counts].
+        table_size: points of the inverse tables.
+    """
+
+    loading: tuple
+    unloading: tuple
+    t_max: float
+    r_divider: float = 10e3
+    adc_max: int = 1023
+    table_size: int = 2048
+    _tables: dict = field(default=None, init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        grid = np.linspace(0.0, self.t_max, self.table_size)
+        tables = {}
+        for b, coefs in ((LOADING, self.loading), (UNLOADING, self.unloading)):
+            g = Polynomial(coefs)(grid)
+            # monotone inversion: a quintic can wiggle at the ends; keep the running maximum so the
+            # table reading -> tension is non-decreasing, then drop repeated readings.
+            g = np.maximum.accumulate(g)
+            keep = np.r_[True, np.diff(g) > 0]
+            gk, tk = g[keep], grid[keep]
+            slope = (tk[-1] - tk[-8]) / (gk[-1] - gk[-8])  # dt/dG at the top, for linear extrapolation
+            tables[b] = (gk, tk, float(slope))
+        object.__setattr__(self, "_tables", tables)
+
+    def reading(self, t, branch) -> np.ndarray:
+        """Conductance [S] for tension t [N] on `branch` (+1 loading, -1 unloading), array-broadcast."""
+        t = np.asarray(t, dtype=float)
+        b = np.broadcast_to(np.asarray(branch), t.shape)
+        gl = Polynomial(self.loading)(t)
+        gu = Polynomial(self.unloading)(t)
+        return np.maximum(np.where(b == UNLOADING, gu, gl), 0.0)
+
+    def tension(self, reading, branch) -> np.ndarray:
+        """Tension [N] for conductance `reading` [S] on `branch` (inverse of `reading`; 0 below, linear above)."""
+        g = np.asarray(reading, dtype=float)
+        b = np.broadcast_to(np.asarray(branch), g.shape)
+        out = np.empty(g.shape)
+        for br in (LOADING, UNLOADING):
+            gk, tk, slope = self._tables[br]
+            m = b == br
+            gm = g[m]
+            tm = np.interp(gm, gk, tk)
+            above = gm > gk[-1]
+            tm[above] = tk[-1] + slope * (gm[above] - gk[-1])
+            out[m] = tm
+        return out
+
+    def counts2conductance(self, counts) -> np.ndarray:
+        """Conductance [S] from ADC counts through the divider: G = c / ((adc_max - c) R)."""
+        c = np.clip(np.asarray(counts, dtype=float), 0.0, self.adc_max - 0.5)
+        return c / ((self.adc_max - c) * self.r_divider)
+
+    def conductance2counts(self, g) -> np.ndarray:
+        """ADC counts (float, unrounded) for conductance g [S]: adc_max G R / (1 + G R)."""
+        gr = np.maximum(np.asarray(g, dtype=float), 0.0) * self.r_divider
+        return self.adc_max * gr / (1.0 + gr)
+
+
+def fit_fsr_calibration(data: FsrCalibrationData, degree: int = 5, **kwargs) -> FsrCalibration:
+    """Least-squares quintic per branch of reading vs tension (numpy.polynomial), seed 000 eq 2."""
+    coefs = {}
+    for b in (LOADING, UNLOADING):
+        m = data.branch == b
+        if np.count_nonzero(m) < degree + 1:
+            raise InputError(f"{data.source or 'calibration'}: need at least {degree + 1} points per branch")
+        coefs[b] = tuple(Polynomial.fit(data.tension[m], data.reading[m], degree).convert().coef.tolist())
+    return FsrCalibration(loading=coefs[LOADING], unloading=coefs[UNLOADING],
+                          t_max=float(np.max(data.tension)), **kwargs)
+
+
+def default_fsr_calibration() -> FsrCalibration:
+    """The quintic fits of the synthetic Fig-7-like calibration (`default_fsr_calibration_data`)."""
+    return fit_fsr_calibration(default_fsr_calibration_data())
+
+
+def eq2_roots(coefs) -> tuple[float, np.ndarray]:
+    """(a, x_i): the fitted quintic written as eq 2, P(x) = a prod(x - x_i) (roots may be complex)."""
+    p = Polynomial(coefs)
+    return float(p.coef[-1]), p.roots()
+
+
+def synthesize_fsr_counts(t, branch, cal: FsrCalibration, rng: np.random.Generator | None = None,
+                          noise_counts: float = 0.0) -> np.ndarray:
+    """Raw FSR ADC counts (int) from tensions t [N] on `branch`: t -> conductance -> counts, + noise, rounded.
+
+    This is how a simulated robot makes its raw readings; `noise_counts` is the RMS ADC noise [counts].
+    """
+    c = cal.conductance2counts(cal.reading(t, branch))
+    if noise_counts > 0:
+        if rng is None:
+            raise ValueError("synthesize_fsr_counts: noise needs a seeded rng")
+        c = c + rng.normal(0.0, noise_counts, np.shape(c))
+    return np.clip(np.rint(c), 0, cal.adc_max).astype(np.int64)
+
+
+class FsrConverter:
+    """Per-cable raw counts -> tension [N], picking the branch from the direction of change of the reading.
+
+    Rising reading -> loading branch, falling -> unloading. A branch flips only after the reading has moved
+    more than `deadband_counts` back from its extreme since the last flip (a Schmitt trigger on reversals,
+    `DirectionTracker`), so ADC noise does not chatter between branches. Before any motion: loading.
+    """
+
+    def __init__(self, cal: FsrCalibration, n: int = 6, deadband_counts: float = 3.0):
+        from teleop.estimation.direction import DirectionTracker
+
+        self.cal = cal
+        self.tracker = DirectionTracker(n, deadband_counts)
+
+    @property
+    def branch(self) -> np.ndarray:
+        """(n,) current branch per cable: +1 loading, -1 unloading."""
+        return np.where(self.tracker.direction < 0, UNLOADING, LOADING)
+
+    def reset(self) -> None:
+        self.tracker.reset()
+
+    def update(self, counts) -> np.ndarray:
+        """(n,) tensions [N] for (n,) raw counts; updates the branch state."""
+        c = np.asarray(counts, dtype=float)
+        self.tracker.update(c)
+        return self.cal.tension(self.cal.counts2conductance(c), self.branch)
+
+
+# --------------------------------------------------------------------------------------------------------
+# FBG: dual-grating temperature compensation (seed 001 eq 3)
+# --------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class FbgParams:
+    """Dual-FBG force sensor (seed 001 §2.1, §3.1).
+
+    Attributes:
+        S_pm_N: force sensitivity of FBG2 [pm/N] (34.12).
+        r: temperature sensitivity ratio FBG2/FBG1 [-] (2.28).
+        kT1_pm_C, kT2_pm_C: temperature sensitivities of FBG1 (strain-free) and FBG2 [pm/degC].
+        noise_pm: RMS error of the wavelength-shift fit [pm] (12.59 pm -> 0.37 N).
+    """
+
+    S_pm_N: float = 34.12
+    r: float = 2.28
+    kT1_pm_C: float = 11.23
+    kT2_pm_C: float = 25.62
+    noise_pm: float = 12.59
+
+    @property
+    def force_error_N(self) -> float:
+        """Sensor measurement error noise_pm / S [N] (seed: 0.37 N)."""
+        return self.noise_pm / self.S_pm_N
+
+
+def fbg2force(dl1_pm, dl2_pm, p: FbgParams = FbgParams()) -> np.ndarray:
+    """Force [N] F = (dl2 - r dl1) / S from Bragg shifts of FBG1 (temperature) and FBG2 (force + temperature) [pm]."""
+    return (np.asarray(dl2_pm, dtype=float) - p.r * np.asarray(dl1_pm, dtype=float)) / p.S_pm_N
+
+
+def fbg2force_uncompensated(dl2_pm, p: FbgParams = FbgParams()) -> np.ndarray:
+    """Force [N] from FBG2 alone, dl2 / S (temperature not removed)."""
+    return np.asarray(dl2_pm, dtype=float) / p.S_pm_N
+
+
+def synthesize_fbg(force_N, dT_C, p: FbgParams = FbgParams(), rng: np.random.Generator | None = None):
+    """(dl1, dl2) [pm]: dl1 = kT1 dT + n1, dl2 = S F + kT2 dT + n2.
+
+    The seed's 12.59 pm RMSE is the error of the compensated shift dl2 - r dl1; it is split between the two
+    gratings in proportion (n2 and r n1 carry equal variance), so the compensated force noise is noise/S.
+    """
+    F = np.asarray(force_N, dtype=float)
+    dT = np.asarray(dT_C, dtype=float)
+    dl1 = p.kT1_pm_C * dT
+    dl2 = p.S_pm_N * F + p.kT2_pm_C * dT
+    if rng is not None:
+        s2 = p.noise_pm / np.sqrt(2.0)
+        dl1 = dl1 + rng.normal(0.0, s2 / p.r, np.shape(dl1))
+        dl2 = dl2 + rng.normal(0.0, s2, np.shape(dl2))
+    return dl1, dl2
+
+
+def lowpass2(x, fs_hz: float, fc_hz: float) -> np.ndarray:
+    """Causal second-order Butterworth low-pass (the seed's filter), started at the first sample's value."""
+    from scipy.signal import butter, sosfilt, sosfilt_zi
+
+    x = np.asarray(x, dtype=float)
+    sos = butter(2, fc_hz, fs=fs_hz, output="sos")
+    y, _ = sosfilt(sos, x, zi=sosfilt_zi(sos) * x[0])
+    return y
+
+
+# --------------------------------------------------------------------------------------------------------
+# One sensor for all cables (seed 001 §2.2): pulling slope Kp, releasing slope Kr, flat transitions
+# --------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ProximalDistalModel:
+    """Proximal -> distal tension profile of a tendon-sheath (seed 001 eq 7, Fig 2b).
+
+    Pulling line Fd = Kp Fp + bp, releasing line Fd = Kr Fp + br (Kp < Kr). Between the lines the distal
+    tension stays flat (the transition phases): Fd_k = clip(Fd_{k-1}, lower line, upper line), a play operator.
+
+    Attributes:
+        Kp, Kr: pulling and releasing slopes dFd/dFp [-].
+        bp, br: intercepts [N].
+    """
+
+    Kp: float
+    Kr: float
+    bp: float = 0.0
+    br: float = 0.0
+
+    def bounds(self, Fp) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) distal tension lines [N] at proximal tension Fp [N]."""
+        Fp = np.asarray(Fp, dtype=float)
+        a, b = self.Kp * Fp + self.bp, self.Kr * Fp + self.br
+        return np.minimum(a, b), np.maximum(a, b)
+
+    def distal(self, Fp, Fd0: float | None = None) -> np.ndarray:
+        """(n,) distal tension estimate [N] from a proximal tension series Fp (n,) [N].
+
+        Fd0: the initial distal tension (default: on the pulling line at Fp[0]).
+        """
+        from teleop.physics.scan import clamp_scan
+
+        lo, hi = self.bounds(Fp)
+        y0 = float(lo[0]) if Fd0 is None else float(Fd0)
+        return clamp_scan(y0, lo, hi)
+
+
+def fit_proximal_distal(Fp, Fd, min_step: float | None = None) -> ProximalDistalModel:
+    """Identify Kp, Kr (and intercepts) from one instrumented cable's proximal/distal tensions [N].
+
+    Stage 1: samples where Fp and Fd both rise (pulling) or both fall (releasing) by more than `min_step`
+    (default: 3x the median |dFd|) give line fits; flat samples belong to the transitions. Stage 2 refines the
+    four parameters by least squares of the play-operator prediction against Fd.
+    """
+    from scipy.optimize import least_squares
+
+    Fp = np.asarray(Fp, dtype=float)
+    Fd = np.asarray(Fd, dtype=float)
+    if Fp.shape != Fd.shape or Fp.ndim != 1 or Fp.size < 20:
+        raise InputError("fit_proximal_distal: Fp and Fd must be 1-D series of the same length (>= 20)")
+    dp, dd = np.diff(Fp), np.diff(Fd)
+    step = 3.0 * np.median(np.abs(dd)) if min_step is None else min_step
+    pull = (dp > 0) & (dd > step)
+    rel = (dp < 0) & (dd < -step)
+    if pull.sum() < 3 or rel.sum() < 3:
+        raise InputError("fit_proximal_distal: the record needs both pulling and releasing phases")
+    Kp, bp = np.polyfit(Fp[1:][pull], Fd[1:][pull], 1)
+    Kr, br = np.polyfit(Fp[1:][rel], Fd[1:][rel], 1)
+
+    def resid(z):
+        return ProximalDistalModel(*z).distal(Fp, Fd[0]) - Fd
+
+    sol = least_squares(resid, [Kp, Kr, bp, br], x_scale=[0.1, 0.1, 0.1, 0.1])
+    return ProximalDistalModel(*map(float, sol.x))
