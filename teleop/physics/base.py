@@ -118,6 +118,7 @@ class ParamSpec:
     """One model parameter: SI unit, fit bounds [lower, upper], a typical value, and its meaning.
 
     `log=True` fits it on a log scale (for quantities spanning decades; then lower > 0).
+    Values given to an effect must be >= 0 when lower >= 0, and > 0 when `positive` (a divisor).
     """
 
     name: str
@@ -127,6 +128,7 @@ class ParamSpec:
     default: float
     doc: str
     log: bool = False
+    positive: bool = False
 
     def __post_init__(self):
         if not self.lower < self.upper or (self.log and self.lower <= 0):
@@ -226,8 +228,10 @@ class Effect:
                 raise InputError(f"effect '{self.name}': unknown parameter '{k}' "
                                  f"(expected {list(self.param_names)})")
             v = float(v)
-            if not math.isfinite(v):
-                raise InputError(f"effect '{self.name}': parameter '{k}' must be finite, got {v}")
+            spec = self.spec(k)
+            if not math.isfinite(v) or (spec.positive and v <= 0) or (spec.lower >= 0 and v < 0):
+                need = "> 0" if spec.positive else (">= 0" if spec.lower >= 0 else "finite")
+                raise InputError(f"effect '{self.name}': parameter '{k}' must be {need}, got {v}")
             out[k] = v
         return out
 

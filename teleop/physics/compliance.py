@@ -28,7 +28,8 @@ def _guess(signals: Signals, y: np.ndarray) -> dict:
     return {"k": 1.0 / c if c > 0 else PARAMS[0].default}
 
 
-PARAMS = (ParamSpec("k", "N/m", 1.0, 1e9, 2e4, "axial stiffness of the cable between motor and tip", log=True),)
+PARAMS = (ParamSpec("k", "N/m", 1.0, 1e9, 2e4, "axial stiffness of the cable between motor and tip",
+                    log=True, positive=True),)
 
 
 class ComplianceStep(Step):

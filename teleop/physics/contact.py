@@ -111,7 +111,7 @@ class ViscoelasticityStep(Step):
 
     def step(self, t: float, force: float, d: float) -> float:
         g, tau = self.params["g"], self.params["tau"]
-        if self.t_prev is not None:
+        if self.t_prev is not None and t > self.t_prev:
             dt = t - self.t_prev
             a = math.exp(-dt / tau)
             self.q = a * self.q + (1.0 - g) * ((force - self.Fe_prev) / dt) * tau * (1.0 - a)
@@ -147,7 +147,7 @@ VISCOELASTICITY = register(Effect(
     name="viscoelasticity", link="contact",
     doc="standard linear solid on the elastic force: relaxation to g Fe with time constant tau",
     params=(ParamSpec("g", "1", 0.0, 1.0, 0.6, "relaxed / instantaneous stiffness ratio"),
-            ParamSpec("tau", "s", 1e-4, 1e4, 1.0, "relaxation time", log=True)),
+            ParamSpec("tau", "s", 1e-4, 1e4, 1.0, "relaxation time", log=True, positive=True)),
     inputs=("t", "force", "d"), output="force",
     simulate=lambda s, p: sls_force(s.t, s.force, s.d, p["g"], p["tau"]), guess=_sls_guess,
     step_class=ViscoelasticityStep))

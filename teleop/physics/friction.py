@@ -174,7 +174,7 @@ STRIBECK_FRICTION = register(Effect(
     doc="extra friction at low speed: load + (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v)",
     params=(_FC,
             ParamSpec("Fs", "N", 0.0, 50.0, 0.3, "static (breakaway) friction force"),
-            ParamSpec("vs", "m/s", 1e-7, 10.0, 1e-3, "Stribeck velocity", log=True)),
+            ParamSpec("vs", "m/s", 1e-7, 10.0, 1e-3, "Stribeck velocity", log=True, positive=True)),
     inputs=("v", "load"), output="load",
     simulate=_stribeck_sim, guess=_stribeck_guess, step_class=StribeckStep))
 
@@ -183,6 +183,7 @@ DAHL_HYSTERESIS = register(Effect(
     doc="Dahl pre-sliding: load + F, dF/dx = sigma (1 - F/Fc sgn(dx)) along the motor position",
     params=(ParamSpec("sigma", "N/m", 1.0, 1e9, 1e4, "rest stiffness (initial slope after a reversal)",
                       log=True),
-            ParamSpec("Fc", "N", 1e-6, 50.0, 0.2, "Coulomb friction force reached in sliding", log=True)),
+            ParamSpec("Fc", "N", 1e-6, 50.0, 0.2, "Coulomb friction force reached in sliding",
+                      log=True, positive=True)),
     inputs=("x", "load"), output="load",
     simulate=_dahl_sim, guess=_dahl_guess, step_class=DahlStep))

@@ -105,7 +105,7 @@ SENSOR_HYSTERESIS = register(Effect(
     doc="loading vs unloading offset: +h while the force rises, -h while it falls, play-type switch",
     params=(ParamSpec("h", "N", 0.0, 50.0, 0.1, "half the gap between loading and unloading readings"),
             ParamSpec("delta", "N", 1e-6, 100.0, 0.2, "half the force change over which the offset flips",
-                      log=True)),
+                      log=True, positive=True)),
     inputs=("force",), output="force",
     simulate=_hyst_sim, guess=_hyst_guess, step_class=SensorHysteresisStep))
 

@@ -127,3 +127,15 @@ def test_package_example_pad_stack_and_fit_plot():
     res = fit("linear_contact", sig, noisy(get_effect("linear_contact").apply(sig, {"k": 900.0}), 0.01))
     ax = res.plot(sig, get_effect("linear_contact").apply(sig, {"k": 900.0}))
     assert len(ax.get_lines()) == 2
+
+
+def test_parameter_values_outside_physics_are_refused():
+    t = np.arange(10) * 1e-3
+    with pytest.raises(InputError, match="'width' must be >= 0"):
+        get_effect("backlash").apply(Signals(t=t, x=t), {"width": -1e-3})
+    with pytest.raises(InputError, match="'tau' must be > 0"):
+        get_effect("viscoelasticity").make_step({"tau": 0.0})
+    with pytest.raises(InputError, match="'k' must be > 0"):
+        get_effect("cable_compliance").apply(Signals(t=t, x=t, load=t), {"k": 0.0})
+    # zero play is physical: the tip follows the motor exactly
+    np.testing.assert_array_equal(get_effect("backlash").apply(Signals(t=t, x=t), {"width": 0.0}), t)
