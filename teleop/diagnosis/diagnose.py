@@ -1,0 +1,172 @@
+"""Diagnose a recording end to end: links -> baseline -> locate -> name effects -> report (DESIGN.md keys).
+
+`diagnose(rec)` returns a `Diagnosis`: per link the identification result, and `as_dict()` gives the JSON
+object {"recording", "channels", "baseline": {"params", "rmse"}, "findings": [...], "unexplained": [...]}
+(plus "peer": the ARX comparison, "holdout"). RMSEs are measured on the held-out last part.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from teleop.diagnosis.identify import LinkResult, identify_link, rms
+from teleop.diagnosis.links import LinkData, find_links, link_data, predict
+from teleop.diagnosis.locate import locate, noise_level
+from teleop.diagnosis.peer import arx_rmse
+from teleop.diagnosis.recording_io import Recording
+from teleop.errors import InputError
+from teleop.physics import get_effect
+
+HOLDOUT = 0.4           # last 40 % of each recording scores the models
+STRUCTURE = 2.0         # residual RMS above this many noise levels, with a condition explaining >= R2_MIN
+R2_MIN = 0.3            # of it, is reported as unexplained
+
+
+def split(n: int, holdout: float) -> tuple[slice, slice]:
+    """(fit, hold) slices: the first 1 - holdout of n samples fit, the rest score."""
+    if not 0.05 <= holdout <= 0.8:
+        raise InputError(f"holdout must be within [0.05, 0.8], got {holdout}")
+    k = int(round(n * (1.0 - holdout)))
+    return slice(0, k), slice(k, n)
+
+
+def si_unit(spec_unit: str, pos_unit: str, force_unit: str) -> str:
+    """A ParamSpec unit written for linear links ('N/m', 'm/s') in the link's own units (rad, N m)."""
+    u = re.sub(r"\bN\b", "§F", spec_unit)
+    u = re.sub(r"\bm\b", "§P", u)
+    return u.replace("§F", force_unit).replace("§P", pos_unit)
+
+
+def _link_units(rec: Recording, d: LinkData) -> tuple[str, str]:
+    L = d.link
+    if L.kind == "position":
+        pos = rec.units[L.output]
+        force = rec.units.get(L.load, "N") if L.load else "N"
+    elif L.kind == "force":
+        pos = rec.units.get(L.drive, "m") if L.drive else "m"
+        force = rec.units[L.output]
+    else:
+        pos, force = "m", "N"
+    return pos, force
+
+
+def _param_block(rec: Recording, d: LinkData, name: str, params: dict, stderr: dict) -> dict:
+    pos, force = _link_units(rec, d)
+    eff = get_effect(name)
+    out = {}
+    for spec in eff.params:
+        se = stderr.get(spec.name)
+        out[spec.name] = {"value": float(params[spec.name]),
+                          "stderr": None if se is None else float(se),
+                          "unit": si_unit(spec.unit, pos, force)}
+        if se is None:
+            out[spec.name]["fixed"] = True
+    return out
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """The diagnosis of one recording: rec, holdout, per-link results and the ARX peer RMSEs."""
+
+    rec: Recording
+    holdout: float
+    links: tuple
+    peer: dict
+
+    @property
+    def hold(self) -> slice:
+        return split(self.rec.n, self.holdout)[1]
+
+    def findings(self) -> list[dict]:
+        """Accepted effects over all links, most important (largest held-out improvement) first."""
+        out = []
+        for res in self.links:
+            d = res.data
+            for before, after in res.steps:
+                name = [n for n in after.names if n not in before.names][0]
+                y0, y1 = predict(d, before.model), predict(d, after.model)
+                loc = locate(d, d.y - y0, d.y, index=self.hold, change=y1 - y0)
+                params = dict(after.model.effects)[name]
+                alts = sorted(((n, f.rmse_hold) for n, f in res.ranking.items() if n != name),
+                              key=lambda kv: kv[1])[:3] if not before.model.effects else []
+                out.append({
+                    "effect": name,
+                    "channel": d.link.output,
+                    "where": loc.as_dict(),
+                    "params": _param_block(self.rec, d, name, params, after.stderr.get(name, {})),
+                    "rmse_before": before.rmse_hold,
+                    "rmse_after": after.rmse_hold,
+                    "improvement": before.rmse_hold / max(after.rmse_hold, 1e-300),
+                    "link": d.link.kind,
+                    "alternatives": [{"effect": n, "rmse_after": r} for n, r in alts],
+                })
+        out.sort(key=lambda f: -f["improvement"])
+        return out
+
+    def unexplained(self) -> list[dict]:
+        """Structured residual left by the final model of each link, with its best correlate."""
+        out = []
+        for res in self.links:
+            d = res.data
+            r = d.y - predict(d, res.final.model)
+            rh = r[self.hold]
+            noise = max(noise_level(r), float(np.std(np.diff(r))) / math.sqrt(2.0) * 0.5, 1e-300)
+            loc = locate(d, r, d.y, index=self.hold)
+            best_r2 = loc.evidence[loc.condition]
+            if rms(rh - rh.mean()) > STRUCTURE * noise and best_r2 >= R2_MIN:
+                out.append({"channel": d.link.output, "link": d.link.kind, "correlate": loc.condition,
+                            "r2": round(best_r2, 4), "rmse": rms(rh), "noise_rmse": noise,
+                            "windows": loc.windows})
+        return out
+
+    def as_dict(self) -> dict:
+        """The JSON object of DESIGN.md."""
+        channels = {}
+        for name, x in self.rec.channels.items():
+            channels[name] = {"unit": self.rec.units[name]}
+        base_params, base_rmse = {}, {}
+        for res in self.links:
+            d = res.data
+            m = res.baseline.model
+            pos, force = _link_units(self.rec, d)
+            ch = d.link.output
+            r = d.y - predict(d, m)
+            loc = locate(d, r, d.y, index=self.hold)
+            channels[ch].update({"link": d.link.kind, "input": d.link.input,
+                                 "rmse_baseline": res.baseline.rmse_hold,
+                                 "rmse_model": res.final.rmse_hold,
+                                 "residual": loc.as_dict()})
+            in_unit = self.rec.units[d.link.input]
+            base_params[ch] = {"gain": {"value": m.gain, "unit": f"{self.rec.units[ch]}/{in_unit}"},
+                               "offset": {"value": m.offset, "unit": self.rec.units[ch]}}
+            if d.link.kind == "force":
+                base_params[ch]["direction"] = {"value": m.direction, "unit": "1"}
+            base_rmse[ch] = res.baseline.rmse_hold
+        return {
+            "recording": self.rec.path,
+            "channels": channels,
+            "baseline": {"params": base_params, "rmse": base_rmse,
+                         "model": "ideal rigid lossless link: output = gain * input + offset "
+                                  "(contact: gain * max(indentation, 0) + offset)"},
+            "findings": self.findings(),
+            "unexplained": self.unexplained(),
+            "holdout": {"fraction": self.holdout, "t_start": float(self.rec.t[self.hold][0])},
+            "peer": self.peer,
+        }
+
+
+def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None) -> Diagnosis:
+    """Diagnose `rec` (see the module docstring); progress(k) is called as candidate fits finish."""
+    fit_idx, hold_idx = split(rec.n, holdout)
+    results, peer = [], {}
+    for link in find_links(rec):
+        d = link_data(rec, link)
+        res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress)
+        results.append(res)
+        peer[link.output] = {"arx_rmse": arx_rmse(d, fit_idx, hold_idx),
+                             "baseline_rmse": res.baseline.rmse_hold, "model_rmse": res.final.rmse_hold}
+    return Diagnosis(rec, holdout, tuple(results), peer)

@@ -1,0 +1,265 @@
+"""Name the missing physics: fit catalogue effects on top of a link's baseline and rank them on held-out data.
+
+For each link: the baseline (gain, offset) is fitted on the first part of the recording (`fit`), every
+catalogue effect that the link's channels allow is fitted jointly with the baseline (scipy least_squares,
+parameters in the physics registry's bounded unit space), and all are scored by RMSE on the last part
+(`hold`), with the model run over the whole record so stateful effects carry their history. An effect is
+accepted when it lowers the held-out RMSE by at least ACCEPT and its information criterion (BIC with
+the residual's effective sample count, residuals being autocorrelated) improves; among candidates whose
+held-out RMSE is within PARSIMONY of the best, the one with the fewest parameters wins. Effects are added
+greedily while they pay.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from teleop.diagnosis.links import LinkData, LinkModel, effect_signals, fit_baseline, is_contact_law, predict
+from teleop.physics import REGISTRY, get_effect
+
+ACCEPT = 1.10        # held-out RMSE must fall by >= 10 % for an effect to be named
+PARSIMONY = 0.03     # candidates within 3 % of the best held-out RMSE count as equally good
+MAX_EFFECTS = 3      # per link
+FIT_SAMPLES = 2000   # fits run on the fit part decimated to about this many samples (stateful effects
+                     # integrate along the smoothed drive, exact on monotone stretches); scores use all
+# never candidates: the contact baseline law itself, and time drift (no physical cause named: a drift
+# with time and no temperature channel is reported as unexplained, correlate "time")
+EXCLUDED = ("linear_contact", "thermal_drift_time")
+
+
+def fixed_params(d: LinkData, name: str) -> dict:
+    """Parameters held fixed when fitting `name` on link data d: those identifiable only as a product or
+    sum with another (capstan theta with mu, unless a bend-angle channel is recorded; the thermal T0 with
+    the baseline offset)."""
+    if name == "capstan_friction":
+        return {"theta": get_effect(name).spec("theta").default}
+    if name == "thermal_drift" and d.temperature is not None:
+        return {"T0": float(np.mean(d.temperature))}
+    return {}
+
+
+@dataclass(frozen=True)
+class Fit:
+    """One fitted chain: model, standard errors {effect: {param: se}}, RMSE on fit and held-out samples,
+    free-parameter count k, effective sample count n_eff of the fit residual."""
+
+    model: LinkModel
+    stderr: dict
+    rmse_fit: float
+    rmse_hold: float
+    k: int
+    n_eff: float
+    at_bound: tuple = ()
+
+    @property
+    def names(self) -> tuple:
+        return tuple(n for n, _ in self.model.effects)
+
+
+def rms(r: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(r)))) if r.size else math.nan
+
+
+def effective_n(r: np.ndarray) -> float:
+    """Effective number of independent samples of residual r: n (1 - rho) / (1 + rho), rho = lag-1 corr."""
+    r = r - r.mean()
+    den = float(np.dot(r, r))
+    rho = float(np.dot(r[1:], r[:-1]) / den) if den > 0 else 0.0
+    rho = min(max(rho, 0.0), 0.999)
+    return max(r.size * (1 - rho) / (1 + rho), 10.0)
+
+
+def delta_bic(new: "Fit", old: "Fit") -> float:
+    """BIC(new) - BIC(old), n ln(RSS/n) + k ln n on the new fit's effective sample count (< 0: new pays)."""
+    n = new.n_eff
+    return n * math.log(max(new.rmse_fit, 1e-300) ** 2 / max(old.rmse_fit, 1e-300) ** 2) + (new.k - old.k) * math.log(n)
+
+
+def applicable(d: LinkData) -> list[str]:
+    """Catalogue effects that can be added on this link given its channels."""
+    have = {"t", "v", "x", "load", "force", "d", "d_dot"}
+    if d.x is None:
+        have -= {"x", "v"}
+    if d.link.kind == "position" and d.load is None:
+        have.discard("load")
+    if d.link.kind != "contact":
+        have -= {"d", "d_dot"}
+    if d.temperature is not None:
+        have.add("temperature")
+    if d.theta is not None:
+        have.add("theta")
+    out = []
+    for name, eff in sorted(REGISTRY.items()):
+        if eff.link not in d.link.effect_kinds or name in EXCLUDED:
+            continue
+        if all(i in have for i in eff.inputs):
+            out.append(name)
+    return out
+
+
+def _target_signals(d: LinkData, m: LinkModel, name: str):
+    """Signals and target for the data-driven guess of effect `name` appended to model m's chain."""
+    sig = effect_signals(d, m)
+    eff = get_effect(name)
+    if eff.link == "sensor":
+        return sig.replace(force=predict(d, m)), d.y
+    if d.link.kind == "position":
+        z = predict(d, m)
+        return sig.replace(x=z), d.y
+    if d.link.kind == "force":
+        z = predict(d, m) - m.offset
+        return sig.replace(load=z), d.y - m.offset
+    return sig, d.y - m.offset
+
+
+def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_idx: slice,
+              starts: int = 1, seed: int = 0, freeze: bool = False) -> Fit:
+    """Fit baseline gain/offset and the parameters of effects `names` (appended to start's chain);
+    freeze: keep the parameters of start's effects (a quick screen of an addition)."""
+    effects = list(start.effects)
+    known = {n for n, _ in effects}
+    for name in names:
+        if name not in known:
+            sig, target = _target_signals(d, LinkModel(start.link, start.gain, start.offset, start.direction,
+                                                       start.load_sign, tuple(effects)), name)
+            p0 = get_effect(name).initial_guess(sig, target)
+            p0.update(fixed_params(d, name))
+            effects.append((name, p0))
+    # free parameter layout: gain, offset, then each effect's free params in the unit space of its specs
+    layout, k = [], 2
+    for i, (name, p) in enumerate(effects):
+        for spec in get_effect(name).params:
+            if spec.name not in fixed_params(d, name):
+                k += 1
+                if not (freeze and i < len(start.effects)):
+                    layout.append((i, spec))
+    ysc = max(float(np.std(d.y[fit_idx])), 1e-12)
+    g0 = start.gain if start.gain != 0 else 1.0
+    stride = max(1, (fit_idx.stop - (fit_idx.start or 0)) // FIT_SAMPLES)
+    dfit = d.window(slice(fit_idx.start, fit_idx.stop, stride))
+    contact_law = d.link.kind == "contact" and any(is_contact_law(n) for n, _ in effects)
+
+    def unpack(w):
+        gain = g0 * (1.0 + w[0])
+        offset = start.offset + w[1] * ysc
+        chain = [(n, dict(p)) for n, p in effects]
+        for (i, spec), wi in zip(layout, w[2:]):
+            chain[i][1][spec.name] = spec.from_unit(0.5 * (1.0 + math.sin(wi)))
+        return LinkModel(start.link, gain, offset, start.direction, start.load_sign, tuple(chain))
+
+    def resid(w, data):
+        r = (predict(data, unpack(w)) - data.y) / ysc
+        return np.nan_to_num(r, nan=1e3, posinf=1e3, neginf=-1e3)
+
+    # bounded unit-space parameters u in [0, 1] enter as u = (1 + sin w) / 2 (unbounded w: MINPACK's
+    # Levenberg-Marquardt, no BLAS threads); a parameter ending on a bound shows as u in {0, 1}
+    u0 = np.array([spec.to_unit(spec.clip(effects[i][1][spec.name])) for i, spec in layout])
+    w0 = np.concatenate([[0.0, 0.0], np.arcsin(np.clip(2.0 * u0 - 1.0, -0.999, 0.999))])
+    if contact_law:  # the contact effect carries the stiffness: the baseline gain is not used
+        g0 = 0.0
+    rng = np.random.default_rng(seed)
+    best = None
+    for s in range(max(starts, 1)):
+        w = w0.copy()
+        if s > 0:
+            w[2:] = w[2:] + rng.normal(0.0, 0.5, len(layout))
+        res = least_squares(resid, w, args=(dfit,), method="lm", x_scale=1.0, diff_step=1e-4,
+                            max_nfev=40 + 20 * len(w))
+        if best is None or res.cost < best.cost:
+            best = res
+    model = unpack(best.x)
+    r_all = predict(d, model) - d.y
+    r_fit = r_all[fit_idx]
+    n_eff = effective_n(best.fun)
+    # standard errors: cov = s^2 (J^T J)^-1 inflated by n / n_eff for correlated residuals
+    J = best.jac
+    m = best.fun.size
+    s2 = float(np.dot(best.fun, best.fun)) / max(m - best.x.size, 1) * (m / n_eff)
+    cov = np.linalg.pinv(J.T @ J) * s2
+    stderr = {n: {} for n, _ in model.effects}
+    for j, (i, spec) in enumerate(layout):
+        name, p = model.effects[i]
+        dudw = 0.5 * abs(math.cos(best.x[j + 2]))
+        stderr[name][spec.name] = float(abs(spec.dvalue_du(p[spec.name])) * dudw
+                                        * math.sqrt(max(cov[j + 2, j + 2], 0)))
+    stderr["baseline"] = {"gain": float(abs(g0) * math.sqrt(max(cov[0, 0], 0))),
+                          "offset": float(ysc * math.sqrt(max(cov[1, 1], 0)))}
+    rf = rms(r_fit)
+    pinned = tuple(f"{model.effects[i][0]}.{spec.name}" for (i, spec), wi in zip(layout, best.x[2:])
+                   if min(1 + math.sin(wi), 1 - math.sin(wi)) < 2e-3)
+    return Fit(model, stderr, rf, rms(r_all[hold_idx]), k, n_eff, pinned)
+
+
+def baseline_fit(d: LinkData, fit_idx: slice, hold_idx: slice) -> Fit:
+    """The baseline alone, as a Fit."""
+    m = fit_baseline(d, fit_idx)
+    r = predict(d, m) - d.y
+    n_eff = effective_n(r[fit_idx])
+    rf = rms(r[fit_idx])
+    return Fit(m, {"baseline": {"gain": 0.0, "offset": 0.0}}, rf, rms(r[hold_idx]), 2, n_eff)
+
+
+def _pick(cands: list[Fit]) -> Fit | None:
+    """Best held-out RMSE, preferring fewer parameters among candidates within PARSIMONY of it; fits
+    with a parameter pinned on its bound (the effect's form does not fit the data) never win."""
+    cands = [c for c in cands if not c.at_bound]
+    if not cands:
+        return None
+    best = min(c.rmse_hold for c in cands)
+    close = [c for c in cands if c.rmse_hold <= best * (1 + PARSIMONY)]
+    return min(close, key=lambda c: (c.k, c.rmse_hold))
+
+
+@dataclass(frozen=True)
+class LinkResult:
+    """Outcome for one link: baseline Fit, accepted steps [(Fit before, Fit after)], every first-round
+    candidate Fit by name (the ranking evidence), and the final Fit."""
+
+    data: LinkData
+    baseline: Fit
+    steps: tuple
+    ranking: dict
+    final: Fit
+
+
+def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None) -> LinkResult:
+    """Greedy identification on one link (see the module docstring)."""
+    base = baseline_fit(d, fit_idx, hold_idx)
+    current = base
+    steps = []
+    ranking = {}
+    pool = applicable(d)
+    for round_ in range(MAX_EFFECTS):
+        cands = []
+        for name in pool:
+            if name in current.names:
+                continue
+            try:
+                f = fit_chain(d, current.model, (name,), fit_idx, hold_idx, freeze=round_ > 0)
+            except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+                continue
+            if round_ == 0:
+                ranking[name] = f
+            cands.append(f)
+            if progress is not None:
+                progress(1)
+        if not cands:
+            break
+        pick = _pick(cands)
+        if pick is not None and round_ > 0:  # refine the screened addition jointly with the chain
+            try:
+                joint = fit_chain(d, pick.model, (), fit_idx, hold_idx)
+                if joint.rmse_fit <= pick.rmse_fit and not joint.at_bound:
+                    pick = joint
+            except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+                pass
+        pays = pick is not None and (pick.rmse_hold * ACCEPT <= current.rmse_hold) and delta_bic(pick, current) < 0
+        if not pays:
+            break
+        steps.append((current, pick))
+        current = pick
+    return LinkResult(d, base, tuple(steps), ranking, current)

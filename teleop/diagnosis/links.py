@@ -1,0 +1,243 @@
+"""The simulation of the setup: which links a recording holds, their baseline, and effect chains on them.
+
+A link maps recorded input channels to one recorded output channel:
+
+- position link: motor_pos -> tip_pos (load for cable stretch: tip_force, else motor_force);
+- force link: tip load -> motor_force, the motor motion (motor_pos, else tip_pos) giving the direction;
+  with `load = spring` and no tip_force the spring's deflection (tip_pos, else motor_pos) is the load;
+- contact link: indentation -> force (a pad poke).
+
+Baseline (what every catalogue effect is an addition to): the ideal rigid, lossless transmission, an
+affine map y = g u + c (gain g: transmission ratio and units; offset c: sensor and encoder zeros). For
+the contact link the baseline is the linear contact law with the same gain/offset, F = g max(d, 0) + c.
+
+With effects, the link's model is a chain of registered physics effects (teleop.physics), run on the
+referred signals: position: z = g u + c -> E_1 -> E_2 ... = tip; force: L = g u -> E_1 ... + c -> sensor
+effects = motor force; contact: contact law (baseline or a catalogue contact effect) + c -> sensor effects.
+`direction` (+1/-1) orients the motor motion so that positive motion raises the output's friction side
+(sensor sign conventions differ between rigs); `load_sign` does the same for the stretch load.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from teleop.diagnosis.recording_io import Recording
+from teleop.errors import InputError
+from teleop.physics import Signals, get_effect
+
+SMOOTH_S = 0.01  # width [s] of the zero-phase moving average on the drive position (encoder quantisation)
+
+
+@dataclass(frozen=True)
+class Link:
+    """kind: 'position' | 'force' | 'contact'; output, input, drive, load: recording channel names."""
+
+    kind: str
+    output: str
+    input: str
+    drive: str | None = None
+    load: str | None = None
+
+    @property
+    def name(self) -> str:
+        return f"{self.kind} link ({self.input} -> {self.output})"
+
+    @property
+    def effect_kinds(self) -> tuple:
+        """Physics link kinds whose effects can be added on this link."""
+        return {"position": ("position",), "force": ("force", "sensor"),
+                "contact": ("contact", "sensor")}[self.kind]
+
+
+def find_links(rec: Recording) -> list[Link]:
+    """The links `rec` holds, position first; InputError when it holds none."""
+    links = []
+    ch = rec.channels
+    if "motor_pos" in ch and "tip_pos" in ch:
+        load = "tip_force" if "tip_force" in ch else ("motor_force" if "motor_force" in ch else None)
+        links.append(Link("position", "tip_pos", "motor_pos", "motor_pos", load))
+    if "motor_force" in ch:
+        drive = "motor_pos" if "motor_pos" in ch else ("tip_pos" if "tip_pos" in ch else None)
+        if "tip_force" in ch:
+            links.append(Link("force", "motor_force", "tip_force", drive))
+        elif rec.metadata.get("load") == "spring" and drive is not None:
+            spring = "tip_pos" if "tip_pos" in ch else "motor_pos"
+            links.append(Link("force", "motor_force", spring, drive))
+    if "indentation" in ch and "force" in ch:
+        links.append(Link("contact", "force", "indentation"))
+    if not links:
+        raise InputError(f"{rec.path}: no link to simulate: channels {', '.join(ch)} (expected motor_pos + "
+                         "tip_pos, motor_force + tip_force (or load = spring), or indentation + force)")
+    return links
+
+
+def smooth(x: np.ndarray, width: int) -> np.ndarray:
+    """Zero-phase centred moving average of odd `width` samples (edges use the available samples)."""
+    if width <= 1:
+        return x
+    k = np.ones(width)
+    num = np.convolve(x, k, mode="same")
+    den = np.convolve(np.ones_like(x), k, mode="same")
+    return num / den
+
+
+@dataclass(frozen=True)
+class LinkData:
+    """A link's arrays: t (n,) [s], u (n,) input, y (n,) output, x (n,) smoothed drive or None, load,
+    temperature, theta (bend angle) or None."""
+
+    link: Link
+    t: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    x: np.ndarray | None
+    load: np.ndarray | None
+    temperature: np.ndarray | None
+    theta: np.ndarray | None
+    cache: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def n(self) -> int:
+        return int(self.t.shape[0])
+
+    def window(self, sl) -> "LinkData":
+        def cut(a):
+            return None if a is None else a[sl]
+        return LinkData(self.link, self.t[sl], self.u[sl], self.y[sl], cut(self.x), cut(self.load),
+                        cut(self.temperature), cut(self.theta))
+
+
+def link_data(rec: Recording, link: Link) -> LinkData:
+    """The arrays of `link` from `rec`; the drive position is smoothed over SMOOTH_S."""
+    ch = rec.channels
+    width = max(1, int(round(SMOOTH_S / rec.dt)) | 1)
+    x = smooth(ch[link.drive], width) if link.drive else None
+    if link.kind == "contact":
+        x = None
+    u = ch[link.input]
+    if link.kind == "position" and link.drive:
+        u = smooth(u, width)
+    return LinkData(link, rec.t, u, ch[link.output], x, ch.get(link.load) if link.load else None,
+                    ch.get("temperature"), ch.get("bend_angle"))
+
+
+@dataclass(frozen=True)
+class LinkModel:
+    """Baseline gain g, offset c, direction (+1/-1), load_sign (+1/-1) and the effect chain
+    ((name, {param: value}), ...) of one link."""
+
+    link: Link
+    gain: float
+    offset: float
+    direction: float = 1.0
+    load_sign: float = 1.0
+    effects: tuple = field(default=())
+
+    def with_effects(self, effects) -> "LinkModel":
+        return LinkModel(self.link, self.gain, self.offset, self.direction, self.load_sign, tuple(effects))
+
+    def baseline_params(self) -> dict:
+        return {"gain": self.gain, "offset": self.offset}
+
+
+def fast_replace(sig: Signals, **changes) -> Signals:
+    """A copy of `sig` with channels replaced by arrays already known to be valid (n,) floats; unlike
+    Signals.replace nothing is re-checked or re-derived (the fitting loop calls this thousands of times)."""
+    out = copy.copy(sig)
+    for k, v in changes.items():
+        object.__setattr__(out, k, v)
+    return out
+
+
+def _template(d: LinkData, m: LinkModel) -> Signals:
+    """Checked Signals of the link for the model's direction and load sign, at unit gain (cached)."""
+    key = (m.direction, m.load_sign)
+    if key not in d.cache:
+        kw = {"t": d.t}
+        if d.x is not None:
+            kw["x"] = m.direction * d.x
+        if d.temperature is not None:
+            kw["temperature"] = d.temperature
+        if d.theta is not None:
+            kw["theta"] = d.theta
+        if d.link.kind == "position":
+            kw["x"] = d.u
+            if d.load is not None:
+                kw["load"] = m.load_sign * d.load
+        elif d.link.kind == "force":
+            kw["load"] = d.u
+        else:
+            kw["d"] = d.u
+        d.cache[key] = Signals(**kw)
+    return d.cache[key]
+
+
+def effect_signals(d: LinkData, m: LinkModel) -> Signals:
+    """The physics Signals the link's effects see (input referred through the baseline gain)."""
+    sig = _template(d, m)
+    if d.link.kind == "position":
+        return fast_replace(sig, x=m.gain * d.u + m.offset, v=m.gain * sig.v)
+    if d.link.kind == "force":
+        return fast_replace(sig, load=m.gain * d.u)
+    return sig
+
+
+def is_contact_law(name: str) -> bool:
+    """True for a contact effect that is a force law of the indentation alone (linear, hertz)."""
+    eff = get_effect(name)
+    return eff.link == "contact" and tuple(eff.inputs) == ("d",)
+
+
+def predict(d: LinkData, m: LinkModel) -> np.ndarray:
+    """The link's output (n,) under model `m` (baseline plus its effect chain)."""
+    sig = effect_signals(d, m)
+    kind = d.link.kind
+    sensor = [(n, p) for n, p in m.effects if get_effect(n).link == "sensor"]
+    chain = [(n, p) for n, p in m.effects if get_effect(n).link != "sensor"]
+    if kind == "position":
+        z = sig.x
+        for name, p in chain:
+            z = get_effect(name).apply(sig, p)
+            sig = sig.replace(x=z)
+        y = z
+    elif kind == "force":
+        z = sig.load
+        for name, p in chain:
+            z = get_effect(name).apply(sig, p)
+            sig = fast_replace(sig, load=z)
+        y = z + m.offset
+    else:
+        # contact law: a catalogue law (hertz) replaces the baseline's linear one; modifiers act on it
+        laws = [(n, p) for n, p in chain if is_contact_law(n)]
+        mods = [(n, p) for n, p in chain if not is_contact_law(n)]
+        Fe = get_effect(laws[0][0]).apply(sig, laws[0][1]) if laws else m.gain * np.maximum(d.u, 0.0)
+        for name, p in mods:
+            Fe = get_effect(name).apply(fast_replace(sig, force=Fe), p)
+        y = Fe + m.offset
+    for name, p in sensor:
+        sig = fast_replace(sig, force=y)
+        y = get_effect(name).apply(sig, p)
+    return y
+
+
+def fit_baseline(d: LinkData, index) -> LinkModel:
+    """Least-squares gain and offset of the ideal link on samples `index`; direction and load sign from
+    the residual's correlation with the motion direction and the load."""
+    u = np.maximum(d.u, 0.0) if d.link.kind == "contact" else d.u
+    A = np.column_stack([u[index], np.ones(u[index].shape)])
+    (g, c), *_ = np.linalg.lstsq(A, d.y[index], rcond=None)
+    r = d.y - (g * u + c)
+    direction, load_sign = 1.0, 1.0
+    if d.x is not None:
+        s = np.sign(np.gradient(d.x))[index]
+        if d.link.kind == "force":
+            direction = 1.0 if float(np.dot(s, r[index])) >= 0 else -1.0
+    if d.link.kind == "position" and d.load is not None:
+        # stretch: the tip falls short of the motor by load / k; choose the load sign that makes it so
+        ld = d.load[index] - np.mean(d.load[index])
+        load_sign = -1.0 if float(np.dot(ld, r[index])) >= 0 else 1.0
+    return LinkModel(d.link, float(g), float(c), direction, load_sign)

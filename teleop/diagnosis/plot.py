@@ -1,0 +1,62 @@
+"""The diagnosis figure: per link, measured vs baseline vs improved, and the residual before/after, on the
+held-out part with the located windows shaded; plus the input-output loop (hysteresis) of each link."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from teleop.diagnosis.links import predict
+
+ATTRIBUTION = "Contains data from the MRDLab mis-tool-characterization dataset, ODbL 1.0."
+
+
+def figure(diag, findings: list | None = None):
+    """A matplotlib Figure (Agg) of Diagnosis `diag`."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    findings = diag.findings() if findings is None else findings
+    links = diag.links
+    fig, axes = plt.subplots(len(links), 3, figsize=(16, 3.8 * len(links)), squeeze=False,
+                             gridspec_kw={"width_ratios": [2.2, 2.2, 1.2]})
+    hold = diag.hold
+    for row, res in zip(axes, links):
+        d = res.data
+        yb, yf = predict(d, res.baseline.model), predict(d, res.final.model)
+        t = d.t[hold]
+        names = "+".join(res.final.names) or "none"
+        wins = [w for f in findings if f["channel"] == d.link.output for w in f["where"]["windows"]]
+        # focus the time axes on a stretch of the held-out part that holds located windows
+        t0 = t[0]
+        t1 = min(t[-1], t0 + max(4.0, 0.25 * (t[-1] - t0)))
+        sel = (t >= t0) & (t <= t1)
+        ax = row[0]
+        ax.plot(t[sel], d.y[hold][sel], "k.", ms=1.5, label="measured")
+        ax.plot(t[sel], yb[hold][sel], "-", c="tab:blue", lw=1, label=f"baseline (rmse {res.baseline.rmse_hold:.3g})")
+        ax.plot(t[sel], yf[hold][sel], "-", c="tab:red", lw=1, label=f"+ {names} (rmse {res.final.rmse_hold:.3g})")
+        ax.set_title(f"{d.link.name}: held-out")
+        ax.set_xlabel("t [s]")
+        ax.legend(loc="best", fontsize=7)
+        ax = row[1]
+        ax.plot(t[sel], (d.y - yb)[hold][sel], "-", c="tab:blue", lw=0.8, label="residual baseline")
+        ax.plot(t[sel], (d.y - yf)[hold][sel], "-", c="tab:red", lw=0.8, label=f"residual + {names}")
+        for a in (row[0], row[1]):
+            for w0, w1 in wins:
+                if w1 >= t0 and w0 <= t1:
+                    a.axvspan(max(w0, t0), min(w1, t1), color="orange", alpha=0.2, lw=0)
+        ax.set_title("residual before/after (shaded: located windows)")
+        ax.set_xlabel("t [s]")
+        ax.legend(loc="best", fontsize=7)
+        ax = row[2]
+        ax.plot(d.u[hold], d.y[hold], "k.", ms=1, label="measured")
+        ax.plot(d.u[hold], yf[hold], "-", c="tab:red", lw=0.8, label="model")
+        ax.set_xlabel(d.link.input)
+        ax.set_ylabel(d.link.output)
+        ax.set_title("input-output loop")
+    title = f"teleop diagnose: {diag.rec.path}"
+    if "mrdlab" in diag.rec.path.lower() or "MRDLab" in diag.rec.metadata.get("source", ""):
+        title += f"\n{ATTRIBUTION}"
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    return fig
