@@ -77,12 +77,12 @@ def indent(world, xy=(0.0, 0.0), depths=DEPTHS, axis=2, settle=SETTLE_STEPS) -> 
             F.append(-world.contact_force()[2])
         return np.array(d_act), np.array(F)
     # lateral: start half-way down the hole, find the wall, then push into it
-    z = p.surface_z + world.pad.thickness / 2
+    z = p.surface_z + world.pad.thickness / 2 + world.proxy_radius  # sphere centre at mid-thickness
     u = np.zeros(3)
     u[axis] = 1.0
     start = np.array([xy[0], xy[1], z])
     # wall at the hole radius: free travel = hole radius - |start| - tip radius along the axis
-    contact = world.pad.hole_radius - p.tip_radius - float(start[axis])
+    contact = world.pad.hole_radius - world.proxy_radius - float(start[axis])
     for d in depths:
         target = start + u * (contact + d)
         for _ in range(settle):

@@ -1,8 +1,8 @@
 """pybullet world of one pad and the end effector's tip: contact forces are the F/T ground truth.
 
 Frame {B} of the robot (teleop.kinematics): the pad's top surface is the plane z = surface_z facing -z,
-the pad fills z in [surface_z, surface_z + thickness], its centre on the z axis. The tip is a sphere of
-radius a (the flat tip's radius) whose touching point is the robot's tool tip; it is a dynamic body driven
+the pad fills z in [surface_z, surface_z + thickness], its centre on the z axis. The tip is a sphere whose
+touching point is the robot's tool tip (see WorldParams.contact_radius); it is a dynamic body driven
 either kinematically (a stiff fixed constraint: calibration, a rigid robot) or through a Cartesian spring
 K (3, 3) [N/m] and damper C (3, 3) [N s/m] to its commanded position (a compliant cable robot).
 
@@ -58,7 +58,11 @@ class WorldParams:
 
     Attributes:
         dt: physics time step [s] (1 kHz, the loop rate).
-        tip_radius: radius of the flat tip / contact sphere [m].
+        tip_radius: radius of the flat tip [m] (sets the pad stiffness through its footprint).
+        contact_radius: radius of the contact sphere standing in for the tip in pybullet [m]; larger than
+            any indentation, because once the sphere's centre enters the pad Bullet's sphere-box algorithm
+            adds a second contact point and the force doubles (measured). Pads with a hole use
+            min(contact_radius, 0.75 hole radius).
         indenter_mass: moving mass of the end effector [kg] (a 3D-printed shaft, ~10 g).
         damping_ratio: contact damping ratio zeta; contactDamping = 2 zeta sqrt(K m) [-].
         lateral_friction: tip-silicone Coulomb friction coefficient [-].
@@ -68,6 +72,7 @@ class WorldParams:
 
     dt: float = 1e-3
     tip_radius: float = 0.0015
+    contact_radius: float = 0.005
     indenter_mass: float = 0.01
     damping_ratio: float = 0.5
     lateral_friction: float = 0.5
@@ -110,10 +115,13 @@ class PadWorld:
         self.client, self._pb = c, pb
         c.setTimeStep(p.dt)
         c.setGravity(0, 0, 0)
-        c.setPhysicsEngineParameter(numSolverIterations=p.solver_iterations, deterministicOverlappingPairs=1)
+        # Bullet's default contact breaking threshold (0.02 m) is tuned for metre-scale scenes: a tip moving a
+        # few mm keeps stale manifold points and doubles the force (measured); 0.1 mm keeps one point.
+        c.setPhysicsEngineParameter(numSolverIterations=p.solver_iterations, deterministicOverlappingPairs=1,
+                                    contactBreakingThreshold=1e-4)
         self._build_pad()
-        sph = c.createCollisionShape(pb.GEOM_SPHERE, radius=p.tip_radius)
-        start = [0.0, 0.0, p.surface_z - p.tip_radius - 0.005]
+        sph = c.createCollisionShape(pb.GEOM_SPHERE, radius=self.proxy_radius)
+        start = [0.0, 0.0, p.surface_z - self.proxy_radius - 0.005]
         self.body = c.createMultiBody(p.indenter_mass, sph, basePosition=start)
         c.changeDynamics(self.body, -1, linearDamping=0.0, angularDamping=0.0, lateralFriction=p.lateral_friction)
         self._target = np.array([0.0, 0.0, p.surface_z - 0.005])
@@ -163,10 +171,9 @@ class PadWorld:
             self.slab = None
             self.pad_bodies = list(self.ring)
             return
-        if pad.outline == "disc":
-            shape = c.createCollisionShape(pb.GEOM_CYLINDER, radius=pad.size / 2, height=h)
-        else:
-            shape = c.createCollisionShape(pb.GEOM_BOX, halfExtents=[pad.size / 2, pad.size / 2, h / 2])
+        # a box even for round pads: pybullet's sphere-box algorithm keeps one contact point, while the
+        # convex-convex sphere-cylinder manifold was measured to keep two (doubling the slope)
+        shape = c.createCollisionShape(pb.GEOM_BOX, halfExtents=[pad.size / 2, pad.size / 2, h / 2])
         self.slab = c.createMultiBody(0, shape, basePosition=[0, 0, zc])
         self.pad_bodies = [self.slab]
         self._update_slab(np.zeros(2), force=True)
@@ -181,14 +188,20 @@ class PadWorld:
             self._set_contact(self.slab, k)
             self._k_set = k
 
+    @property
+    def proxy_radius(self) -> float:
+        """Radius of the contact sphere [m]."""
+        r = self.params.contact_radius
+        return min(r, 0.75 * self.pad.hole_radius) if self.pad.hole_radius > 0 else r
+
     # stepping --------------------------------------------------------------------------------------
     def centre(self) -> np.ndarray:
         """(3,) sphere centre [m]."""
         return np.asarray(self.client.getBasePositionAndOrientation(self.body)[0])
 
     def tip(self) -> np.ndarray:
-        """(3,) touching point (sphere centre + a z) [m]."""
-        return self.centre() + np.array([0.0, 0.0, self.params.tip_radius])
+        """(3,) touching point (sphere centre + r z) [m]."""
+        return self.centre() + np.array([0.0, 0.0, self.proxy_radius])
 
     def velocity(self) -> np.ndarray:
         return np.asarray(self.client.getBaseVelocity(self.body)[0])
@@ -200,7 +213,7 @@ class PadWorld:
     def step(self, target) -> None:
         """Advance one dt with the tip (touching point) commanded to `target` (3,) [m]."""
         target = np.asarray(target, dtype=float)
-        centre_target = target - np.array([0.0, 0.0, self.params.tip_radius])
+        centre_target = target - np.array([0.0, 0.0, self.proxy_radius])
         c = self.client
         pos, _ = c.getBasePositionAndOrientation(self.body)
         pos = np.asarray(pos)
@@ -212,6 +225,9 @@ class PadWorld:
             v = np.asarray(c.getBaseVelocity(self.body)[0])
             f = -self.K @ (pos - centre_target) - self.C @ v  # spring-damper of the cable robot
             c.applyExternalForce(self.body, -1, f.tolist(), pos.tolist(), self._pb.WORLD_FRAME)
+        # the tip does not roll: friction torques would turn the sphere and every new contact location
+        # on it became an extra manifold point (measured: up to 4, four times the slope)
+        c.resetBasePositionAndOrientation(self.body, pos.tolist(), (0.0, 0.0, 0.0, 1.0))
         c.resetBaseVelocity(self.body, angularVelocity=[0, 0, 0])
         c.stepSimulation()
         self._target = target

@@ -1,0 +1,364 @@
+"""Simulated CDPR slave (URL ``sim://robot``): the Robot protocol of devices.base over a pybullet pad scene.
+
+One reading = `substeps` physics steps of dt. Per reading:
+  cable lengths (commanded, ideal steppers) -> pose (forward kinematics, batched Newton on
+  teleop.kinematics.poses2lengths) -> tip target p + R tip -> pybullet: the tip is a mass on the cables'
+  Cartesian spring K = sum_i k_c u_i u_i^T (cable compliance, k_c per cable) and meets the pad's calibrated
+  contact -> contact wrench f (the Nano17 ground truth, moments about p with the force at the tool tip)
+  -> tip tensions t = wrench2tensions(f, A, pretension) (A t + f = 0, eq 8)
+  -> sheath friction between the FSR and the end effector: teleop.physics capstan_friction with
+     Theta_i = theta_i (eq 6) + theta0, motor position x = -length (shortening = pulling), stick
+     transitions of stiffness k at reversals
+  -> FSR: teleop.physics sensor_hysteresis loading state s in [-1, 1] blends the calibration's loading
+     and unloading conductance branches (teleop.sensors), divider -> ADC counts + Gaussian noise, rounded.
+The batch path `run(lengths)` does the same with the array forms of those models (fast); `read()` uses
+their per-sample Step forms; both give the same counts for the same seed (tested).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from devices.base import ContextDevice, RobotReading, RobotSpec
+from scenes.pads import Pad, z_test_pad
+from scenes.world import PadWorld, WorldParams
+from teleop.errors import InputError
+from teleop.geometry import Geometry, default_geometry
+from teleop.kinematics import bending_angles, check_lengths, poses2lengths, rotation_zyx, structure_matrix
+from teleop.physics.capstan import CapstanStep, tip2motor_transitions
+from teleop.physics.sensor_effects import SensorHysteresisStep, hysteresis_offset
+from teleop.sensors import LOADING, UNLOADING, FsrCalibration, default_fsr_calibration
+from teleop.tension import wrench2tensions
+
+
+@dataclass(frozen=True)
+class SimRobotParams:
+    """Physics of the simulated slave (SI). Defaults and their sources:
+
+    Attributes:
+        geometry: CDPR geometry (teleop.geometry.default_geometry: seed 000 robot, mu = 0.056 fitted to
+            seed 000 Fig 9, theta0 = 140 deg from seed 000 §3).
+        world: pybullet constants (1 kHz, 10 g tip, 1.5 mm flat tip).
+        substeps: physics steps per reading (1: readings at 1 kHz).
+        pretension: reference cable tension of the tension distribution [N]; seed 000 Fig 9 pre-tensions
+            the cable with 1.96-2.94 N; 2.85 N is the middle of the [0.2, 5.5] N tension range.
+        cable_stiffness: axial stiffness of each cable path (sheath, FSR press block, scaffold) [N/m]:
+            177 N/m per cable (z stiffness 382 N/m at home) reproduces seed 000 Table 1's ground truth of
+            Dragon Skin 30 vs Ecoflex 00-10 (2.27 vs 1.01 N) with this catalogue's pad stiffnesses, and then
+            predicts Ecoflex 00-30 (1.42 N vs the measured 1.43 N); None = rigid robot (tip tracks exactly).
+        ee_damping_ratio: damping ratio of the tip on the cable spring [-].
+        capstan_k: stick stiffness of the capstan transition at reversals [N/m] (teleop.physics
+            capstan_friction default, 2e4 N/m).
+        hysteresis_delta: half the force change over which the FSR loading state flips [N]
+            (teleop.physics sensor_hysteresis default, 0.2 N).
+        noise_counts: RMS ADC noise [counts] (ATmega2560 10-bit ADC, +-2 LSB absolute accuracy).
+    """
+
+    geometry: Geometry = field(default_factory=default_geometry)
+    world: WorldParams = WorldParams()
+    substeps: int = 1
+    pretension: float = 2.85
+    cable_stiffness: float | None = 177.0
+    ee_damping_ratio: float = 0.7
+    capstan_k: float = 2e4
+    hysteresis_delta: float = 0.2
+    noise_counts: float = 1.0
+
+    def __post_init__(self):
+        g = self.geometry
+        if self.substeps < 1 or not g.t_min < self.pretension < g.t_max:
+            raise InputError(f"sim robot: need substeps >= 1 and t_min < pretension < t_max, got "
+                             f"{self.substeps}, {self.pretension}")
+        if self.cable_stiffness is not None and self.cable_stiffness <= 0:
+            raise InputError("sim robot: cable_stiffness must be > 0 (or None for a rigid robot)")
+
+    @property
+    def dt(self) -> float:
+        """Time between readings [s]."""
+        return self.world.dt * self.substeps
+
+
+HOME_POSE = np.zeros(6)
+
+
+def home_pose() -> np.ndarray:
+    """(6,) home pose: the shaft on the scaffold axis, its tip 5 mm before the pad surface."""
+    return HOME_POSE.copy()
+
+
+# --------------------------------------------------------------------------------------------------------
+# pure helpers (batched over samples)
+# --------------------------------------------------------------------------------------------------------
+
+def cartesian_stiffness(pose, geom: Geometry, k_cable: float) -> np.ndarray:
+    """(3, 3) translational stiffness [N/m] of the tip on cables of axial stiffness k_cable: sum k u u^T."""
+    u = -structure_matrix(pose, geom)[:3].T  # (6, 3) unit cable directions
+    return k_cable * (u.T @ u)
+
+
+_FREE = [0, 1, 2, 4, 5]  # axial geometry: roll alpha is not set by the cables
+
+
+def lengths2poses(L, geom: Geometry, guess=None, iters: int = 6, tol: float = 1e-9) -> np.ndarray:
+    """(n, 6) poses for (n, 6) cable lengths [m]: batched Gauss-Newton on poses2lengths (axial geometry,
+    alpha = 0), numerical Jacobian; raises InputError if any sample misses by more than 1 um."""
+    L = np.atleast_2d(np.asarray(L, dtype=float))
+    n = len(L)
+    q = np.zeros((n, 6)) if guess is None else np.array(np.broadcast_to(guess, (n, 6)), dtype=float)
+    h = 1e-7
+    for _ in range(iters):
+        r = poses2lengths(q, geom) - L
+        if np.abs(r).max() < tol:
+            break
+        J = np.empty((n, 6, 5))
+        for j, idx in enumerate(_FREE):
+            dq = q.copy()
+            dq[:, idx] += h
+            J[:, :, j] = (poses2lengths(dq, geom) - L - r) / h
+        JT = np.swapaxes(J, 1, 2)
+        step = np.linalg.solve(JT @ J, (JT @ r[:, :, None]))[:, :, 0]
+        q[:, _FREE] -= step
+    r = poses2lengths(q, geom) - L
+    if np.abs(r).max() > 1e-6:
+        raise InputError(f"sim robot: no pose reproduces the commanded lengths (residual {np.abs(r).max():.3g} m)")
+    return q
+
+
+def capstan_angles_batch(poses, geom: Geometry) -> np.ndarray:
+    """(n, 6) total wrap Theta = theta (eq 6) + theta0 [rad] between each FSR and the end effector."""
+    q = np.atleast_2d(np.asarray(poses, dtype=float))
+    out = np.empty((len(q), 6))
+    for k, pose in enumerate(q):
+        R = rotation_zyx(*pose[3:])
+        l = pose[:3] + geom.r @ R.T - geom.B
+        out[k] = bending_angles(l, geom)
+    return out + geom.theta0
+
+
+def fsr_conductance(t, s, cal: FsrCalibration) -> np.ndarray:
+    """Conductance [S] of FSRs at tension t [N] in loading state s in [-1, 1] (+1 loading, -1 unloading):
+    the calibration's two branches blended linearly in s."""
+    w = 0.5 * (1.0 + np.asarray(s, dtype=float))
+    return w * cal.reading(t, LOADING) + (1.0 - w) * cal.reading(t, UNLOADING)
+
+
+def counts_from(g, cal: FsrCalibration, noise) -> np.ndarray:
+    """Rounded, clipped ADC counts (int64) for conductance g [S] plus noise [counts]."""
+    c = cal.conductance2counts(g) + noise
+    return np.clip(np.rint(c), 0, cal.adc_max).astype(np.int64)
+
+
+@dataclass
+class SimTrace:
+    """What `SimRobot.run` produced, one row per reading.
+
+    Attributes:
+        t: (n,) time [s]; lengths: (n, 6) commanded lengths [m]; poses: (n, 6) commanded poses;
+        tip: (n, 3) actual tip [m]; wrench_truth: (n, 6) contact wrench on the end effector [N, N m];
+        t_tip: (n, 6) cable tensions at the end effector [N]; t_fsr: (n, 6) tensions at the FSRs [N];
+        counts: (n, 6) raw FSR counts; theta: (n, 6) capstan wrap [rad].
+    """
+
+    t: np.ndarray
+    lengths: np.ndarray
+    poses: np.ndarray
+    tip: np.ndarray
+    wrench_truth: np.ndarray
+    t_tip: np.ndarray
+    t_fsr: np.ndarray
+    counts: np.ndarray
+    theta: np.ndarray
+
+
+# --------------------------------------------------------------------------------------------------------
+# the device
+# --------------------------------------------------------------------------------------------------------
+
+class SimRobot(ContextDevice):
+    """The simulated slave. `command_lengths` sets the target; each `read()` advances one reading period.
+
+    Args:
+        pad: the pad in the scene (default: the 60 mm z-test pad).
+        params: physics (SimRobotParams).
+        seed: seeds the ADC noise.
+        calibration: FSR calibration shared with the estimator side (default teleop.sensors').
+    """
+
+    def __init__(self, pad: Pad | None = None, params: SimRobotParams = SimRobotParams(), seed: int = 0,
+                 calibration: FsrCalibration | None = None):
+        self.pad = pad if pad is not None else z_test_pad()
+        self.params = params
+        self.seed = int(seed)
+        self.cal = calibration if calibration is not None else default_fsr_calibration()
+        self.spec = RobotSpec(l_min=params.geometry.l_min, l_max=params.geometry.l_max, v_max=params.geometry.v_max)
+        self.is_open = False
+
+    # lifecycle -------------------------------------------------------------------------------------
+    def open(self) -> None:
+        if self.is_open:
+            return
+        p = self.params
+        self.geom = p.geometry
+        self.rng = np.random.default_rng(self.seed)
+        K = C = None
+        if p.cable_stiffness is not None:
+            K = cartesian_stiffness(HOME_POSE, self.geom, p.cable_stiffness)
+            c = 2.0 * p.ee_damping_ratio * math.sqrt(p.world.indenter_mass * float(np.max(np.diag(K))))
+            C = np.eye(3) * c
+        self.world = PadWorld(self.pad, p.world, stiffness=K, damping=C)
+        self.world.open()
+        self.L_home = poses2lengths(HOME_POSE, self.geom)[0]
+        self.L_cmd = self.L_home.copy()
+        self.pose = HOME_POSE.copy()
+        self.t = 0.0
+        self.seq = 0
+        self.boot_id = (self.seed * 2654435761) % 2 ** 31
+        self.stopped = False
+        self._capstan = [CapstanStep({"mu": self.geom.mu, "theta": self.geom.theta0, "k": p.capstan_k})
+                         for _ in range(6)]
+        self._hyst = [SensorHysteresisStep({"h": 1.0, "delta": p.hysteresis_delta}) for _ in range(6)]
+        self.is_open = True
+
+    def close(self) -> None:
+        if self.is_open:
+            self.world.close()
+            self.is_open = False
+
+    def _require_open(self) -> None:
+        if not self.is_open:
+            raise InputError("sim robot: not open (use it as a context manager)")
+
+    # Robot protocol --------------------------------------------------------------------------------
+    def command_lengths(self, lengths) -> None:
+        """Command cable lengths (6,) [m] (checked against the geometry's limits)."""
+        self._require_open()
+        L = check_lengths(lengths, self.geom)
+        if not self.stopped:
+            self.pose = lengths2poses(L, self.geom, guess=self.pose)[0]
+            self.L_cmd = L.copy()
+
+    def stop(self) -> None:
+        """Hold the current lengths; further commands are ignored until `open` again."""
+        self.stopped = True
+
+    def _physics(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Advance `substeps` steps toward the commanded pose; (tip (3,), wrench (6,), A (6, 6))."""
+        w, g = self.world, self.geom
+        R = rotation_zyx(*self.pose[3:])
+        tip_offset = R @ g.tip
+        target = self.pose[:3] + tip_offset
+        for _ in range(self.params.substeps):
+            w.step(target)
+        F = w.contact_force()
+        tip = w.tip()
+        f = np.concatenate([F, np.cross(tip_offset, F)])  # force at the tool tip, moments about p
+        actual = self.pose.copy()
+        actual[:3] = tip - tip_offset
+        return tip, f, structure_matrix(actual, g)
+
+    def read(self) -> RobotReading:
+        """Advance one reading period and return the raw reading."""
+        self._require_open()
+        p, g = self.params, self.geom
+        tip, f, A = self._physics()
+        t_tip = wrench2tensions(f, A, g.t_min, g.t_max, p.pretension)
+        theta = capstan_angles_batch(self.pose[None], g)[0]
+        x = -self.L_cmd  # motor position: hauling in (shortening) is +
+        t_fsr = np.array([cs.step(x=x[i], load=t_tip[i], theta=theta[i]) for i, cs in enumerate(self._capstan)])
+        s = np.array([h.step(t_fsr[i]) - t_fsr[i] for i, h in enumerate(self._hyst)])
+        noise = self.rng.normal(0.0, p.noise_counts, 6) if p.noise_counts > 0 else np.zeros(6)
+        counts = counts_from(fsr_conductance(t_fsr, s, self.cal), self.cal, noise)
+        self.t += p.dt
+        self.seq += 1
+        steps = np.rint((self.L_home - self.L_cmd) * self.spec.steps_per_m).astype(np.int64)
+        return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
+                            commanded_lengths=self.L_cmd.copy(), status=1 | (2 if self.stopped else 0),
+                            boot_id=self.boot_id, wrench_truth=f,
+                            extras={"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy()})
+
+    # batch path ------------------------------------------------------------------------------------
+    def run(self, lengths, progress=None) -> SimTrace:
+        """Command each row of `lengths` (n, 6) [m] and read once after each; array physics after the
+        pybullet pass. `progress(k)` is called every 1000 readings if given."""
+        self._require_open()
+        p, g = self.params, self.geom
+        L = np.asarray(lengths, dtype=float)
+        for row in (L[0], L[-1], L.min(axis=0), L.max(axis=0)):
+            check_lengths(row, g)
+        n = len(L)
+        poses = lengths2poses(L, g, guess=self.pose)
+        tips = np.empty((n, 3))
+        F = np.empty((n, 3))
+        w = self.world
+        R_tip = np.einsum("nij,j->ni", _rotations(poses), g.tip)
+        targets = poses[:, :3] + R_tip
+        sub = p.substeps
+        for k in range(n):
+            tk = targets[k]
+            for _ in range(sub):
+                w.step(tk)
+            F[k] = w.contact_force()
+            tips[k] = w.tip()
+            if progress is not None and k % 1000 == 999:
+                progress(1000)
+        f = np.concatenate([F, np.cross(R_tip, F)], axis=1)
+        actual = poses.copy()
+        actual[:, :3] = tips - R_tip
+        t_tip = np.array([wrench2tensions(fk, structure_matrix(ak, g), g.t_min, g.t_max, p.pretension)
+                          for fk, ak in zip(f, actual)])
+        theta = capstan_angles_batch(poses, g)
+        x = -L  # motor positions: hauling in (shortening) is +
+        t_fsr = np.empty((n, 6))
+        s = np.empty((n, 6))
+        for i in range(6):
+            cs, hs = self._capstan[i], self._hyst[i]
+            if cs.x_prev is None:  # fresh: starts on the tip tension, like CapstanStep
+                t_fsr[:, i] = tip2motor_transitions(x[:, i], t_tip[:, i], g.mu, theta[:, i], p.capstan_k)
+            else:  # continue from the stored state: a leading sample at (x_prev, F) inside its own band
+                y = tip2motor_transitions(np.r_[cs.x_prev, x[:, i]], np.r_[cs.F, t_tip[:, i]], g.mu,
+                                          np.r_[theta[0, i], theta[:, i]], p.capstan_k, F0=cs.F)
+                t_fsr[:, i] = y[1:]
+            cs.x_prev, cs.F = float(x[-1, i]), float(t_fsr[-1, i])
+            u = t_fsr[:, i] if hs.z is None else np.r_[hs.z, t_fsr[:, i]]
+            s_i = hysteresis_offset(u, 1.0, p.hysteresis_delta)  # loading state (h = 1)
+            s[:, i] = s_i if hs.z is None else s_i[1:]
+            hs.z = float(t_fsr[-1, i] - p.hysteresis_delta * s[-1, i])
+        noise = self.rng.normal(0.0, p.noise_counts, (n, 6)) if p.noise_counts > 0 else np.zeros((n, 6))
+        counts = counts_from(fsr_conductance(t_fsr, s, self.cal), self.cal, noise)
+        t = self.t + p.dt * np.arange(1, n + 1)
+        self.t = float(t[-1])
+        self.seq += n
+        self.L_cmd = L[-1].copy()
+        self.pose = poses[-1].copy()
+        return SimTrace(t=t, lengths=L, poses=poses, tip=tips, wrench_truth=f, t_tip=t_tip, t_fsr=t_fsr,
+                        counts=counts, theta=theta)
+
+
+def _rotations(poses: np.ndarray) -> np.ndarray:
+    return np.array([rotation_zyx(*q[3:]) for q in poses]) if np.any(poses[:, 3:]) else \
+        np.broadcast_to(np.eye(3), (len(poses), 3, 3))
+
+
+def from_url(parsed, options: dict) -> SimRobot:
+    """`sim://robot?pad=z60&seed=3&substeps=1`: build (not open) a SimRobot."""
+    from scenes import pads as pads_mod
+
+    known = {"pad", "seed", "substeps", "letter"}
+    for k in options:
+        if k not in known:
+            raise InputError(f"sim://robot: unknown option '{k}' (expected one of: {', '.join(sorted(known))})")
+    makers = {"z60": pads_mod.z_test_pad, "stiffness3": pads_mod.three_region_pad, "hole27": pads_mod.hole_pad,
+              "letter_E": lambda: pads_mod.letter_pad("E"), "letter_P": lambda: pads_mod.letter_pad("P"),
+              "blind4": pads_mod.blind_test_pad}
+    name = str(options.get("pad", "z60"))
+    if name not in makers:
+        raise InputError(f"sim://robot: unknown pad '{name}' (expected one of: {', '.join(makers)})")
+    try:
+        seed = int(options.get("seed", 0))
+        substeps = int(options.get("substeps", 1))
+    except ValueError:
+        raise InputError("sim://robot: seed and substeps must be integers") from None
+    return SimRobot(makers[name](), SimRobotParams(substeps=substeps), seed=seed)
