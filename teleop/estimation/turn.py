@@ -38,7 +38,7 @@ class AxisTurnFit:
     duration: float
     forward: tuple
     backward: tuple
-    deadband: float = 20e-6
+    deadband: float = 0.0
 
     def correction(self, direction: int, tau: float) -> np.ndarray:
         """(6,) wrench error to subtract `tau` [s] after a turn to `direction` (zero outside the segment)."""
@@ -57,7 +57,7 @@ class TurnCompensation:
 
 
 def fit_turn_compensation(t, poses, wrench, axis: int = 2, degree: int = 4, duration: float | None = None,
-                          deadband: float = 20e-6, settle: float = 0.1) -> AxisTurnFit:
+                          deadband: float = 0.0, settle: float = 0.02) -> AxisTurnFit:
     """Fit the jump segments of a no-load back-and-forth run along `axis`.
 
     t (n,) [s]; poses (n, 6) end-effector poses; wrench (n, 6) the single-compensated wrench (the truth is 0).

@@ -1,0 +1,289 @@
+"""Estimation pipeline: capstan compensation, f = -A t, turn fit, Kalman, estimators, the fast tick."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from teleop.bench.tick import ReferenceTick, bench_tick
+from teleop.errors import InputError
+from teleop.estimation.direction import DirectionTracker
+from teleop.estimation.estimators import ESTIMATOR_NAMES, DynamicParams, capstan_angles, make_estimator
+from teleop.estimation.kalman import (FilterpyWrenchKalman, KalmanNoise, SteadyWrenchKalman, _dare_gain,
+                                      bandwidth_hz, make_filterpy, wrench_kalman_params)
+from teleop.estimation.tick import TickComputer
+from teleop.estimation.turn import AxisTurnFit, TurnCompensation, fit_turn_compensation
+from teleop.geometry import default_geometry
+from teleop.kinematics import poses2lengths, pose2lengths, structure_matrix
+from teleop.physics.capstan import tip2motor, tip2motor_transitions
+from teleop.physics.friction import dahl, viscous
+from teleop.rendering import Renderer, RenderParams
+from teleop.tension import tensions2wrench, wrench2tensions
+
+G = default_geometry()
+PROPS = settings(derandomize=True, max_examples=40, deadline=None)
+small = st.floats(-0.004, 0.004)
+angle = st.floats(-0.15, 0.15)
+
+
+def pose_of(x, y, z, b, c):
+    return np.array([x, y, z, 0.0, b, c])
+
+
+# ---------------------------------------------------------------------------------------------- capstan
+@PROPS
+@given(x=small, y=small, z=small, b=angle, c=angle,
+       t_tip=st.lists(st.floats(0.2, 5.5), min_size=6, max_size=6),
+       pulling=st.lists(st.booleans(), min_size=6, max_size=6))
+def test_single_compensation_inverts_the_capstan_model(x, y, z, b, c, t_tip, pulling):
+    """Sensor tensions made by physics.capstan.tip2motor with the robot's Theta are mapped back exactly."""
+    q = pose_of(x, y, z, b, c)
+    theta = capstan_angles(q, G)
+    t_tip = np.array(t_tip)
+    pulling = np.array(pulling)
+    t_fsr = tip2motor(t_tip, G.mu, theta, pulling)
+    est = make_estimator("single", G, kalman=None)
+    L0 = pose2lengths(q, G)
+    est.update(t_fsr, L0, q, 1e-3)
+    # the cable lengths move the way the pulling flags say: shortening = pulling
+    L1 = L0 + np.where(pulling, -1e-6, 1e-6)
+    f = est.update(t_fsr, L1, q, 1e-3)
+    t_back = est.compensate(t_fsr, L1, theta, 1e-3)
+    np.testing.assert_allclose(t_back, t_tip, rtol=1e-12)
+    np.testing.assert_allclose(f, tensions2wrench(t_tip, structure_matrix(q, G)), atol=1e-12)
+
+
+@PROPS
+@given(x=small, y=small, z=small, b=angle, c=angle,
+       F=st.lists(st.floats(-1.5, 1.5), min_size=3, max_size=3))
+def test_tension_distribution_then_minus_A_t_returns_the_wrench(x, y, z, b, c, F):
+    q = pose_of(x, y, z, b, c)
+    A = structure_matrix(q, G)
+    # a wrench the robot can produce: forces plus the moments they make at the tool tip
+    Rr_tip = np.array([0.0, 0.0, 0.025])
+    f = np.r_[F, np.cross(Rr_tip, F)]
+    f = A @ np.linalg.lstsq(A, f, rcond=None)[0]  # project on the range of A (no moment about the shaft)
+    t = wrench2tensions(f, A, G.t_min, G.t_max)
+    est = make_estimator("non_compensated", G, kalman=None)
+    np.testing.assert_allclose(est.update(t, pose2lengths(q, G), q, 1e-3), f, atol=1e-9)
+
+
+def test_dynamic_inverts_the_capstan_with_stick_transitions():
+    """The play-form compensation recovers the tip tension through reversals (physics capstan_friction):
+    each cable pulls a spring (tip tension follows the motor position), k = 2e4 N/m stick stiffness."""
+    n, dt = 3000, 1e-3
+    tt = np.arange(n) * dt
+    poses = np.zeros((n, 6))
+    poses[:, 2] = 0.003 * np.sin(2 * np.pi * tt / 0.8)
+    poses[:, 0] = 0.001 * np.sin(2 * np.pi * tt / 1.3)
+    L = poses2lengths(poses, G)
+    theta = np.array([capstan_angles(q, G) for q in poses])
+    x = -(L - L[0])
+    t_tip = 2.5 + 300.0 * x
+    fsr = np.column_stack([tip2motor_transitions(x[:, i], t_tip[:, i], G.mu, theta[:, i], 2e4) for i in range(6)])
+    single = make_estimator("single", G, kalman=None)
+    dynamic = make_estimator("dynamic", G, kalman=None)
+    err = {}
+    for est in (single, dynamic):
+        out = []
+        for k in range(n):
+            est.cables.update(L[k])
+            out.append(est.compensate(fsr[k], L[k], theta[k], dt))
+        err[est.name] = np.abs(np.array(out) - t_tip)[100:].max()
+    # the tip tension moves by 300 N/m x the ~40 um of a transition: 0.012 N; single jumps at every reversal
+    assert err["dynamic"] < 0.02
+    assert err["single"] > 0.3
+
+
+# --------------------------------------------------------------------------------------------- direction
+def test_direction_tracker_dead_band_ignores_noise_and_flags_reversals():
+    tr = DirectionTracker(1, deadband=0.1)
+    seq = [0.0, 0.05, -0.05, 0.2, 0.5, 0.45, 0.42, 0.3, 0.1, 0.15, 0.25]
+    dirs, flips = [], []
+    for v in seq:
+        dirs.append(int(tr.update([v])[0]))
+        flips.append(bool(tr.flipped[0]))
+    assert dirs == [0, 0, 0, 1, 1, 1, 1, -1, -1, -1, 1]
+    assert flips == [False] * 7 + [True, False, False, True]
+
+
+# ------------------------------------------------------------------------------------------------ Kalman
+def test_kalman_tuning_gives_the_requested_bandwidth_and_filterpy_gain():
+    noise = KalmanNoise(dt=1e-3, bandwidth_hz=8.0, sigma_t=0.02)
+    kp = wrench_kalman_params(G, noise)
+    K = np.array(kp.K[2])
+    assert bandwidth_hz(K, noise.dt) == pytest.approx(8.0, rel=0.02)
+    # filterpy's converged recursion equals the Riccati fixed point
+    np.testing.assert_allclose(K, _dare_gain(noise.dt, kp.q[2] / kp.r[2]), rtol=1e-8)
+    # measurement noise is the FSR noise through A: (A diag(s^2) A^T)_kk
+    A = structure_matrix(np.zeros(6), G)
+    assert kp.r[2] == pytest.approx(((A[2] ** 2).sum()) * 0.02 ** 2)
+
+
+def test_kalman_covariance_stays_symmetric_positive_definite():
+    kp = wrench_kalman_params(G)
+    kf = make_filterpy(kp, steady=False)
+    rng = np.random.default_rng(3)
+    for k in range(400):
+        kf.predict()
+        kf.update(rng.normal(0.0, 1.0, 6) * (1e3 if k % 97 == 0 else 1.0))
+        P = kf.P
+        assert np.allclose(P, P.T, atol=1e-12 * np.abs(P).max())
+        assert np.linalg.eigvalsh(0.5 * (P + P.T)).min() > 0
+
+
+def test_steady_state_step_equals_filterpy_recursion():
+    kp = wrench_kalman_params(G)
+    rng = np.random.default_rng(4)
+    z = np.cumsum(rng.normal(0, 0.05, (3000, 6)), axis=0) + rng.normal(0, 0.03, (3000, 6))
+    fast, steady, cold = SteadyWrenchKalman(kp), FilterpyWrenchKalman(kp, steady=True), \
+        FilterpyWrenchKalman(kp, steady=False)
+    a = np.array([fast.update(zk) for zk in z])
+    b = np.array([steady.update(zk) for zk in z])
+    c = np.array([cold.update(zk) for zk in z])
+    np.testing.assert_allclose(a, b, atol=1e-9)          # started at the fixed point: identical
+    assert np.abs(a[-500:] - c[-500:]).max() < 1e-9       # started far away: converges to the same
+    assert np.abs(a[:5] - c[:5]).max() > 1e-6             # ...and really differed at the start
+
+
+# -------------------------------------------------------------------------------- plant and comparisons
+PLANT = dict(k=2e3, b=5.0, sigma=2e4, Fc=0.05)
+DYN = DynamicParams(b=PLANT["b"], dahl_sigma=PLANT["sigma"], dahl_Fc=PLANT["Fc"])
+
+
+def plant(poses, wrench, dt, seed, noise=0.01):
+    """FSR tensions from the physics library: tip tensions (tension distribution) -> capstan with stick
+    transitions + viscous + Dahl along each cable's motor position, plus sensor noise."""
+    rng = np.random.default_rng(seed)
+    L = poses2lengths(poses, G)
+    theta = np.array([capstan_angles(q, G) for q in poses])
+    t_tip = np.array([wrench2tensions(f, structure_matrix(q, G), G.t_min, G.t_max)
+                      for q, f in zip(poses, wrench)])
+    x = -(L - L[0])
+    fsr = np.empty_like(L)
+    for i in range(6):
+        fsr[:, i] = (tip2motor_transitions(x[:, i], t_tip[:, i], G.mu, theta[:, i], PLANT["k"])
+                     + viscous(np.gradient(x[:, i], dt), PLANT["b"]) + dahl(x[:, i], PLANT["sigma"], PLANT["Fc"]))
+    return fsr + rng.normal(0.0, noise, fsr.shape)
+
+
+def tri(t, period):
+    return (2 / np.pi) * np.arcsin(np.sin(2 * np.pi * t / period))
+
+
+def run_fast(name, poses, fsr, dt, turn=None, kalman=None):
+    tc = TickComputer(G, name, turn=turn, dynamic=DYN, kalman=kalman)
+    return np.array([tc.compute(q, t, dt)[1] for q, t in zip(poses.tolist(), fsr.tolist())])
+
+
+@pytest.fixture(scope="module")
+def turn_fit():
+    """Step 3 fitted like the seed: no load, back and forth along z at uniform speed (here 5 mm/s)."""
+    dt = 2e-3
+    tt = np.arange(0, 8.0, dt)
+    poses = np.zeros((tt.size, 6))
+    poses[:, 2] = 0.005 * tri(tt, 4.0)
+    fsr = plant(poses, np.zeros((tt.size, 6)), dt, seed=1)
+    single = run_fast("single", poses, fsr, dt)
+    fit = fit_turn_compensation(tt, poses, single, axis=2)
+    return TurnCompensation((fit,)), (tt, poses, fsr, single)
+
+
+def test_turn_fit_removes_the_jumps_of_the_fitting_run(turn_fit):
+    turn, (tt, poses, fsr, single) = turn_fit
+    fit = turn.axes[0]
+    assert 0.02 < fit.duration < 1.0
+    double = run_fast("double", poses, fsr, 2e-3, turn=turn)
+    jump = lambda w: np.abs(w[:, 2] - np.median(w[:, 2])).max()  # noqa: E731
+    assert jump(double) < 0.5 * jump(single)
+
+
+def test_turn_fit_needs_turns_both_ways():
+    tt = np.arange(0, 1.0, 1e-3)
+    poses = np.zeros((tt.size, 6))
+    poses[:, 2] = 0.001 * tt
+    with pytest.raises(InputError, match="turns both ways"):
+        fit_turn_compensation(tt, poses, np.zeros((tt.size, 6)))
+
+
+def test_dynamic_beats_double_on_a_variable_speed_run_with_reversals(turn_fit):
+    turn, _ = turn_fit
+    dt = 2e-3
+    tt = np.arange(0, 10.0, dt)
+    phase = 2 * np.pi * (tt / 3.0 + 0.15 * np.sin(2 * np.pi * tt / 2.3) + 0.1 * np.sin(2 * np.pi * tt / 0.9))
+    poses = np.zeros((tt.size, 6))
+    poses[:, 2] = 0.004 * np.sin(phase)
+    poses[:, 0] = 0.001 * np.sin(2 * np.pi * tt / 4.1)
+    truth = np.zeros((tt.size, 6))
+    truth[:, 2] = -1.0 * np.clip(poses[:, 2] / 0.004, 0.0, None)  # a pad pushing back while z > 0
+    fsr = plant(poses, truth, dt, seed=2)
+    rmse = {}
+    for name in ESTIMATOR_NAMES:
+        w = run_fast(name, poses, fsr, dt, turn=turn, kalman=KalmanNoise(dt=dt))
+        rmse[name] = float(np.sqrt(np.mean((w[:, :3] - truth[:, :3]) ** 2)))
+    assert rmse["dynamic"] < 0.4 * rmse["double"], rmse
+    assert rmse["dynamic"] < 0.4 * rmse["single"], rmse
+    assert rmse["dynamic"] < 0.15, rmse
+
+
+# --------------------------------------------------------------------------- fast tick == plain code
+def equal_runs(name, turn):
+    rng = np.random.default_rng(7)
+    n, dt = 1500, 1e-3
+    tt = np.arange(n) * dt
+    poses = np.zeros((n, 6))
+    poses[:, 2] = 0.004 * np.sin(2 * np.pi * tt / 0.7)
+    poses[:, 0] = 0.002 * np.sin(2 * np.pi * tt / 0.53)
+    poses[:, 4] = 0.1 * np.sin(3 * tt)
+    poses[:, 5] = 0.05 * np.cos(2 * tt)
+    T = 2.5 + rng.normal(0, 0.3, (n, 6))
+    vel = rng.normal(0, 0.05, (n, 3))
+    dyn = DynamicParams(b=5.0, dahl_sigma=2e4, dahl_Fc=0.05, v_smooth=0.005)
+    rp = RenderParams(max_force=3.0, ramp_s=0.05, engage_N=20.0)
+    est = make_estimator(name, G, turn=turn, dynamic=dyn)
+    plain_r = Renderer(rp)
+    fast = TickComputer(G, name, turn=turn, dynamic=dyn, renderer=Renderer(rp))
+    ref = ReferenceTick(G, name, turn=turn, dynamic=dyn, renderer=Renderer(rp))
+    for r in (plain_r, fast.renderer, ref.renderer):
+        r.enable()
+    worst = 0.0
+    for k in range(n):
+        L = pose2lengths(poses[k], G)
+        w = est.update(T[k], L, poses[k], dt)
+        F = plain_r.render(w, dt, vel[k])
+        L2, w2, F2 = fast.compute(poses[k], T[k], dt, vel[k])
+        L3, w3, F3 = ref.compute(poses[k], T[k], dt, vel[k])
+        worst = max(worst, np.abs(L - L2).max(), np.abs(w - w2).max(), np.abs(F - F2).max(),
+                    np.abs(L - L3).max(), np.abs(w - w3).max(), np.abs(F - F3).max())
+    return worst, fast
+
+
+@pytest.mark.parametrize("name", ESTIMATOR_NAMES)
+def test_fast_tick_equals_the_plain_estimator_renderer_and_reference(name):
+    rng = np.random.default_rng(8)
+    poly = tuple(tuple(rng.normal(0, 0.1, 5)) for _ in range(6))
+    turn = TurnCompensation((AxisTurnFit(axis=2, duration=0.3, forward=poly, backward=poly[::-1]),
+                             AxisTurnFit(axis=0, duration=0.2, forward=poly[::-1], backward=poly)))
+    worst, fast = equal_runs(name, turn)
+    assert worst < 1e-9
+    assert fast.renderer.state == "engaged"
+
+
+def test_tick_computer_rejects_bad_names_and_nan_faults_the_renderer():
+    with pytest.raises(InputError, match="unknown estimator"):
+        TickComputer(G, "magic")
+    with pytest.raises(InputError, match="turn compensation"):
+        TickComputer(G, "double")
+    tc = TickComputer(G, "dynamic")
+    tc.renderer.enable()
+    _, _, F = tc.compute(np.zeros(6), [np.nan] + [2.0] * 5, 1e-3)
+    assert F == (0.0, 0.0, 0.0) and tc.renderer.fault
+    tc.reset()
+    assert not tc.renderer.fault
+
+
+def test_bench_tick_json_keys():
+    out = bench_tick(ticks=300, warmup=50)
+    assert list(out) == ["ticks", "tick_us", "reference_tick_us", "speedup_p50"]
+    assert list(out["tick_us"]) == ["p50", "p99", "max"] and list(out["reference_tick_us"]) == ["p50", "p99", "max"]
+    assert out["ticks"] == 300 and out["speedup_p50"] > 0
