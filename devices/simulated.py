@@ -46,7 +46,7 @@ class OperatorParams:
     k: float = 150.0
     b: float = 6.0
     tremor: float = 0.005
-    h: float = 0.0005
+    h: float = 0.001
 
     def __post_init__(self):
         for name in ("m", "k", "b", "h"):

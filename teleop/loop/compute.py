@@ -82,7 +82,8 @@ def structure_matrix_at(p, Rr: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 def render_force(f, R_reg: np.ndarray, force_scale: float, zero_neg_z: bool) -> np.ndarray:
     """(3,) stylus force [N] from the external wrench f (6,) in {B}: k_f R_reg^T f[:3], -z zeroed if asked."""
-    F = force_scale * (R_reg.T @ np.asarray(f, dtype=float)[:3])
+    with np.errstate(all="ignore"):  # inf/NaN inputs are caught by clamp_force
+        F = force_scale * (R_reg.T @ np.asarray(f, dtype=float)[:3])
     if zero_neg_z and F[2] < 0.0:
         F[2] = 0.0
     return F
@@ -100,7 +101,11 @@ def clamp_force(F, limit: float) -> tuple[np.ndarray, bool]:
     F = np.asarray(F, dtype=float)
     if F.shape != (3,) or not np.isfinite(F).all():
         return np.zeros(3), False
-    n = float(np.sqrt(F @ F))
+    m = float(np.max(np.abs(F)))
+    if m == 0.0:
+        return F, True
+    u = F / m  # scaled first: no overflow for |F| ~ 1e308
+    n = m * float(np.sqrt(u @ u))
     if n > limit:
-        F = F * (limit / n)
+        F = u * (limit / float(np.sqrt(u @ u)))
     return F, True

@@ -1,5 +1,6 @@
 """The master-slave tick: READ -> MAP -> ROBOT I/O -> ESTIMATE -> RENDER -> WRITE -> RECORD.
 
+A robot's read() may return None while no telemetry frame has arrived yet (counted as missing telemetry).
 `Teleop.tick(now)` runs one tick at host time `now` [s]; it never sleeps and never reads a clock for its
 computation (the runner paces it; a replay feeds recorded times), so a session replays bit for bit. Any
 exception at any stage becomes a latched FAULT with the stage and reason; the stylus force is zero in the
@@ -197,7 +198,7 @@ class Teleop:
             return
         self.fault_reason = reason
         self.x.L_cmd = None
-        self.x.F[:] = 0.0
+        self.x.F = np.zeros(3)
         self._goto(State.FAULT, reason)
 
     def _reset_from_fault(self) -> None:

@@ -82,20 +82,32 @@ class StuckCable:
     The pay-out streak of each cable starts when its commanded length begins to increase; once the streak has
     lasted `window` [s], a tension more than `rise` [N] above the lowest tension of the streak, seen on
     `confirm` consecutive updates, reports the cable stuck. A pause or reversal of the command ends the streak.
+    Tensions are low-pass filtered first (time constant `tau` [s]) so sensor noise and FSR branch flips
+    do not count as a rise.
     """
 
-    def __init__(self, window: float, rise: float, payout_eps: float, n: int = 6, confirm: int = 3):
-        self.window, self.rise, self.eps, self.confirm = window, rise, payout_eps, confirm
+    def __init__(self, window: float, rise: float, payout_eps: float, n: int = 6, confirm: int = 3,
+                 tau: float = 0.02):
+        self.window, self.rise, self.eps, self.confirm, self.tau = window, rise, payout_eps, confirm, tau
         self.t0 = np.full(n, np.nan)
         self.Tmin = np.zeros(n)
         self.count = np.zeros(n, dtype=int)
+        self.tf = None
+        self.t_prev = None
 
     def reset(self) -> None:
         self.t0[:] = np.nan
         self.count[:] = 0
+        self.tf = None
 
     def update(self, now: float, t, dL) -> str | None:
         t = np.asarray(t, dtype=float)
+        if self.tf is None:
+            self.tf = t.copy()
+        else:  # tf += a (t - tf), a = 1 - exp(-dt / tau)
+            self.tf += (1.0 - math.exp(-max(now - self.t_prev, 0.0) / self.tau)) * (t - self.tf)
+        self.t_prev = now
+        t = self.tf
         paying = np.asarray(dL, dtype=float) > self.eps
         self.t0[~paying] = np.nan
         start = paying & np.isnan(self.t0)

@@ -79,11 +79,24 @@ def _on_sigterm(signum, frame):
 
 def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | None = None,
                 params: LoopParams | None = None, estimator=None, seed: int | None = None,
-                spin_us: float = 200.0, flush_interval: float = 0.1, haptic=None, robot=None) -> SessionResult:
-    """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs."""
+                spin_us: float = 200.0, flush_interval: float = 0.1, haptic=None, robot=None,
+                robot_process_hz: float | None = 1000.0) -> SessionResult:
+    """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
+
+    With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
+    .ProcessRobot) and the loop exchanges the latest command/reading with it every tick; None runs the
+    robot's I/O inline in the tick (at LoopParams.robot_rate_hz).
+    """
     params = params or LoopParams()
     haptic = haptic if haptic is not None else open_device(haptic_url)
-    robot = robot if robot is not None else open_device(robot_url)
+    if robot is None:
+        if robot_process_hz:
+            from devices.wrappers import ProcessRobot
+
+            open_device(robot_url)  # validates the URL here (one clear line) before forking
+            robot = ProcessRobot(robot_url, rate_hz=robot_process_hz)
+        else:
+            robot = open_device(robot_url)
     recorder = None
     old = signal.signal(signal.SIGTERM, _on_sigterm)
     try:

@@ -8,7 +8,8 @@ import numpy as np
 
 from devices.base import ContextDevice, DeviceError, RobotReading, RobotSpec
 from teleop.geometry import default_geometry
-from teleop.kinematics import length_jacobian, pose2lengths, structure_matrix
+from teleop.kinematics import length_jacobian, pose2lengths
+from teleop.loop.compute import structure_matrix_at
 from teleop.tension import wrench2tensions
 
 N_PER_COUNT = 0.01
@@ -28,6 +29,7 @@ class FakeRobot(ContextDevice):
         self.L0 = pose2lengths(np.zeros(6), self.geom)
         self.Jp_pinv = np.linalg.pinv(length_jacobian(np.zeros(6), self.geom)[:, :3])
         self.frozen = False
+        self.silent = False
         self.boot_id = 7
         self.status = 1
         self.fail_read = None
@@ -68,8 +70,11 @@ class FakeRobot(ContextDevice):
         f = np.zeros(6)
         if p[2] > self.z_pad:
             f[2] = -self.k_pad * (p[2] - self.z_pad)  # the pad pushes the tool back (-z)
-        A = structure_matrix(np.r_[p, 0.0, 0.0, 0.0], self.geom)
-        t = wrench2tensions(f, A, 0.05, 9.0, t_ref=self.pretension)
+        key = (tuple(np.round(p, 9)), f[2])
+        if key != getattr(self, "_key", None):  # tension distribution only when something changed
+            A = structure_matrix_at(p, self.geom.r, self.geom.B)
+            self._key, self._t = key, wrench2tensions(f, A, 0.05, 9.0, t_ref=self.pretension)
+        t = self._t.copy()
         if self.stuck is not None:
             t[self.stuck] += 400.0 * max(0.0, self.L[self.stuck] - self.L_stuck0[self.stuck])
         return t + self.tension_offset
@@ -77,6 +82,8 @@ class FakeRobot(ContextDevice):
     def read(self):
         if self.fail_read is not None:
             raise self.fail_read
+        if self.silent:
+            return None
         if not self.frozen:
             self.seq += 1
             self.t += 0.001
@@ -102,7 +109,7 @@ class LinearEstimator:
 
     def update(self, reading, pose, dt):
         t = np.asarray(reading.fsr_counts, dtype=float) * N_PER_COUNT
-        return t, -(structure_matrix(pose, self.geom) @ t)
+        return t, -(structure_matrix_at(np.asarray(pose)[:3], self.geom.r, self.geom.B) @ t)
 
     def describe(self):
         return {"estimator": "linear", "N_per_count": N_PER_COUNT}

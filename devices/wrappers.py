@@ -1,0 +1,296 @@
+"""Device wrappers (Gymnasium style: behaviour added around a device, not flags inside it).
+
+- `ProcessRobot`: runs any Robot (built from its URL) in its own process at its own rate; the loop exchanges
+  the latest command and the latest reading through shared memory (a seqlock), so a slow robot link or a
+  physics step never stalls the haptic tick and shares no interpreter lock with it.
+- `DelayedRobot`: readings arrive `delay` reads late (link latency).
+- `NoisyStylus`: Gaussian noise on the stylus position (seeded).
+- `LoggedDevice`: keeps every call and result (for tests and debugging).
+"""
+
+from __future__ import annotations
+
+import collections
+import multiprocessing as mp
+import os
+import pickle
+import time
+
+import numpy as np
+
+from devices.base import ContextDevice, DeviceError, HapticSample, RobotReading
+
+# ------------------------------------------------------------------------------------------------------------
+# generic wrappers
+# ------------------------------------------------------------------------------------------------------------
+
+
+class Wrapper(ContextDevice):
+    """Delegates everything to the wrapped device; subclasses override what they change."""
+
+    def __init__(self, device):
+        self.device = device
+
+    @property
+    def spec(self):
+        return self.device.spec
+
+    @property
+    def is_open(self):
+        return self.device.is_open
+
+    def open(self):
+        self.device.open()
+
+    def close(self):
+        self.device.close()
+
+    def __getattr__(self, name):
+        if name == "device":
+            raise AttributeError(name)
+        return getattr(self.device, name)
+
+
+class DelayedRobot(Wrapper):
+    """Each read() returns the reading from `delay` reads earlier (the first ones repeat the oldest)."""
+
+    def __init__(self, robot, delay: int):
+        super().__init__(robot)
+        if delay < 0:
+            raise ValueError("delay must be >= 0")
+        self.delay = int(delay)
+        self.queue = collections.deque(maxlen=self.delay + 1)
+
+    def command_lengths(self, lengths):
+        self.device.command_lengths(lengths)
+
+    def stop(self):
+        self.device.stop()
+
+    def read(self) -> RobotReading:
+        self.queue.append(self.device.read())
+        return self.queue[0]
+
+
+class NoisyStylus(Wrapper):
+    """Adds N(0, sigma^2) [m] to each position component of the stylus readings (seeded)."""
+
+    def __init__(self, haptic, sigma: float, seed: int = 0):
+        super().__init__(haptic)
+        self.sigma = float(sigma)
+        self.rng = np.random.default_rng(seed)
+
+    def read(self) -> HapticSample:
+        s = self.device.read()
+        p = s.measured_cp + self.rng.normal(0.0, self.sigma, 3)
+        return HapticSample(t=s.t, measured_cp=p, orientation=s.orientation, measured_cv=s.measured_cv,
+                            buttons=s.buttons, operator_present=s.operator_present)
+
+    def servo_cf(self, force):
+        self.device.servo_cf(force)
+
+
+class LoggedDevice(Wrapper):
+    """Records (method, argument or result) for every read / servo_cf / command_lengths / stop."""
+
+    def __init__(self, device):
+        super().__init__(device)
+        self.log: list = []
+
+    def read(self):
+        r = self.device.read()
+        self.log.append(("read", r))
+        return r
+
+    def servo_cf(self, force):
+        self.log.append(("servo_cf", np.array(force, dtype=float)))
+        self.device.servo_cf(force)
+
+    def command_lengths(self, lengths):
+        self.log.append(("command_lengths", np.array(lengths, dtype=float)))
+        self.device.command_lengths(lengths)
+
+    def stop(self):
+        self.log.append(("stop", None))
+        self.device.stop()
+
+
+# ------------------------------------------------------------------------------------------------------------
+# robot in its own process
+# ------------------------------------------------------------------------------------------------------------
+
+_SLOT = 256  # float64 slots of a published reading
+# command block (float64): [version, 6 lengths, stop flag, quit flag]
+_CMD_N = 9
+_BASE = ("t", "seq", "status", "boot_id")  # then fsr(6), steps(6), lengths(6), wrench(6), wrench_ok, extras
+
+
+def _pack(r: RobotReading, keys: list, out: np.ndarray) -> None:
+    out[0], out[1], out[2], out[3] = r.t, r.seq, r.status, r.boot_id
+    out[4:10] = r.fsr_counts
+    out[10:16] = r.position_steps
+    out[16:22] = r.commanded_lengths
+    if r.wrench_truth is None:
+        out[22:28] = np.nan
+        out[28] = 0
+    else:
+        out[22:28] = r.wrench_truth
+        out[28] = 1
+    i = 29
+    for k, w in keys:
+        out[i:i + w] = np.asarray(r.extras.get(k, np.nan), dtype=float).ravel()[:w]
+        i += w
+
+
+def _unpack(v: np.ndarray, keys: list) -> RobotReading:
+    extras, i = {}, 29
+    for k, w in keys:
+        extras[k] = v[i:i + w].copy() if w > 1 else float(v[i])
+        i += w
+    return RobotReading(t=float(v[0]), seq=int(v[1]), fsr_counts=v[4:10].copy(), position_steps=v[10:16].copy(),
+                        commanded_lengths=v[16:22].copy(), status=int(v[2]), boot_id=int(v[3]),
+                        wrench_truth=v[22:28].copy() if v[28] else None, extras=extras)
+
+
+def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, parent_pid: int) -> None:
+    """Child: own the device, apply the latest command, read, publish, at rate_hz (sleeping, not spinning)."""
+    from devices.base import open_device
+
+    pub = np.frombuffer(shm_read, dtype=np.float64)  # [version, slot...]
+    cmd = np.frombuffer(shm_cmd, dtype=np.float64)
+    try:
+        dev = open_device(url, **options)
+        dev.open()
+        first = dev.read()
+        keys = []
+        for k, v in sorted((first.extras or {}).items()):
+            try:
+                a = np.asarray(v, dtype=float).ravel()
+            except (TypeError, ValueError):
+                continue
+            if 0 < a.size and 29 + sum(w for _, w in keys) + a.size <= _SLOT:
+                keys.append((k, int(a.size)))
+        conn.send_bytes(pickle.dumps(("ok", dev.spec, keys, getattr(dev, "firmware_version", None))))
+    except Exception as exc:  # noqa: BLE001 - reported to the parent as one line
+        conn.send_bytes(pickle.dumps(("error", f"{type(exc).__name__}: {exc}", None, None)))
+        return
+    period = 1.0 / rate_hz
+    slot = np.zeros(_SLOT)
+    last_cmd_version = 0.0
+    stopped = False
+    next_t = time.monotonic()
+    reading = first
+    try:
+        while cmd[8] == 0 and os.getppid() == parent_pid:
+            if cmd[7] and not stopped:
+                dev.stop()
+                stopped = True
+            v = cmd[0]
+            if v != last_cmd_version and not stopped:
+                last_cmd_version = v
+                dev.command_lengths(cmd[1:7].copy())
+            reading = dev.read()
+            _pack(reading, keys, slot)
+            pub[0] += 1  # odd: being written (seqlock)
+            pub[1:] = slot
+            pub[0] += 1  # even: consistent
+            next_t += period
+            delay = next_t - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            else:
+                next_t = time.monotonic()
+    except Exception as exc:  # noqa: BLE001 - the parent sees the error and faults
+        try:
+            conn.send_bytes(pickle.dumps(("error", f"{type(exc).__name__}: {exc}", None, None)))
+        except OSError:
+            pass
+    finally:
+        try:
+            dev.stop()
+        finally:
+            dev.close()
+
+
+class ProcessRobot(ContextDevice):
+    """A Robot run in a child process at `rate_hz`; read() returns the latest published reading (same
+    seq when nothing new arrived, so the loop's staleness watchdog works), command_lengths() posts the
+    latest command. Errors in the child come back as DeviceError on the next read()."""
+
+    def __init__(self, url: str, rate_hz: float = 1000.0, start_timeout: float = 30.0, **options):
+        self.url, self.rate_hz, self.options, self.start_timeout = url, float(rate_hz), options, start_timeout
+        self.is_open = False
+        self.spec = None
+        self.firmware_version = None
+
+    def open(self) -> None:
+        ctx = mp.get_context("fork")
+        self.shm_read = ctx.RawArray("d", 1 + _SLOT)
+        self.shm_cmd = ctx.RawArray("d", _CMD_N)
+        self.pub = np.frombuffer(self.shm_read, dtype=np.float64)
+        self.cmd = np.frombuffer(self.shm_cmd, dtype=np.float64)
+        rx, tx = ctx.Pipe(duplex=False)
+        self.proc = ctx.Process(target=_worker, name="teleop-robot", daemon=True,
+                                args=(self.url, self.options, self.rate_hz, self.shm_read, self.shm_cmd, tx,
+                                      os.getpid()))
+        self.proc.start()
+        self.rx = rx
+        if not rx.poll(self.start_timeout):
+            self._kill()
+            raise DeviceError(f"{self.url}: robot process did not start within {self.start_timeout:g} s")
+        status, spec, keys, fw = pickle.loads(rx.recv_bytes())
+        if status != "ok":
+            self._kill()
+            raise DeviceError(f"{self.url}: {spec}")
+        self.spec, self.keys, self.firmware_version = spec, keys, fw
+        self.buf = np.zeros(1 + _SLOT)
+        self.last = None
+        self.last_version = -1.0
+        deadline = time.monotonic() + self.start_timeout
+        while self.pub[0] == 0 and time.monotonic() < deadline:
+            time.sleep(0.001)
+        self.is_open = True
+
+    def _kill(self) -> None:
+        if self.proc.is_alive():
+            self.proc.kill()
+        self.proc.join()
+
+    def close(self) -> None:
+        if not self.is_open:
+            return
+        self.cmd[8] = 1
+        self.proc.join(5.0)
+        if self.proc.is_alive():
+            self._kill()
+        self.is_open = False
+
+    def command_lengths(self, lengths) -> None:
+        L = np.asarray(lengths, dtype=float)
+        if L.shape != (6,) or not np.isfinite(L).all():
+            raise DeviceError(f"{self.url}: lengths must be 6 finite numbers")
+        self.cmd[1:7] = L
+        self.cmd[0] += 1
+
+    def stop(self) -> None:
+        if self.is_open:
+            self.cmd[7] = 1
+
+    def read(self) -> RobotReading:
+        if not self.is_open:
+            raise DeviceError(f"{self.url}: read() before open()")
+        if self.rx.poll():
+            status, msg, _, _ = pickle.loads(self.rx.recv_bytes())
+            raise DeviceError(f"{self.url} (robot process): {msg}")
+        for _ in range(100):  # seqlock: retry while the writer is mid-update
+            v1 = self.pub[0]
+            if self.last is not None and v1 == self.last_version:
+                return self.last
+            self.buf[:] = self.pub
+            if v1 == self.buf[0] == self.pub[0] and int(v1) % 2 == 0 and v1 > 0:
+                self.last = _unpack(self.buf[1:], self.keys)
+                self.last_version = v1
+                break
+        if self.last is None:
+            raise DeviceError(f"{self.url}: no reading published yet")
+        return self.last

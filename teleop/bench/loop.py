@@ -1,0 +1,80 @@
+"""`teleop bench loop`: the paced master-slave loop's timing (DESIGN.md JSON), recording on by default.
+
+    teleop bench loop --seconds 60 --rate 1000 --json loop.json
+    teleop bench loop --find-max-rate --seconds 10 --json maxrate.json
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+
+from teleop.errors import InputError
+
+MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (RELIABILITY.md)
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("loop", help="loop timing: lateness, tick and per-stage times (recording on)")
+    p.add_argument("--seconds", type=float, default=10.0)
+    p.add_argument("--rate", type=float, default=1000.0)
+    p.add_argument("--json", metavar="F", help="write the DESIGN.md loop JSON")
+    p.add_argument("--haptic", default="sim://?script=pokes")
+    p.add_argument("--robot", default="sim://robot")
+    p.add_argument("--record", metavar="FILE", help="keep the recording here (default: a temporary file)")
+    p.add_argument("--no-record", action="store_true", help="benchmark without the recorder")
+    p.add_argument("--spin-us", type=float, default=200.0, help="spin this long before each deadline [us]")
+    p.add_argument("--find-max-rate", action="store_true",
+                   help="run --seconds at increasing rates; report the highest with <= 0.1 %% misses")
+    p.set_defaults(func=run)
+
+
+def bench_once(args, rate: float) -> dict:
+    from teleop.loop.params import LoopParams
+    from teleop.loop.session import run_session
+
+    with tempfile.TemporaryDirectory() as tmp:
+        record = None if args.no_record else (args.record or os.path.join(tmp, "bench.mcap"))
+        res = run_session(args.haptic, args.robot, args.seconds, record=record, params=LoopParams(rate_hz=rate),
+                          spin_us=args.spin_us)
+    out = dict(res.timing)
+    out["recording"] = {"on": record is not None, "drops": res.drops, "alarm": res.alarm}
+    out["final_state"] = res.final_state
+    out["miss_fraction"] = out["deadline_misses"] / max(1, out["ticks"])
+    return out
+
+
+def run(args) -> int:
+    from teleop.outputs import write_json
+
+    if not args.seconds > 0 or not args.rate > 0:
+        raise InputError("--seconds and --rate must be > 0")
+    if not args.find_max_rate:
+        out = bench_once(args, args.rate)
+        la = out["lateness_us"]
+        print(f"loop {out['rate_hz']:g} Hz, {out['ticks']} ticks: lateness p50 {la['p50']} us, p99 {la['p99']} us, "
+              f"p99.9 {la['p999']} us, max {la['max']} us; misses {out['deadline_misses']} "
+              f"({100 * out['miss_fraction']:.3f} %); tick p50 {out['tick_us']['p50']} us")
+        for name, st in out["stages_us"].items():
+            print(f"  {name:9s} p50 {st['p50']:8.1f} us  p99 {st['p99']:8.1f} us")
+        if args.json:
+            write_json(args.json, out)
+        return 0
+    trials = []
+    best = None
+    for rate in (1000.0, 1500.0, 2000.0, 3000.0, 4000.0, 5000.0, 6000.0, 8000.0):
+        out = bench_once(args, rate)
+        ok = out["miss_fraction"] <= MISS_FRACTION and out["final_state"] != "FAULT"
+        trials.append({"rate_hz": rate, "miss_fraction": out["miss_fraction"], "ok": ok,
+                       "lateness_us": out["lateness_us"], "tick_us": out["tick_us"], "final_state": out["final_state"]})
+        print(f"{rate:6.0f} Hz: misses {100 * out['miss_fraction']:.3f} %, tick p50 {out['tick_us']['p50']} us, "
+              f"final {out['final_state']} -> {'ok' if ok else 'FAIL'}")
+        if not ok:
+            break
+        best = rate
+    res = {"max_rate_hz": best, "criterion": "<= 0.1 % ticks > 0.5 ms late (skipped ticks count), no FAULT",
+           "trials": trials}
+    if args.json:
+        write_json(args.json, res)
+    print(f"highest sustained rate: {best} Hz")
+    return 0

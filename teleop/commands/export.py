@@ -1,0 +1,88 @@
+"""`teleop export FILE --csv OUT [--cable N]`: a session as the interchange CSV of DESIGN.md, one cable.
+
+Columns (one row per robot reading): t_s; motor_pos_mm (cable hauled in by the motor, from the step count,
++ = shortening); tip_pos_mm (cable hauled in at the end effector, from the simulator's actual tip pose when
+the recording has it); motor_force_N (the FSR's calibrated tension, the sensor side of the distal sheath
+segment); tip_force_N (tension at the end effector, when the recording has the simulator's truth);
+bend_angle_deg (eq 6 bend at the setpoint pose plus the scaffold bend theta0); cmd_len_mm (commanded length).
+"""
+
+from __future__ import annotations
+
+import sys
+
+from teleop.errors import InputError
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("export", help="write a recorded session as the interchange CSV (one cable)")
+    p.add_argument("file", help="session recording (.mcap)")
+    p.add_argument("--csv", required=True, metavar="OUT", help="output CSV")
+    p.add_argument("--cable", type=int, default=1, help="cable 1..6 (default 1)")
+    p.set_defaults(func=run)
+
+
+def export_rows(session, cable: int):
+    """(header, rows, notes) of the interchange CSV for `cable` (1-based)."""
+    import numpy as np
+
+    from teleop.kinematics import bending_angles, pose2cables, pose2lengths
+    from teleop.loop.replay import geometry_from
+
+    meta = session.metadata.get("session", {})
+    conf = meta.get("configuration", {})
+    geom = geometry_from(conf.get("geometry"))
+    steps_per_m = float((conf.get("robot_spec") or {}).get("steps_per_m", 3200 / (np.pi * 0.010)))
+    home = np.array(((conf.get("loop") or {}).get("mapping") or {}).get("home", [0.0] * 6), dtype=float)
+    L_home = pose2lengths(home, geom)
+    i = cable - 1
+    est = {m["tick"]: m for m in session.messages("/estimation")}
+    sp = {m["tick"]: m for m in session.messages("/teleop/setpoint")}
+    header = ["t_s", "motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "cmd_len_mm"]
+    rows = []
+    for m in session.messages("/robot/measured"):
+        k = m["tick"]
+        if k not in est or k not in sp:
+            continue
+        pose = home.copy()
+        pose[:3] = sp[k]["setpoint_cp"]
+        theta = bending_angles(pose2cables(pose, geom), geom)[i] + geom.theta0
+        tip_pos = tip_force = float("nan")
+        if "x_tip" in m:  # simulator truth: actual tip -> actual pose -> actual lengths
+            actual = np.array(m.get("x_pose", pose), dtype=float)
+            from teleop.kinematics import rotation_zyx
+
+            actual[:3] = np.array(m["x_tip"]) - rotation_zyx(*actual[3:]) @ geom.tip
+            tip_pos = (L_home[i] - pose2lengths(actual, geom)[i]) * 1e3
+        if "x_t_tip" in m:
+            tip_force = float(m["x_t_tip"][i])
+        rows.append([m["t"], m["position_steps"][i] / steps_per_m * 1e3, tip_pos, est[k]["tensions"][i], tip_force,
+                     float(np.rad2deg(theta)), m["commanded_lengths"][i] * 1e3])
+    keep = [j for j in range(len(header)) if not all(r[j] != r[j] for r in rows)] if rows else list(range(len(header)))
+    header = [header[j] for j in keep]
+    rows = [[r[j] for j in keep] for r in rows]
+    return header, rows
+
+
+def run(args) -> int:
+    from teleop.outputs import atomic_write
+    from teleop.recording import read_session
+
+    if not 1 <= args.cable <= 6:
+        raise InputError(f"--cable must be 1..6, got {args.cable}")
+    s = read_session(args.file)
+    if s.damage:
+        print(f"teleop: warning: {args.file}: {s.damage}; exporting the intact prefix", file=sys.stderr)
+    if "session" not in s.metadata:
+        raise InputError(f"{args.file}: no session metadata (is this a teleop session recording?)")
+    header, rows = export_rows(s, args.cable)
+    if not rows:
+        raise InputError(f"{args.file}: no robot readings to export")
+    lines = [f"# source = teleop session {args.file}", "# load = external", f"# cable = {args.cable}",
+             "# motor_force_N = FSR-calibrated tension (sensor side of the distal sheath segment)",
+             ",".join(header)]
+    lines += [",".join(repr(float(v)) for v in r) for r in rows]
+    text = "\n".join(lines) + "\n"
+    atomic_write(args.csv, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    print(f"wrote {args.csv}: {len(rows)} rows, columns {', '.join(header)}")
+    return 0

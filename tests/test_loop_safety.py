@@ -1,0 +1,356 @@
+"""RELIABILITY.md watchdogs, safe state and limits, host side: every item drives the loop into the condition
+with a manual clock and checks the state, the stylus force and the motion commands tick by tick."""
+
+import os
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "devices"))
+
+from _fakes import FakeRobot, LinearEstimator  # noqa: E402
+
+from devices.base import TOUCH_SPEC  # noqa: E402
+from devices.simulated import OperatorParams, Script, SimulatedStylus  # noqa: E402
+from teleop.loop import LoopParams, State, Teleop  # noqa: E402
+from teleop.loop.compute import clamp_force, render_force  # noqa: E402
+
+DT = 0.001
+
+
+class Clock:
+    def __init__(self):
+        self.t = 0.0
+
+    def __call__(self):
+        return self.t
+
+
+class Rig:
+    """Stylus + fake robot + loop on a manual clock; `run(n)` ticks n times."""
+
+    def __init__(self, script=None, params=None, robot=None, estimator=None):
+        self.clock = Clock()
+        self.stylus = SimulatedStylus(script or Script(kind="hold"), OperatorParams(tremor=0.0), clock=self.clock)
+        self.robot = robot or FakeRobot()
+        self.stylus.open()
+        self.robot.open()
+        self.tp = Teleop(self.stylus, self.robot, params or LoopParams(), estimator=estimator or LinearEstimator())
+        self.tp.start(0.0)
+        self.k = 0
+        self.forces = []
+        self.states = []
+
+    def run(self, n=1):
+        for _ in range(n):
+            self.clock.t = self.k * DT
+            x = self.tp.tick(self.k * DT)
+            self.forces.append(x.F.copy())
+            self.states.append(self.tp.state)
+            self.k += 1
+        return self.tp.x
+
+    def run_until(self, state, limit=2000):
+        for _ in range(limit):
+            self.run()
+            if self.tp.state == state:
+                return
+        raise AssertionError(f"never reached {state}; events {self.tp.events}")
+
+
+def poke_script():
+    return Script(kind="pokes", axis=(0.0, 0.0, -1.0), amplitude=0.016, period=1.0, duty=0.6)
+
+
+def test_power_on_is_disabled_zero_force_no_motion():
+    rig = Rig(params=LoopParams(auto_enable=False))
+    rig.run(300)
+    assert set(rig.states) == {State.DISABLED}
+    assert np.all(np.array(rig.forces) == 0.0)
+    assert rig.robot.commands == []
+
+
+def test_enable_engages_through_aligning_and_moves():
+    rig = Rig(script=poke_script())
+    rig.run_until(State.ENABLED)
+    assert [e.dst for e in rig.tp.events] == ["ALIGNING", "ENABLED"]
+    rig.run(400)
+    assert rig.tp.state == State.ENABLED and len(rig.robot.commands) > 300
+
+
+def test_stale_telemetry_faults_and_zeroes_force_within_one_tick():
+    p = LoopParams()
+    rig = Rig(script=poke_script(), params=p, robot=FakeRobot(z_pad=0.0))
+    rig.run_until(State.ENABLED)
+    rig.run(450)
+    assert np.linalg.norm(rig.forces[-1]) > 0  # in contact: the operator feels the pad
+    rig.robot.frozen = True  # telemetry stops: same seq from now on
+    last_fresh = rig.k - 1
+    rig.run(40)
+    fault_tick = next(i for i, s in enumerate(rig.states) if s == State.FAULT)
+    limit_tick = last_fresh + p.stale_limit / DT
+    assert limit_tick - 1e-9 <= fault_tick <= limit_tick + 1 + 1e-9  # age >= 20 ms, at most a tick later
+    assert np.all(np.array(rig.forces[fault_tick:]) == 0.0)
+    assert "stale" in rig.tp.fault_reason and rig.robot.stops == 1
+
+
+def test_missing_telemetry_faults():
+    rig = Rig()
+    rig.robot.silent = True  # read() returns None: no frame has ever arrived
+    rig.run(499)
+    assert rig.tp.state == State.DISABLED
+    rig.run(3)
+    assert rig.tp.state == State.FAULT and "missing" in rig.tp.fault_reason
+
+
+def test_telemetry_frozen_from_start_faults():
+    rig = Rig()
+    rig.robot.frozen = True
+    rig.run(30)
+    assert rig.tp.state == State.FAULT and "stale" in rig.tp.fault_reason
+
+
+def test_fault_latches_reconnect_never_reenables_and_reset_needs_enable():
+    rig = Rig(script=poke_script())
+    rig.run_until(State.ENABLED)
+    rig.robot.frozen = True
+    rig.run(30)
+    assert rig.tp.state == State.FAULT
+    rig.robot.frozen = False  # link back: fresh telemetry again
+    n_cmd = len(rig.robot.commands)
+    rig.run(500)
+    assert set(rig.states[-500:]) == {State.FAULT}
+    assert len(rig.robot.commands) == n_cmd and np.all(np.array(rig.forces[-500:]) == 0.0)
+    rig.tp.operator_reset()
+    rig.run(300)
+    assert rig.tp.state == State.DISABLED  # reset leaves FAULT but does not re-enable
+    rig.tp.request_enable()
+    rig.run_until(State.ENABLED)
+
+
+def test_firmware_reset_detected_next_frame_no_motion_until_rehomed():
+    rig = Rig(script=poke_script())
+    rig.run_until(State.ENABLED)
+    rig.run(50)
+    rig.robot.boot_id = 99
+    rig.robot.status = 0  # a rebooted firmware is not homed
+    k_reset = rig.k
+    rig.run(1)
+    assert rig.tp.state == State.FAULT and "firmware reset" in rig.tp.fault_reason
+    assert rig.k - 1 == k_reset
+    rig.tp.operator_reset()
+    rig.run(1)
+    rig.tp.request_enable()
+    n_cmd = len(rig.robot.commands)
+    rig.run(500)
+    assert rig.tp.state == State.DISABLED and len(rig.robot.commands) == n_cmd  # not homed: no motion
+    rig.robot.status = 1  # re-homed
+    rig.run_until(State.ENABLED)
+
+
+class Boom(RuntimeError):
+    pass
+
+
+@pytest.mark.parametrize("stage", ["read", "map", "robot_command", "robot_read", "estimate", "render", "write",
+                                   "record"])
+def test_exception_at_any_stage_faults_with_reason_zero_force(stage):
+    est = LinearEstimator()
+    rig = Rig(script=poke_script(), estimator=est, robot=FakeRobot(z_pad=0.0))
+    rig.run_until(State.ENABLED)
+    rig.run(450)
+    tp = rig.tp
+    if stage == "read":
+        rig.stylus.read = lambda: (_ for _ in ()).throw(Boom("usb"))
+    elif stage == "map":
+        tp.follow = lambda x: (_ for _ in ()).throw(Boom("ik"))
+    elif stage == "robot_command":
+        rig.robot.fail_command = Boom("serial write")
+    elif stage == "robot_read":
+        rig.robot.fail_read = Boom("serial read")
+    elif stage == "estimate":
+        est.update = lambda *a: (_ for _ in ()).throw(Boom("kalman"))
+    elif stage == "render":
+        tp.ramp = lambda now: (_ for _ in ()).throw(Boom("render"))
+    elif stage == "write":
+        real = rig.stylus.servo_cf
+        calls = []
+
+        def flaky(F):
+            calls.append(np.array(F))
+            if len(calls) == 1:
+                raise Boom("servo")
+            real(F)
+        rig.stylus.servo_cf = flaky
+    elif stage == "record":
+        tp.tap = lambda t: (_ for _ in ()).throw(Boom("disk"))
+    rig.run(1)
+    assert tp.state == State.FAULT
+    assert "Boom" in tp.fault_reason and tp.fault_reason.split(":")[0] in stage.replace("robot_command", "robot") \
+        .replace("robot_read", "robot")
+    if stage == "write":
+        assert np.all(calls[-1] == 0.0)  # the retry after the failed write commands zero force
+    else:
+        assert np.all(rig.forces[-1] == 0.0)
+    rig.run(20)
+    assert tp.state == State.FAULT and np.all(np.array(rig.forces[-20:]) == 0.0)
+
+
+@pytest.mark.parametrize("where", ["stylus", "counts", "estimate"])
+def test_nan_input_gives_zero_force_and_fault(where):
+    est = LinearEstimator()
+    rig = Rig(script=poke_script(), estimator=est)
+    rig.run_until(State.ENABLED)
+    rig.run(20)
+    if where == "stylus":
+        real = rig.stylus.read
+
+        def nan_read():
+            s = real()
+            s.measured_cp[0] = np.nan
+            return s
+        rig.stylus.read = nan_read
+    elif where == "counts":
+        rig.robot.nan_counts = True
+    else:
+        real_u = est.update
+        est.update = lambda *a: (real_u(*a)[0], np.full(6, np.nan))
+    rig.run(1)
+    assert rig.tp.state == State.FAULT and np.all(rig.forces[-1] == 0.0)
+
+
+@settings(max_examples=60)
+@given(st.lists(st.one_of(st.floats(allow_nan=True, allow_infinity=True),
+                          st.sampled_from([1e9, -1e9, np.inf, -np.inf, np.nan])), min_size=6, max_size=6),
+       st.floats(0.01, 100.0))
+def test_commanded_force_always_finite_and_within_continuous_limit(f, scale):
+    F = render_force(np.array(f), np.diag([1.0, -1.0, -1.0]), scale, False)
+    out, ok = clamp_force(F, TOUCH_SPEC.max_force_continuous)
+    assert np.isfinite(out).all()
+    assert np.linalg.norm(out) <= TOUCH_SPEC.max_force_continuous * (1 + 1e-12)
+    if not np.isfinite(F).all():
+        assert not ok and np.all(out == 0.0)
+
+
+def test_huge_wrench_in_loop_is_clamped():
+    est = LinearEstimator()
+    rig = Rig(script=poke_script(), estimator=est)
+    rig.run_until(State.ENABLED)
+    real_u = est.update
+    est.update = lambda *a: (real_u(*a)[0], np.array([3e8, -1e9, 1e9, 0, 0, 0]))
+    rig.run(400)
+    norms = np.linalg.norm(np.array(rig.forces), axis=1)
+    assert norms.max() <= TOUCH_SPEC.max_force_continuous + 1e-12 and norms[-1] > 0.8
+
+
+def test_force_ramps_in_on_enable_and_engages_only_after_small_force():
+    est = LinearEstimator()
+    rig = Rig(script=poke_script(), estimator=est, params=LoopParams(ramp_time=0.2))
+    real_u = est.update
+    bias = {"f": np.array([0.0, 0.0, -0.5, 0, 0, 0])}
+    est.update = lambda *a: (real_u(*a)[0], bias["f"].copy())
+    rig.run(300)
+    assert rig.tp.state == State.ALIGNING  # 0.5 N computed force: engaging would jolt the hand
+    bias["f"] = np.array([0.0, 0.0, -0.1, 0, 0, 0])
+    rig.run_until(State.ENABLED)
+    k_on = rig.k
+    rig.run(300)
+    n = np.linalg.norm(np.array(rig.forces[k_on - 1:]), axis=1)
+    assert n[0] < 0.01 and abs(n[100] - 0.05) < 0.01 and abs(n[250] - 0.1) < 1e-9
+    assert np.all(np.diff(n[:200]) >= -1e-12)
+
+
+def test_negative_z_zeroing_for_blind_test():
+    F = render_force(np.array([0.1, 0.2, 0.7, 0, 0, 0]), np.diag([1.0, -1.0, -1.0]), 1.0, True)
+    assert F[2] == 0.0 and F[0] == 0.1 and F[1] == -0.2
+    F = render_force(np.array([0.1, 0.2, -0.7, 0, 0, 0]), np.diag([1.0, -1.0, -1.0]), 1.0, True)
+    assert F[2] == pytest.approx(0.7)
+
+
+def test_engages_only_with_operator_present_and_aligned():
+    rig = Rig(script=Script(kind="hold", absent=((0.0, 0.5),)))
+    rig.run(400)
+    assert rig.tp.state == State.ALIGNING
+    rig.run_until(State.ENABLED)
+    assert rig.k * DT >= 0.5
+    tilted = Rig(script=Script(kind="hold", tilt=np.deg2rad(45)))
+    tilted.run(500)
+    assert tilted.tp.state == State.ALIGNING and tilted.robot.commands == []
+    rig.stylus.script = Script(kind="hold", absent=((0.0, 100.0),))
+    rig.run(2)
+    assert rig.tp.state == State.ALIGNING and np.all(rig.forces[-1] == 0.0)
+
+
+@pytest.mark.parametrize("what", ["over", "slack"])
+def test_tension_out_of_range_persisting_faults_single_sample_does_not(what):
+    rig = Rig(script=poke_script())
+    rig.run_until(State.ENABLED)
+    off = np.zeros(6)
+    off[2] = 10.0 if what == "over" else -0.999
+    rig.robot.tension_offset = off  # one noisy sample
+    rig.run(1)
+    rig.robot.tension_offset = np.zeros(6)
+    rig.run(50)
+    assert rig.tp.state == State.ENABLED
+    rig.robot.tension_offset = off
+    rig.run(9)
+    assert rig.tp.state == State.ENABLED  # 9 ms < 10 ms window
+    rig.run(3)
+    assert rig.tp.state == State.FAULT and what.replace("over", "over-range") in rig.tp.fault_reason
+    assert "cable 3" in rig.tp.fault_reason and rig.robot.stops == 1
+
+
+def test_stuck_cable_stops_the_robot():
+    rig = Rig(script=poke_script(), robot=FakeRobot(z_pad=1.0))
+    rig.run_until(State.ENABLED)
+    rig.run(5)
+    L = np.array(rig.robot.commands)
+    rig.robot.L_stuck0 = rig.robot.L.copy()
+    rig.robot.stuck = 1  # cable 2 pays out in the poke: it jams
+    rig.run(400)
+    assert rig.tp.state == State.FAULT and "cable 2 stuck" in rig.tp.fault_reason
+    assert rig.robot.stops == 1
+    n = len(rig.robot.commands)
+    rig.run(50)
+    assert len(rig.robot.commands) == n
+    assert len(L) > 0
+
+
+def test_normal_pokes_with_contact_do_not_trip_monitors():
+    rig = Rig(script=poke_script(), robot=FakeRobot(z_pad=0.0015, k_pad=400.0))
+    rig.run(3000)
+    assert rig.tp.state == State.ENABLED, rig.tp.events
+
+
+def test_motion_commands_within_limits_and_rate_limited():
+    """A violent operator (10 cm steps) cannot make any cable jump or leave its limits."""
+    script = Script(kind="recorded", points=np.array([[0, 0, 0, 0], [0.3, 0, 0, 0], [0.301, 0.05, -0.05, -0.05],
+                                                      [0.6, 0.05, -0.05, -0.05], [0.601, -0.05, 0.05, 0.05],
+                                                      [1.0, -0.05, 0.05, 0.05]]))
+    p = LoopParams()
+    rig = Rig(script=script, params=p, robot=FakeRobot(z_pad=1.0))
+    rig.stylus.operator = OperatorParams(m=0.05, k=2000.0, b=10.0, tremor=0.0)
+    rig.run(1000)
+    L = np.array(rig.robot.commands)
+    g = rig.tp.geom
+    assert len(L) > 900
+    assert L.min() >= g.l_min and L.max() <= g.l_max
+    steps = np.abs(np.diff(np.vstack([rig.robot.L0, L]), axis=0)).max(axis=1)
+    assert steps.max() <= g.v_max * p.dt * (1 + 1e-9)
+    assert steps.max() > 0.9 * g.v_max * p.dt  # the limiter was active
+    m = p.mapping
+    pos = rig.tp.pose[:3]
+    assert np.all(pos >= m.workspace_min - 1e-12) and np.all(pos <= m.workspace_max + 1e-12)
+
+
+def test_clutch_reanchors_without_jump():
+    script = Script(kind="sine", axis=(1.0, 0.0, 0.0), amplitude=0.005, period=1.0, clutch=((0.3, 0.55),))
+    rig = Rig(script=script)
+    rig.run(1000)
+    dst = [e.dst for e in rig.tp.events]
+    assert dst[:4] == ["ALIGNING", "ENABLED", "CLUTCHED", "ENABLED"]
+    L = np.array(rig.robot.commands)
+    assert np.abs(np.diff(L, axis=0)).max() < 0.5 * rig.tp.geom.v_max * DT  # smooth, no re-engage jump
