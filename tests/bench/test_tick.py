@@ -1,0 +1,29 @@
+"""`teleop bench tick`: JSON keys (DESIGN.md) and bad arguments; no wall-clock assertions."""
+
+import json
+
+from teleop.bench.tick import bench_tick
+from teleop.cli import main
+
+
+def test_bench_tick_json_keys():
+    out = bench_tick(ticks=300, warmup=50)
+    assert list(out) == ["ticks", "tick_us", "reference_tick_us", "speedup_p50"]
+    assert list(out["tick_us"]) == ["p50", "p99", "max"]
+    assert list(out["reference_tick_us"]) == ["p50", "p99", "max"]
+    assert out["ticks"] == 300 and out["speedup_p50"] > 0
+    assert out["tick_us"]["p50"] <= out["tick_us"]["p99"] <= out["tick_us"]["max"]
+
+
+def test_cli_writes_the_json(tmp_path, capsys):
+    path = tmp_path / "tick.json"
+    assert main(["bench", "tick", "--ticks", "1000", "--estimator", "single", "--json", str(path)]) == 0
+    data = json.loads(path.read_text())
+    assert data["ticks"] == 1000 and set(data) == {"ticks", "tick_us", "reference_tick_us", "speedup_p50"}
+
+
+def test_cli_bad_arguments_exit_2(capsys):
+    assert main(["bench", "tick", "--ticks", "5"]) == 2
+    assert main(["bench", "tick", "--estimator", "magic"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all(line.startswith("teleop: error: --") for line in err)

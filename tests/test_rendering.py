@@ -1,0 +1,99 @@
+"""Rendering: limits for any input, NaN fault, ramp-in, -z zeroing, frame map, passivity."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from devices.base import OMEGA_SPEC, TOUCH_SPEC
+from teleop.errors import InputError
+from teleop.rendering import ENGAGED, RAMPING, WAITING, Renderer, RenderParams, clamp_norm, frame_map
+
+wild = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.sampled_from([1e9, -1e9, 1e308, -1e308]))
+
+
+def engaged(params=RenderParams(ramp_s=0.0)):
+    r = Renderer(params)
+    r.enable()
+    for _ in range(params.engage_ticks + 1):
+        r.render(np.zeros(6), 1e-3)
+    assert r.state == ENGAGED
+    return r
+
+
+@settings(derandomize=True, max_examples=200, deadline=None)
+@given(f=st.lists(wild, min_size=6, max_size=6), v=st.lists(wild, min_size=3, max_size=3),
+       spec=st.sampled_from([TOUCH_SPEC, OMEGA_SPEC]), zero_z=st.booleans())
+def test_output_is_finite_and_within_the_device_limit_for_any_input(f, v, spec, zero_z):
+    r = engaged(RenderParams.for_device(spec, ramp_s=0.0, zero_negative_z=zero_z))
+    out = r.render(np.array(f), 1e-3, np.array(v))
+    assert np.isfinite(out).all()
+    assert np.linalg.norm(out) <= spec.max_force_continuous * (1 + 1e-12)
+    if not all(math.isfinite(x) for x in f[:3]) or not all(math.isfinite(x) for x in v):
+        assert r.fault and np.all(out == 0.0)
+
+
+def test_nan_faults_latch_until_reset():
+    r = engaged()
+    assert np.all(r.render([np.nan, 0, 0, 0, 0, 0], 1e-3) == 0) and r.fault
+    assert np.all(r.render([0.1, 0, 0, 0, 0, 0], 1e-3) == 0)         # latched
+    r.enable()
+    assert np.all(r.render([0.1, 0, 0, 0, 0, 0], 1e-3) == 0)         # enable does not clear a fault
+    r.reset()
+    assert not r.fault and r.state == "disabled"
+
+
+def test_ramp_in_engages_only_after_small_force_for_three_ticks():
+    p = RenderParams(max_force=3.0, ramp_s=0.01)
+    r = Renderer(p)
+    big, small = [1.0, 0, 0, 0, 0, 0], [0.1, 0, 0, 0, 0, 0]
+    assert np.all(r.render(big, 1e-3) == 0)                          # disabled: zero
+    r.enable()
+    for _ in range(5):
+        assert np.all(r.render(big, 1e-3) == 0) and r.state == WAITING
+    assert np.all(r.render(small, 1e-3) == 0)
+    assert np.all(r.render(small, 1e-3) == 0)
+    assert np.all(r.render(big, 1e-3) == 0)                          # a big one restarts the count
+    outs = [r.render(small, 1e-3)[0] for _ in range(3)]
+    assert r.state == RAMPING and outs[:2] == [0.0, 0.0] and outs[2] == pytest.approx(0.1 * 0.1)
+    ramp = [r.render(big, 1e-3)[0] for _ in range(12)]
+    assert np.all(np.diff(ramp) >= 0) and ramp[-1] == pytest.approx(1.0) and r.state == ENGAGED
+    assert ramp[0] == pytest.approx(0.2)                             # linear over ramp_s = 10 ticks
+
+
+def test_clamp_keeps_direction_and_zero_negative_z():
+    r = engaged(RenderParams(max_force=0.88, ramp_s=0.0, zero_negative_z=True, alpha_max=0.0))
+    out = r.render([3.0, 4.0, -12.0, 0, 0, 0], 1e-3)
+    np.testing.assert_allclose(out, [0.88 * 0.6, 0.88 * 0.8, 0.0])
+    out = r.render([0.0, 0.0, 0.5, 0, 0, 0], 1e-3)
+    np.testing.assert_allclose(out, [0, 0, 0.5])
+    assert clamp_norm(1e308, 1e308, 0.0, 1.0) == pytest.approx((math.sqrt(0.5), math.sqrt(0.5), 0.0))
+
+
+def test_frame_map_and_scale():
+    R = ((0.0, -1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0))            # 90 deg about z
+    assert frame_map(R, 2.0, 1.0, 0.0, 0.5) == (0.0, 2.0, 1.0)
+    r = engaged(RenderParams(max_force=5.0, R_dev_B=R, scale=0.5, ramp_s=0.0, alpha_max=0.0))
+    np.testing.assert_allclose(r.render([1.0, 0, 0, 0, 0, 0], 1e-3), [0.0, 0.5, 0.0])
+    with pytest.raises(InputError, match="rotation"):
+        RenderParams(R_dev_B=((1, 0, 0), (0, 2, 0), (0, 0, 1)))
+
+
+def test_passivity_observer_keeps_the_port_passive():
+    """A force that pushes along the motion (an active, energy-generating rendering) gets damped so the
+    observed energy stays >= 0 wherever alpha_max allows it; without the guard energy is generated."""
+    dt, n = 1e-3, 2000
+    t = np.arange(n) * dt
+    v = 0.05 * np.cos(2 * np.pi * t)                                  # stylus oscillates along x
+    f_active = 0.4 * np.sign(v)                                       # a force that follows the velocity
+    energies = {}
+    for amax in (0.0, 50.0):
+        r = engaged(RenderParams(max_force=0.88, ramp_s=0.0, alpha_max=amax))
+        out = np.array([r.render([f, 0, 0, 0, 0, 0], dt, [vk, 0, 0]) for f, vk in zip(f_active, v)])
+        energies[amax] = -np.cumsum(out[:, 0] * v * dt)               # energy absorbed from the hand
+        assert np.linalg.norm(out, axis=1).max() <= 0.88 + 1e-12
+    assert energies[0.0].min() < -0.01                                 # unguarded: the port generates energy
+    # guarded: passive up to what alpha_max cannot absorb near the velocity zero crossings
+    assert energies[50.0].min() > 0.01 * energies[0.0].min()
