@@ -36,6 +36,7 @@ class LinkStats:
         gaps: firmware frames missing (sum of sequence gaps).
         duplicates, reordered: firmware frames dropped as repeated or older than the last one.
         resets: firmware resets seen (boot id changes).
+        timeouts: requests whose reply did not arrive within the timeout (then resent).
     """
 
     frames: int = 0
@@ -44,6 +45,7 @@ class LinkStats:
     duplicates: int = 0
     reordered: int = 0
     resets: int = 0
+    timeouts: int = 0
 
 
 class ArduinoRobot(ContextDevice):
@@ -130,8 +132,7 @@ class ArduinoRobot(ContextDevice):
     def home(self, lengths) -> msg.Telemetry:
         """Declare the current cable lengths (6,) [m] as home (motor steps 0); enables motion."""
         home = self._check_lengths(lengths)
-        seq = self._send(msg.Home(self._next_seq(), (0,) * self.spec.n_cables))
-        reply = self._wait_reply(seq)
+        reply = self._request(lambda seq: msg.Home(seq, (0,) * self.spec.n_cables))
         if reply.status & msg.Status.REJECTED or not reply.status & msg.Status.HOMED:
             raise DeviceError(f"serial robot '{self.port}': HOME refused (status {reply.status:#04x})")
         with self._cond:
@@ -141,8 +142,7 @@ class ArduinoRobot(ContextDevice):
 
     def enable(self) -> msg.Telemetry:
         """Clear a STOP or watchdog latch (the motors hold where they are)."""
-        seq = self._send(msg.Enable(self._next_seq()))
-        reply = self._wait_reply(seq)
+        reply = self._request(msg.Enable)
         if reply.status & msg.Status.REJECTED:
             raise DeviceError(f"serial robot '{self.port}': ENABLE refused (status {reply.status:#04x})")
         self._stopped = False
@@ -169,10 +169,10 @@ class ArduinoRobot(ContextDevice):
     def read(self) -> RobotReading:
         """Newest telemetry as a RobotReading; solicits the next one (HEARTBEAT) if nothing was sent."""
         self._require_open()
-        if not self._sent_since_read or self._latest is None:
-            seq = self._send(msg.Heartbeat(self._next_seq()))
-            if self._latest is None:
-                self._wait_reply(seq)
+        if self._latest is None:
+            self._request(msg.Heartbeat)
+        elif not self._sent_since_read:
+            self._send(msg.Heartbeat(self._next_seq()))
         self._sent_since_read = False
         with self._cond:
             return self._reading(self._latest, self._latest_t)
@@ -180,7 +180,7 @@ class ArduinoRobot(ContextDevice):
     def read_fresh(self) -> RobotReading:
         """Send a HEARTBEAT and wait for its telemetry (one round trip)."""
         self._require_open()
-        reply = self._wait_reply(self._send(msg.Heartbeat(self._next_seq())))
+        reply = self._request(msg.Heartbeat)
         with self._cond:
             return self._reading(reply, self._latest_t)
 
@@ -251,6 +251,19 @@ class ArduinoRobot(ContextDevice):
     def _wait(self, predicate, timeout: float) -> bool:
         with self._cond:
             return self._cond.wait_for(predicate, timeout)
+
+    def _request(self, make, attempts: int = 3) -> msg.Telemetry:
+        """Send make(seq) with a fresh seq and wait for its TELEMETRY; resend (new seq) when the reply is
+        lost (a frame dropped on an overloaded link). Raises DeviceError after `attempts`."""
+        for attempt in range(attempts):
+            seq = self._send(make(self._next_seq()))
+            try:
+                return self._wait_reply(seq)
+            except DeviceError:
+                self.stats.timeouts += 1
+                if attempt == attempts - 1:
+                    raise
+        raise AssertionError("unreachable")
 
     def _wait_reply(self, seq: int) -> msg.Telemetry:
         tag = seq & 0xFF

@@ -109,22 +109,22 @@ bool motion_moving() {
   return false;
 }
 
-// Next velocity of one channel [steps/s] from its position error [steps] and velocity.
+// Next velocity of one channel [steps/s] from its position error [steps] and velocity: accelerate
+// toward the target at ACCEL, brake when v^2 > 2 a |e|, never faster than |e| steps per 2 updates (so
+// the update after the arriving step comes before another one), stop on the target. A NEMA17 starts
+// and stops without losing steps far above V_MAX (0.6 rev/s), so the last-step stop is safe.
 static int16_t next_velocity(int32_t err, int16_t v) {
-  if (err == 0) {  // on target: brake to rest
-    if (v > DV) return v - DV;
-    if (v < -DV) return v + DV;
-    return 0;
-  }
+  if (err == 0) return 0;
   int8_t s = err > 0 ? 1 : -1;
   uint32_t abserr = err > 0 ? err : -err;
   if ((int32_t)v * s < 0) return v + s * DV;  // heading away: turn around
   uint32_t vv = (uint32_t)((int32_t)v * v);
   bool brake = abserr < BRAKE_ZONE && vv > 2UL * ACCEL_STEPS * abserr;  // v^2 > 2 a |e|
   int16_t w = brake ? v - s * DV : v + s * DV;
-  if (brake && (int32_t)w * s < 0) w = 0;
-  if (w > V_MAX_STEPS) w = V_MAX_STEPS;
-  if (w < -V_MAX_STEPS) w = -V_MAX_STEPS;
+  if (brake && (int32_t)w * s <= 0) w = s * DV;  // keep creeping toward the target
+  int16_t cap = abserr < V_MAX_STEPS / (MOTION_HZ / 2) ? (int16_t)(abserr * (MOTION_HZ / 2)) : V_MAX_STEPS;
+  if (w > cap) w = cap;
+  if (w < -cap) w = -cap;
   return w;
 }
 

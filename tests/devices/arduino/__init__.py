@@ -1,0 +1,1 @@
+"""Tests of the Arduino link: host framing/messages (pure) and the real firmware in simavr over a pty."""
