@@ -11,6 +11,7 @@ from the direction of change of the reading (with a dead band so noise does not 
 from __future__ import annotations
 
 import csv
+from bisect import bisect_right
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -156,7 +157,7 @@ class FsrCalibration:
             keep = np.r_[True, np.diff(g) > 0]
             gk, tk = g[keep], grid[keep]
             slope = (tk[-1] - tk[-8]) / (gk[-1] - gk[-8])  # dt/dG at the top, for linear extrapolation
-            tables[b] = (gk, tk, float(slope))
+            tables[b] = (gk, tk, float(slope), gk.tolist(), tk.tolist())
         object.__setattr__(self, "_tables", tables)
 
     def reading(self, t, branch) -> np.ndarray:
@@ -173,7 +174,7 @@ class FsrCalibration:
         b = np.broadcast_to(np.asarray(branch), g.shape)
         out = np.empty(g.shape)
         for br in (LOADING, UNLOADING):
-            gk, tk, slope = self._tables[br]
+            gk, tk, slope = self._tables[br][:3]
             m = b == br
             gm = g[m]
             tm = np.interp(gm, gk, tk)
@@ -181,6 +182,19 @@ class FsrCalibration:
             tm[above] = tk[-1] + slope * (gm[above] - gk[-1])
             out[m] = tm
         return out
+
+    def tension1(self, reading: float, branch: int) -> float:
+        """`tension` for one float reading [S] (bisection in the same table; the per-tick form)."""
+        _, _, slope, gk, tk = self._tables[UNLOADING if branch == UNLOADING else LOADING]
+        if reading != reading:
+            return reading
+        if reading > gk[-1]:
+            return tk[-1] + slope * (reading - gk[-1])
+        if reading <= gk[0]:
+            return tk[0]
+        j = bisect_right(gk, reading)  # gk[j-1] <= reading < gk[j]
+        g0, g1 = gk[j - 1], gk[j]
+        return tk[j - 1] + (tk[j] - tk[j - 1]) * (reading - g0) / (g1 - g0)
 
     def counts2conductance(self, counts) -> np.ndarray:
         """Conductance [S] from ADC counts through the divider: G = c / ((adc_max - c) R)."""
@@ -253,10 +267,17 @@ class FsrConverter:
         self.tracker.reset()
 
     def update(self, counts) -> np.ndarray:
-        """(n,) tensions [N] for (n,) raw counts; updates the branch state."""
-        c = np.asarray(counts, dtype=float)
-        self.tracker.update(c)
-        return self.cal.tension(self.cal.counts2conductance(c), self.branch)
+        """(n,) tensions [N] for (n,) raw counts; updates the branch state. Same numbers as
+        cal.tension(cal.counts2conductance(counts), branch), computed per float (faster for six cables)."""
+        c = np.asarray(counts, dtype=float).tolist()
+        d = self.tracker.update(c).tolist()
+        cal = self.cal
+        top, R = cal.adc_max - 0.5, cal.r_divider
+        out = []
+        for ci, di in zip(c, d):
+            ci = 0.0 if ci < 0.0 else (top if ci > top else ci)  # counts2conductance
+            out.append(cal.tension1(ci / ((cal.adc_max - ci) * R), UNLOADING if di < 0 else LOADING))
+        return np.array(out)
 
 
 # --------------------------------------------------------------------------------------------------------

@@ -280,3 +280,30 @@ def test_tick_computer_rejects_bad_names_and_nan_faults_the_renderer():
     assert F == (0.0, 0.0, 0.0) and tc.renderer.fault
     tc.reset()
     assert not tc.renderer.fault
+
+
+def test_reading_estimator_follows_the_loop_protocol_and_round_trips_its_description():
+    import json
+
+    from devices.base import RobotReading
+    from teleop.estimation.reading import ReadingEstimator
+    from teleop.sensors import LOADING, default_fsr_calibration, synthesize_fsr_counts
+
+    cal = default_fsr_calibration()
+    poly = tuple((0.01, -0.02, 0.0) for _ in range(6))
+    turn = TurnCompensation((AxisTurnFit(axis=2, duration=0.2, forward=poly, backward=poly),))
+    est = ReadingEstimator(G, "double", cal=cal, turn=turn)
+    desc = json.loads(json.dumps(est.describe()))
+    again = ReadingEstimator.rebuild(desc, G)
+    assert again.describe() == desc
+    rng = np.random.default_rng(0)
+    for k in range(200):
+        q = np.array([0.0, 0.0, 0.003 * np.sin(k / 20), 0.0, 0.0, 0.0])
+        counts = synthesize_fsr_counts(np.full(6, 2.85), LOADING, cal, rng=rng, noise_counts=1.0)
+        r = RobotReading(t=k * 1e-3, seq=k, fsr_counts=counts, position_steps=np.zeros(6),
+                         commanded_lengths=pose2lengths(q, G))
+        t1, f1 = est.update(r, q, 1e-3)
+        t2, f2 = again.update(r, q, 1e-3)
+        assert t1.shape == (6,) and f1.shape == (6,) and np.isfinite(f1).all()
+        np.testing.assert_array_equal(f1, f2)
+    assert np.abs(t1 - 2.85).max() < 0.3

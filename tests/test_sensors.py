@@ -155,3 +155,14 @@ def test_one_sensor_fit_needs_both_phases():
     Fp = np.linspace(1, 5, 100)
     with pytest.raises(InputError, match="pulling and releasing"):
         fit_proximal_distal(Fp, 0.6 * Fp)
+
+
+def test_converter_float_path_equals_the_array_calibration():
+    rng = np.random.default_rng(9)
+    counts = rng.integers(-5, 1030, (500, 6)).astype(float)
+    counts[5, 2] = np.nan
+    conv = FsrConverter(CAL, deadband_counts=2.0)
+    for row in counts:
+        a = conv.update(row)
+        b = CAL.tension(CAL.counts2conductance(row), conv.branch)
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)

@@ -72,6 +72,11 @@ class TickComputer:
 
     def compute(self, pose, tensions, dt: float, velocity=(0.0, 0.0, 0.0)):
         """(lengths [6], wrench [6], force (3,)) for one tick; see the module docstring."""
+        lengths, w = self.estimate(pose, tensions, dt)
+        return lengths, w, self.renderer.render_xyz(w[0], w[1], w[2], dt, *velocity)
+
+    def estimate(self, pose, tensions, dt: float):
+        """(lengths [6], wrench [6]): the tick without the renderer."""
         if isinstance(pose, np.ndarray):
             pose = pose.tolist()
         if isinstance(tensions, np.ndarray):
@@ -169,8 +174,7 @@ class TickComputer:
             self._turn(w, (x, y, z), dt)
         if self.kalman is not None:
             w = self.kalman.update(w)
-        force = self.renderer.render_xyz(w[0], w[1], w[2], dt, *velocity)
-        return lengths, w, force
+        return lengths, w
 
     def _turn(self, w: list, pos: tuple, dt: float) -> None:
         """Subtract the step-3 turn corrections from w in place (estimation.turn.TurnCompensator)."""
