@@ -18,11 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from teleop.diagnosis.links import LinkData, LinkModel, effect_signals, fit_baseline, is_contact_law, predict
+from teleop.diagnosis.links import (LinkData, LinkModel, effect_signals, fast_replace, fit_baseline,
+                                   is_contact_law, predict)
 from teleop.physics import REGISTRY, get_effect
 
 ACCEPT = 1.10        # held-out RMSE must fall by >= 10 % for an effect to be named
-PARSIMONY = 0.03     # candidates within 3 % of the best held-out RMSE count as equally good
+PARSIMONY = 0.08     # candidates within 8 % of the best held-out RMSE count as equally good (a
+                     # discontinuous model's switching time is noise-limited: smoother relatives win a
+                     # few per cent at reversals without being the physics)
 MAX_EFFECTS = 3      # per link
 FIT_SAMPLES = 2000   # fits run on the fit part decimated to about this many samples (stateful effects
                      # integrate along the smoothed drive, exact on monotone stretches); scores use all
@@ -113,7 +116,9 @@ def _target_signals(d: LinkData, m: LinkModel, name: str):
     if d.link.kind == "force":
         z = predict(d, m) - m.offset
         return sig.replace(load=z), d.y - m.offset
-    return sig, d.y - m.offset
+    if is_contact_law(name):
+        return sig, d.y - m.offset
+    return fast_replace(sig, force=predict(d, m) - m.offset), d.y - m.offset
 
 
 def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_idx: slice,
@@ -203,10 +208,18 @@ def baseline_fit(d: LinkData, fit_idx: slice, hold_idx: slice) -> Fit:
     return Fit(m, {"baseline": {"gain": 0.0, "offset": 0.0}}, rf, rms(r[hold_idx]), 2, n_eff)
 
 
+def wrong_form(name: str, params: dict) -> bool:
+    """True when fitted parameters contradict the effect's defining signature (then it is not named):
+    Stribeck means more friction at low speed than in sliding (Fs > Fc)."""
+    if name == "stribeck_friction":
+        return params["Fs"] <= 1.1 * params["Fc"]
+    return False
+
+
 def _pick(cands: list[Fit]) -> Fit | None:
     """Best held-out RMSE, preferring fewer parameters among candidates within PARSIMONY of it; fits
     with a parameter pinned on its bound (the effect's form does not fit the data) never win."""
-    cands = [c for c in cands if not c.at_bound]
+    cands = [c for c in cands if not c.at_bound and not any(wrong_form(n, p) for n, p in c.model.effects)]
     if not cands:
         return None
     best = min(c.rmse_hold for c in cands)

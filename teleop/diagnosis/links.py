@@ -29,7 +29,10 @@ from teleop.diagnosis.recording_io import Recording
 from teleop.errors import InputError
 from teleop.physics import Signals, get_effect
 
-SMOOTH_S = 0.01  # width [s] of the zero-phase moving average on the drive position (encoder quantisation)
+# width [s] of the zero-phase moving average on the recorded inputs (drive position, load, indentation):
+# encoder quantisation and sensor noise on an input would otherwise reach the rate estimates (sign(v)
+# flicker at reversals) and let hysteretic models win by filtering the noise instead of by physics
+SMOOTH_S = 0.02
 
 
 @dataclass(frozen=True)
@@ -112,17 +115,14 @@ class LinkData:
 
 
 def link_data(rec: Recording, link: Link) -> LinkData:
-    """The arrays of `link` from `rec`; the drive position is smoothed over SMOOTH_S."""
+    """The arrays of `link` from `rec`; inputs (not the output) are smoothed over SMOOTH_S."""
     ch = rec.channels
     width = max(1, int(round(SMOOTH_S / rec.dt)) | 1)
-    x = smooth(ch[link.drive], width) if link.drive else None
-    if link.kind == "contact":
-        x = None
-    u = ch[link.input]
-    if link.kind == "position" and link.drive:
-        u = smooth(u, width)
-    return LinkData(link, rec.t, u, ch[link.output], x, ch.get(link.load) if link.load else None,
-                    ch.get("temperature"), ch.get("bend_angle"))
+    x = smooth(ch[link.drive], width) if link.drive and link.kind != "contact" else None
+    u = smooth(ch[link.input], width)
+    load = smooth(ch[link.load], width) if link.load else None
+    temp = smooth(ch["temperature"], width) if "temperature" in ch else None
+    return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"))
 
 
 @dataclass(frozen=True)
@@ -144,6 +144,31 @@ class LinkModel:
         return {"gain": self.gain, "offset": self.offset}
 
 
+def clean_rate(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(n,) rate of x with its sign cleaned at reversals: where |v| is within the noise (3 sigma of the
+    differentiated noise), a pause keeps its direction and a reversal switches at the middle of the quiet
+    stretch instead of flickering with the noise. Magnitudes are kept."""
+    v = np.gradient(x, t)
+    hf = v - smooth(v, 9)
+    eps = 3.0 * 1.4826 * float(np.median(np.abs(hf - np.median(hf))))
+    s = np.where(v > eps, 1.0, np.where(v < -eps, -1.0, 0.0))
+    n = s.size
+    idx = np.where(s != 0, np.arange(n), 0)
+    np.maximum.accumulate(idx, out=idx)
+    fwd = np.where(s[idx] != 0, s[idx], 0.0)
+    last_on = idx
+    idx_b = np.where(s != 0, np.arange(n), n - 1)
+    idx_b = np.minimum.accumulate(idx_b[::-1])[::-1]
+    bwd = s[idx_b]
+    k = np.arange(n)
+    quiet = s == 0
+    # inside a quiet stretch between last_on and next_on: first half forward sign, second half backward
+    mid = 0.5 * (last_on + idx_b)
+    sign = np.where(quiet, np.where((k <= mid) & (fwd != 0) | (bwd == 0), fwd, bwd), s)
+    sign = np.where(sign == 0, bwd, sign)
+    return sign * np.abs(v)
+
+
 def fast_replace(sig: Signals, **changes) -> Signals:
     """A copy of `sig` with channels replaced by arrays already known to be valid (n,) floats; unlike
     Signals.replace nothing is re-checked or re-derived (the fitting loop calls this thousands of times)."""
@@ -160,6 +185,7 @@ def _template(d: LinkData, m: LinkModel) -> Signals:
         kw = {"t": d.t}
         if d.x is not None:
             kw["x"] = m.direction * d.x
+            kw["v"] = m.direction * clean_rate(d.x, d.t)
         if d.temperature is not None:
             kw["temperature"] = d.temperature
         if d.theta is not None:
@@ -192,6 +218,16 @@ def is_contact_law(name: str) -> bool:
     return eff.link == "contact" and tuple(eff.inputs) == ("d",)
 
 
+def elastic_force(d: LinkData, m: LinkModel, sig: Signals | None = None) -> np.ndarray:
+    """Contact link: the elastic law's force (n,): a catalogue law in m's chain (hertz) replaces the
+    baseline's linear one, gain * max(d, 0)."""
+    sig = effect_signals(d, m) if sig is None else sig
+    for name, p in m.effects:
+        if is_contact_law(name):
+            return get_effect(name).apply(sig, p)
+    return m.gain * np.maximum(d.u, 0.0)
+
+
 def predict(d: LinkData, m: LinkModel) -> np.ndarray:
     """The link's output (n,) under model `m` (baseline plus its effect chain)."""
     sig = effect_signals(d, m)
@@ -211,13 +247,11 @@ def predict(d: LinkData, m: LinkModel) -> np.ndarray:
             sig = fast_replace(sig, load=z)
         y = z + m.offset
     else:
-        # contact law: a catalogue law (hertz) replaces the baseline's linear one; modifiers act on it
-        laws = [(n, p) for n, p in chain if is_contact_law(n)]
-        mods = [(n, p) for n, p in chain if not is_contact_law(n)]
-        Fe = get_effect(laws[0][0]).apply(sig, laws[0][1]) if laws else m.gain * np.maximum(d.u, 0.0)
-        for name, p in mods:
-            Fe = get_effect(name).apply(fast_replace(sig, force=Fe), p)
-        y = Fe + m.offset
+        y = elastic_force(d, m, sig)
+        for name, p in chain:
+            if not is_contact_law(name):
+                y = get_effect(name).apply(fast_replace(sig, force=y), p)
+        y = y + m.offset
     for name, p in sensor:
         sig = fast_replace(sig, force=y)
         y = get_effect(name).apply(sig, p)

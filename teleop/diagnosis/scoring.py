@@ -1,0 +1,91 @@
+"""Score diagnoses of generated cases: named-first accuracy, `none` rate, parameter error, improvement,
+and the confusion matrix (true effect -> first named effect)."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from teleop.diagnosis.diagnose import diagnose
+from teleop.diagnosis.generator import CASE_EFFECTS, PRIMARY, Case
+from teleop.diagnosis.recording_io import read_interchange
+
+PARAM_TOL = 0.2
+
+
+def run_case(case: Case, workdir: str | Path | None = None) -> dict:
+    """Write the case as CSV, diagnose the CSV, and score the report against the truth."""
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        path = Path(tmp) / f"case_{case.index:04d}.csv"
+        case.write(path)
+        doc = diagnose(read_interchange(path)).as_dict()
+    return score(case, doc)
+
+
+def score(case: Case, doc: dict) -> dict:
+    """{"index", "truth", "named", "all_named", "correct", "param_errors", "params_ok", "improvement",
+    "improved_2x", "unexplained"} for one case's report."""
+    findings = doc["findings"]
+    named = findings[0]["effect"] if findings else "none"
+    out = {"index": case.index, "truth": case.effect, "setup": case.setup, "trajectory": case.trajectory,
+           "named": named, "all_named": [f["effect"] for f in findings],
+           "correct": named == case.effect,
+           "unexplained": [u["correlate"] for u in doc["unexplained"]],
+           "first": ({"effect": named, "rmse_after": findings[0]["rmse_after"],
+                      "alternatives": findings[0]["alternatives"]} if findings else None)}
+    if case.effect != "none":
+        hit = [f for f in findings if f["effect"] == case.effect]
+        errs = {}
+        if hit:
+            for p in PRIMARY[case.effect]:
+                true = case.params[p]
+                errs[p] = abs(hit[0]["params"][p]["value"] - true) / abs(true)
+        out["param_errors"] = errs
+        out["params_ok"] = bool(errs) and max(errs.values()) <= PARAM_TOL
+        ch = case.channel
+        before = doc["baseline"]["rmse"][ch]
+        after = doc["channels"][ch]["rmse_model"]
+        out["improvement"] = before / max(after, 1e-300)
+        out["improved_2x"] = out["improvement"] >= 2.0
+    return out
+
+
+def summarise(rows: list[dict]) -> dict:
+    """Rates and the confusion matrix over scored cases."""
+    eff = [r for r in rows if r["truth"] != "none"]
+    clean = [r for r in rows if r["truth"] == "none"]
+    labels = list(CASE_EFFECTS) + ["none"]
+    named_labels = sorted({r["named"] for r in rows} | set(labels), key=lambda s: (s not in labels,
+                          labels.index(s) if s in labels else 0, s))
+    confusion = {t: {n: 0 for n in named_labels} for t in labels}
+    for r in rows:
+        confusion[r["truth"]][r["named"]] += 1
+
+    def rate(xs):
+        return float(np.mean(xs)) if xs else None
+
+    return {
+        "cases": len(rows),
+        "effect_cases": len(eff),
+        "clean_cases": len(clean),
+        "named_first_rate": rate([r["correct"] for r in eff]),
+        "none_rate": rate([r["correct"] for r in clean]),
+        "params_within_20pct_rate": rate([r["params_ok"] for r in eff]),
+        "improved_2x_rate": rate([r["improved_2x"] for r in eff]),
+        "improvement_min": min((r["improvement"] for r in eff), default=None),
+        "confusion": confusion,
+    }
+
+
+def confusion_text(summary: dict) -> str:
+    """The confusion matrix as aligned text (rows: truth, columns: first named effect)."""
+    conf = summary["confusion"]
+    cols = [c for c in next(iter(conf.values())) if any(conf[t][c] for t in conf)]
+    short = {c: c.replace("_friction", "").replace("_hysteresis", "_h").replace("_contact", "")[:10] for c in cols}
+    w = max(len(t) for t in conf) + 1
+    lines = [" " * w + " ".join(f"{short[c]:>10}" for c in cols)]
+    for t, row in conf.items():
+        lines.append(f"{t:<{w}}" + " ".join(f"{row[c]:>10d}" for c in cols))
+    return "\n".join(lines)
