@@ -231,7 +231,7 @@ class SecondStats:
 # Shared-memory ring and the recorder process
 # ------------------------------------------------------------------------------------------------------------
 
-HEAD, TAIL, DROPS, STATUS, STOP, WRITTEN, FLUSHES = range(7)
+HEAD, TAIL, DROPS, STATUS, STOP, WRITTEN, FLUSHES, T0_NS = range(8)
 OK, ALARM_FULL, ALARM_ERROR = 0, 1, 2
 
 
@@ -304,6 +304,8 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
         while True:
             stopping = bool(ctrl[STOP]) or os.getppid() != parent_pid
             rows = ring.pop(2000)
+            if len(rows) and ctrl[T0_NS]:
+                writer.t0_ns = int(ctrl[T0_NS])  # wall-clock time of session time 0, set by the loop at start
             for row in rows:
                 writer.write_row(row)
                 s = stats.add(row)
@@ -385,6 +387,11 @@ class Recorder:
         os.set_blocking(self.tx.fileno(), False)
         self.event_drops = 0
         return self
+
+    def set_t0(self, t0_ns: int) -> None:
+        """Wall-clock time [ns since epoch] of session time 0 (call before the first push)."""
+        self.t0_ns = int(t0_ns)
+        self.ring.ctrl[T0_NS] = self.t0_ns
 
     def push(self, row: np.ndarray) -> bool:
         """Loop side: copy one tick row into the ring (never blocks)."""
@@ -622,7 +629,13 @@ def _record(op: int, b: _Buf, s: Session, schemas: dict, in_chunk: bool = False)
             s.metadata[name] = {k: json.loads(v) for k, v in m.items()}
         except ValueError:
             raise _Damage(f"metadata '{name}' is not JSON") from None
-    # other records (indexes, statistics, attachments) carry nothing we need
+    elif op == 0x07 and not in_chunk:  # message index: carries nothing we need, but must be well formed
+        b.u16()
+        n = b.u32()
+        if n % 16 or b.end - b.i != n:
+            raise _Damage("malformed message index")
+    else:  # a data section written by SessionWriter holds nothing else: anything else is damage
+        raise _Damage(f"unexpected record 0x{op:02x} in the data section")
 
 
 def _chunk(b: _Buf, s: Session, schemas: dict) -> None:

@@ -119,7 +119,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             gc.collect()
             gc.disable()
             try:
-                run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us)
+                run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us,
+                          on_start=recorder.set_t0 if recorder is not None else None)
             except (KeyboardInterrupt, _Terminate):
                 pass
             finally:

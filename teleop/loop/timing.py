@@ -75,11 +75,11 @@ class TimingLog:
 
 
 def run_paced(tp, seconds: float, rate_hz: float, log: TimingLog | None = None, spin_us: float = 200.0,
-              on_tick=None, should_stop=None) -> TimingLog:
+              on_tick=None, should_stop=None, on_start=None) -> TimingLog:
     """Run `tp.tick(now)` at `rate_hz` for `seconds` (now = seconds since start); returns the timing log.
 
-    `on_tick(k, lateness_ns)` runs after each tick (the session's per-second status); `should_stop()` ends the
-    run early when it returns True.
+    `on_start(t0_wall_ns)` is told the wall-clock time of session time 0; `on_tick(k, lateness_ns)` runs after
+    each tick; `should_stop()` ends the run early when it returns True.
     """
     period = int(round(1e9 / rate_hz))
     n = int(round(seconds * rate_hz))
@@ -87,6 +87,8 @@ def run_paced(tp, seconds: float, rate_hz: float, log: TimingLog | None = None, 
     spin = int(spin_us * 1e3)
     pc = time.perf_counter_ns
     t0 = pc() + period
+    if on_start is not None:
+        on_start(time.time_ns() + (t0 - pc()))
     tp.start(0.0)
     k_sched = 0
     for _ in range(n):
