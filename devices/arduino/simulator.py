@@ -71,6 +71,15 @@ class EmulatedMega:
         """Emulated time [ns], last UART byte in [ns], last step pulse [ns], positions, ADC inputs [mV], ..."""
         return parse_status(self.request("status"))
 
+    def turnaround_s(self) -> list[float]:
+        """Firmware turnaround of recent requests on the emulated clock [s]: a request's delimiter into the
+        UART -> the reply's delimiter out (reply line time included; the last 4096)."""
+        reply = self.request("turnaround")
+        words = reply.split()
+        if not words or words[0] != "turnaround":
+            raise DeviceError(f"cdpr_sim: unexpected control reply {reply!r}")
+        return [int(v) * 1e-9 for v in words[1].split(",")] if len(words) > 1 else []
+
     def reset(self) -> None:
         """Reset the MCU (firmware restarts with a new boot id; cable positions persist)."""
         reply = self.request("reset")

@@ -12,6 +12,7 @@
  * wall-clock time (never ahead of it). A control channel on stdin/stdout (one line per request):
  *   status  -> "status key=value ..." with emulated time and link/stepper observations (ns emulated)
  *   reset   -> resets the MCU (a firmware reset mid-session; cable positions persist) -> "ok reset"
+ *   turnaround -> "turnaround ns,ns,..." request delimiter in -> reply delimiter out, emulated [ns]
  *   quit    -> exits
  * The first line written is "pty /dev/pts/N". simavr's own messages go to stderr.
  */
@@ -43,6 +44,11 @@
 #define VCC_MV 5000
 
 static avr_t *avr;
+/* firmware turnaround on the emulated clock: a request's delimiter entering the UART -> the reply's
+ * delimiter leaving it (line time of the reply included), last RESP_KEEP values [cycles] */
+#define RESP_KEEP 4096
+static uint64_t last_rx_delim_cycle, resp[RESP_KEEP], resp_count;
+static int awaiting_reply;
 static FILE *trace; /* CDPR_SIM_TRACE=path: one line per UART byte, "R|T cycle byte" */
 static int pty_master = -1, pty_slave = -1;
 static char pty_name[128];
@@ -107,6 +113,10 @@ static void on_rx(avr_irq_t *irq, uint32_t value, void *param) {
   if (trace) fprintf(trace, "R %llu %02x\n", (unsigned long long)avr->cycle, value);
   last_rx_cycle = avr->cycle;
   rx_bytes++;
+  if (value == 0) {
+    last_rx_delim_cycle = avr->cycle;
+    awaiting_reply = 1;
+  }
   steps_after_rx = 0;
 }
 
@@ -151,6 +161,10 @@ static void on_tx(avr_irq_t *irq, uint32_t value, void *param) {
   if (tx_len == sizeof(tx_buf)) {
     tx_dropped++;
     return;
+  }
+  if (value == 0 && awaiting_reply) {
+    resp[resp_count++ % RESP_KEEP] = avr->cycle - last_rx_delim_cycle;
+    awaiting_reply = 0;
   }
   tx_buf[tx_len++] = (uint8_t)value;
   if (value == 0 || tx_len >= 64) flush_tx(); /* frame delimiter: send the frame now */
@@ -236,6 +250,13 @@ static int poll_control(void) {
       resets++;
       for (int i = 0; i < N_CH; i++) feed_adc(i);
       fprintf(ctl, "ok reset\n");
+      fflush(ctl);
+    } else if (!strcmp(line, "turnaround")) { /* the kept turnaround times [ns], oldest first */
+      uint64_t n = resp_count < RESP_KEEP ? resp_count : RESP_KEEP;
+      fprintf(ctl, "turnaround");
+      for (uint64_t k = resp_count - n; k < resp_count; k++)
+        fprintf(ctl, "%s%llu", k == resp_count - n ? " " : ",", (unsigned long long)cyc2ns(resp[k % RESP_KEEP]));
+      fprintf(ctl, "\n");
       fflush(ctl);
     } else if (!strcmp(line, "quit")) {
       return 0;

@@ -20,6 +20,17 @@ def delta(after: msg.DiagReply, before: msg.DiagReply) -> dict:
     return {k: after.counters[k] - before.counters[k] for k in msg.DIAG_COUNTERS}
 
 
+def keep_going(robot, target):
+    """Re-enable and re-command when the watchdog stopped the motors (a host stall > 25 ms on a loaded
+    machine is a real silence to the firmware); returns the fresh reading."""
+    reading = robot.read_fresh()
+    if reading.status & msg.Status.WATCHDOG_STOP:
+        robot.enable()
+        robot.command_lengths(target)
+        reading = robot.read_fresh()
+    return reading
+
+
 def wait_for(predicate, timeout=3.0, period=0.01):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -135,13 +146,14 @@ def test_stale_and_duplicate_commands_are_rejected_and_never_applied(raw, mega):
     assert stop_stale.status & msg.Status.STOPPED
     d = delta(raw.diag(), before)
     assert d["stale"] == 2
-    raw.exchange(msg.Enable(raw.next_seq()))
-    raw.exchange(msg.Command(raw.next_seq(), (-30,) * 6))
-    for _ in range(60):                                            # keep the watchdog fed while moving
+    for _ in range(100):                                           # keep the watchdog fed while moving
         t = raw.exchange(msg.Heartbeat(raw.next_seq()))
         if t.position_steps == (-30,) * 6 and not t.status & msg.Status.MOVING:
             break
-        time.sleep(0.005)
+        if t.status & (msg.Status.WATCHDOG_STOP | msg.Status.STOPPED):  # STOP above, or a host stall
+            raw.exchange(msg.Enable(raw.next_seq()))
+            raw.exchange(msg.Command(raw.next_seq(), (-30,) * 6))
+        time.sleep(0.003)
     assert t.position_steps == (-30,) * 6                          # went to B, never toward A
 
 
@@ -152,7 +164,7 @@ def test_robot_moves_counts_steps_and_reads_the_tension_model(robot, mega):
     expected = msg.lengths2steps(target, HOME_LENGTHS, SPEC.steps_per_m)
 
     def arrived():
-        reading = robot.read_fresh()
+        reading = keep_going(robot, target)
         return reading if (np.array_equal(reading.position_steps, expected)
                            and not reading.status & msg.Status.MOVING) else None
 
@@ -172,17 +184,19 @@ def test_robot_moves_counts_steps_and_reads_the_tension_model(robot, mega):
 
 
 def test_speed_limit_respected(robot, mega):
-    robot.command_lengths(HOME_LENGTHS - 0.010)          # 10 mm: longer than the ramp
-    time.sleep(0.02)
-    a = mega.status()
-    for _ in range(30):
-        robot.read()
-        time.sleep(0.005)
-    b = mega.status()
-    dt = (b["t_ns"] - a["t_ns"]) * 1e-9
-    moved = np.abs(np.array(b["pos"]) - np.array(a["pos"]))
-    assert moved.max() > 0
-    assert np.all(moved <= SPEC.v_max * SPEC.steps_per_m * dt + 2)  # v <= v_max (emulated clock)
+    target = HOME_LENGTHS - 0.010                        # 10 mm: longer than the ramp
+    robot.command_lengths(target)
+    windows = 0
+    for _ in range(10):
+        a = mega.status()
+        for _ in range(20):
+            keep_going(robot, target)
+        b = mega.status()
+        dt = (b["t_ns"] - a["t_ns"]) * 1e-9
+        moved = np.abs(np.array(b["pos"]) - np.array(a["pos"]))
+        assert np.all(moved <= SPEC.v_max * SPEC.steps_per_m * dt + 2)  # v <= v_max (emulated clock)
+        windows += moved.max() > 0
+    assert windows >= 5                                   # it was moving, not standing still
     robot.stop()
 
 
@@ -198,4 +212,9 @@ def test_firmware_reset_detected_and_motion_refused_until_rehomed(robot, mega):
     assert robot.stats.resets == 1
     robot.home(HOME_LENGTHS)
     robot.command_lengths(HOME_LENGTHS - 0.0005)
-    assert robot.read_fresh().extras["rejected"] is False
+    reading = robot.read_fresh()
+    if reading.status & msg.Status.WATCHDOG_STOP:        # a host stall after HOME: not the point here
+        robot.enable()
+        robot.command_lengths(HOME_LENGTHS - 0.0005)
+        reading = robot.read_fresh()
+    assert reading.extras["rejected"] is False

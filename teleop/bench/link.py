@@ -1,0 +1,74 @@
+"""`teleop bench link [--roundtrips N] [--trials N] [--json F]`: the Arduino link on the real firmware.
+
+Builds the Mega2560 firmware and the simavr harness (into ~/.cache/cdpr-teleop/arduino, or --build-dir),
+runs the firmware emulated at 16 MHz behind a pseudo-terminal, and measures through pyserial at 1 Mbaud:
+- round trip HEARTBEAT (8 bytes) -> TELEMETRY (30 bytes), one per millisecond, wall clock [ms], and the
+  firmware's part of it on the emulated clock (request delimiter in -> reply delimiter out) [ms];
+- watchdog: host silent -> last step pulse, on the emulated clock [ms], over --trials episodes.
+JSON: {"roundtrips", "rtt_ms": {"p50","p99","max"}, "firmware_turnaround_ms": {...}, "trials", "watchdog_stop_ms": {"max","mean","min"},
+"early_trips", "link_bytes_per_tick", "link_fraction_of_1ms", "firmware", "host_link": {...}}.
+Wall-clock numbers depend on the machine's load (the emulator shares the CPU); nothing is asserted.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("link", help="Arduino link on the emulated firmware: round trip, watchdog stop time")
+    p.add_argument("--roundtrips", type=int, default=2000, help="timed round trips (default 2000)")
+    p.add_argument("--trials", type=int, default=100, help="watchdog silence episodes (default 100)")
+    p.add_argument("--build-dir", metavar="DIR", help="build directory (default ~/.cache/cdpr-teleop/arduino)")
+    p.add_argument("--json", metavar="F", help="write the result JSON here")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from devices.arduino import build
+    from devices.arduino import messages as msg
+    from devices.arduino.robot import ArduinoRobot
+    from devices.arduino.simulator import EmulatedMega
+    from devices.arduino.trials import round_trips, watchdog_trials
+    from teleop.errors import InputError
+    from teleop.outputs import dumps_json, write_json
+
+    if args.roundtrips < 10 or args.trials < 1:
+        raise InputError("bench link: --roundtrips must be >= 10 and --trials >= 1")
+    try:
+        out = Path(args.build_dir) if args.build_dir else None
+        elf, harness = build.build_firmware(out), build.build_harness(out)
+    except build.ToolchainMissing as exc:
+        raise InputError(f"bench link: {exc}") from None
+    home = np.full(6, 0.030)
+    with EmulatedMega(harness, elf) as mega, ArduinoRobot(mega.port, timeout_s=1.0) as robot:
+        robot.home(home)
+        rtt = round_trips(robot, args.roundtrips) * 1e3
+        turnaround = np.array(mega.turnaround_s()[-args.roundtrips:]) * 1e3
+        wd = watchdog_trials(robot, mega, home, n=args.trials, max_attempts=3 * args.trials)
+        diag = robot.diag()
+        version = robot.hello.version_string
+        stats = robot.stats
+    wire = msg.wire_size(msg.MsgType.COMMAND) + msg.wire_size(msg.MsgType.TELEMETRY)
+    result = {
+        "roundtrips": int(args.roundtrips),
+        "rtt_ms": {"p50": float(np.percentile(rtt, 50)), "p99": float(np.percentile(rtt, 99)),
+                   "max": float(rtt.max())},
+        "firmware_turnaround_ms": {"p50": float(np.percentile(turnaround, 50)),
+                                   "p99": float(np.percentile(turnaround, 99)), "max": float(turnaround.max())},
+        "trials": int(args.trials),
+        "watchdog_stop_ms": {"max": float(wd.stop_ms.max()), "mean": float(wd.stop_ms.mean()),
+                             "min": float(wd.stop_ms.min())},
+        "early_trips": int(wd.early_trips),
+        "link_bytes_per_tick": int(wire),
+        "link_fraction_of_1ms": wire * 10 / 1e6 / 1e-3,
+        "firmware": {"version": version, "handle_max_us": int(diag.handle_max_us), "counters": diag.counters},
+        "host_link": {"frames": stats.frames, "gaps": stats.gaps, "duplicates": stats.duplicates,
+                      "reordered": stats.reordered, "timeouts": stats.timeouts, "errors": stats.errors},
+    }
+    if args.json:
+        write_json(args.json, result)
+    print(dumps_json(result), end="")
+    return 0
