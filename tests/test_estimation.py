@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from teleop.bench.tick import ReferenceTick
 from teleop.errors import InputError
+from teleop.estimation.calibrate import fit_dynamic_params, no_load_forces
 from teleop.estimation.direction import DirectionTracker
 from teleop.estimation.estimators import ESTIMATOR_NAMES, DynamicParams, capstan_angles, make_estimator
 from teleop.estimation.kalman import (FilterpyWrenchKalman, KalmanNoise, SteadyWrenchKalman, _dare_gain,
@@ -171,31 +172,41 @@ def tri(t, period):
     return (2 / np.pi) * np.arcsin(np.sin(2 * np.pi * t / period))
 
 
-def run_fast(name, poses, fsr, dt, turn=None, kalman=None):
-    tc = TickComputer(G, name, turn=turn, dynamic=DYN, kalman=kalman)
+def run_fast(name, poses, fsr, dt, turn=None, kalman=None, dyn=DYN):
+    tc = TickComputer(G, name, turn=turn, dynamic=dyn, kalman=kalman)
     return np.array([tc.compute(q, t, dt)[1] for q, t in zip(poses.tolist(), fsr.tolist())])
 
 
 @pytest.fixture(scope="module")
-def turn_fit():
-    """Step 3 fitted like the seed: no load, back and forth along z at uniform speed (here 5 mm/s)."""
-    dt = 2e-3
-    tt = np.arange(0, 8.0, dt)
+def calibration():
+    """The seed's step-3 protocol: no load, back and forth along z (here two cycles at 5 mm/s, two at
+    10 mm/s). `double` fits its turn polynomials on it, `dynamic` its friction parameters."""
+    dt = 4e-3
+    z = np.r_[0.005 * tri(np.arange(0, 8.0, dt), 4.0), 0.005 * tri(np.arange(0, 4.0, dt), 2.0)]
+    tt = np.arange(z.size) * dt
     poses = np.zeros((tt.size, 6))
-    poses[:, 2] = 0.005 * tri(tt, 4.0)
+    poses[:, 2] = z
     fsr = plant(poses, np.zeros((tt.size, 6)), dt, seed=1)
     single = run_fast("single", poses, fsr, dt)
-    fit = fit_turn_compensation(tt, poses, single, axis=2)
-    return TurnCompensation((fit,)), (tt, poses, fsr, single)
+    turn = TurnCompensation((fit_turn_compensation(tt, poses, single, axis=2),))
+    dyn = fit_dynamic_params(G, poses, fsr, dt)
+    return turn, dyn, (tt, poses, fsr, single)
 
 
-def test_turn_fit_removes_the_jumps_of_the_fitting_run(turn_fit):
-    turn, (tt, poses, fsr, single) = turn_fit
+def test_turn_fit_removes_the_jumps_of_the_fitting_run(calibration):
+    turn, _, (tt, poses, fsr, single) = calibration
     fit = turn.axes[0]
     assert 0.02 < fit.duration < 1.0
-    double = run_fast("double", poses, fsr, 2e-3, turn=turn)
+    double = run_fast("double", poses, fsr, tt[1] - tt[0], turn=turn)
     jump = lambda w: np.abs(w[:, 2] - np.median(w[:, 2])).max()  # noqa: E731
     assert jump(double) < 0.5 * jump(single)
+
+
+def test_dynamic_fit_zeroes_the_no_load_run(calibration):
+    _, dyn, (tt, poses, fsr, single) = calibration
+    f = no_load_forces(G, poses, fsr, tt[1] - tt[0], dyn)
+    assert np.sqrt(np.mean(f ** 2)) < 0.2 * np.sqrt(np.mean(single[:, :3] ** 2))
+    assert dyn.b == pytest.approx(PLANT["b"], rel=0.5) and dyn.dahl_Fc == pytest.approx(PLANT["Fc"], rel=0.5)
 
 
 def test_turn_fit_needs_turns_both_ways():
@@ -206,8 +217,9 @@ def test_turn_fit_needs_turns_both_ways():
         fit_turn_compensation(tt, poses, np.zeros((tt.size, 6)))
 
 
-def test_dynamic_beats_double_on_a_variable_speed_run_with_reversals(turn_fit):
-    turn, _ = turn_fit
+def test_dynamic_beats_double_on_a_variable_speed_run_with_reversals(calibration):
+    """Both calibrated on the same no-load run; evaluated on a loaded run at varying speed."""
+    turn, dyn, _ = calibration
     dt = 2e-3
     tt = np.arange(0, 10.0, dt)
     phase = 2 * np.pi * (tt / 3.0 + 0.15 * np.sin(2 * np.pi * tt / 2.3) + 0.1 * np.sin(2 * np.pi * tt / 0.9))
@@ -219,7 +231,7 @@ def test_dynamic_beats_double_on_a_variable_speed_run_with_reversals(turn_fit):
     fsr = plant(poses, truth, dt, seed=2)
     rmse = {}
     for name in ESTIMATOR_NAMES:
-        w = run_fast(name, poses, fsr, dt, turn=turn, kalman=KalmanNoise(dt=dt))
+        w = run_fast(name, poses, fsr, dt, turn=turn, kalman=KalmanNoise(dt=dt), dyn=dyn)
         rmse[name] = float(np.sqrt(np.mean((w[:, :3] - truth[:, :3]) ** 2)))
     assert rmse["dynamic"] < 0.4 * rmse["double"], rmse
     assert rmse["dynamic"] < 0.4 * rmse["single"], rmse
@@ -229,11 +241,11 @@ def test_dynamic_beats_double_on_a_variable_speed_run_with_reversals(turn_fit):
 # --------------------------------------------------------------------------- fast tick == plain code
 def equal_runs(name, turn):
     rng = np.random.default_rng(7)
-    n, dt = 1500, 1e-3
+    n, dt = 800, 1e-3
     tt = np.arange(n) * dt
     poses = np.zeros((n, 6))
-    poses[:, 2] = 0.004 * np.sin(2 * np.pi * tt / 0.7)
-    poses[:, 0] = 0.002 * np.sin(2 * np.pi * tt / 0.53)
+    poses[:, 2] = 0.004 * np.sin(2 * np.pi * tt / 0.37)
+    poses[:, 0] = 0.002 * np.sin(2 * np.pi * tt / 0.29)
     poses[:, 4] = 0.1 * np.sin(3 * tt)
     poses[:, 5] = 0.05 * np.cos(2 * tt)
     T = 2.5 + rng.normal(0, 0.3, (n, 6))
