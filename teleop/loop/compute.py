@@ -1,4 +1,7 @@
-"""The loop's compute step, as pure functions of numpy arrays, plus the default estimator.
+"""The loop's compute step as pure functions of numpy arrays; the estimator protocol the loop calls.
+
+The default estimator is teleop.estimation.reading.ReadingEstimator ("dynamic": FSR branches, capstan and
+turn compensation, f = -A t, steady-state Kalman).
 
 Force path (robot frame {B} -> stylus frame):  F = k_f R_reg^T f[:3], optional zeroing of -z, ramp-in
 factor, then the safety clamp to the device's continuous limit (NaN/inf -> zero and a fault).
@@ -10,8 +13,6 @@ from typing import Protocol
 
 import numpy as np
 
-from teleop.geometry import Geometry
-from teleop.kinematics import rotation_zyx
 
 
 class Estimator(Protocol):
@@ -21,48 +22,6 @@ class Estimator(Protocol):
     def update(self, reading, pose, dt: float) -> tuple[np.ndarray, np.ndarray]: ...
     def describe(self) -> dict:
         """Calibration and settings, stored in the session metadata."""
-
-
-class FsrWrenchEstimator:
-    """FSR counts -> tensions (teleop.sensors calibration, loading/unloading branches) -> f = -A t (eq 8).
-
-    No friction compensation and no filter: the plain estimator of seed 000 used when no better one is given.
-    """
-
-    def __init__(self, geom: Geometry, cal=None):
-        from teleop.sensors import FsrConverter, default_fsr_calibration
-
-        self.geom = geom
-        self.cal = cal if cal is not None else default_fsr_calibration()
-        self.converter = FsrConverter(self.cal, n=len(geom.B))
-        self._orientation = None
-
-    def reset(self) -> None:
-        self.converter.reset()
-
-    def update(self, reading, pose, dt: float):
-        t = np.asarray(self.converter.update(reading.fsr_counts), dtype=float)
-        q = np.asarray(pose, dtype=float)
-        if self._orientation is None or (q[3:] != self._orientation).any():
-            self._orientation = q[3:].copy()
-            self._Rr = self.geom.r @ rotation_zyx(*q[3:]).T
-        f = -(structure_matrix_at(q[:3], self._Rr, self.geom.B) @ t)  # f = -A t
-        return t, f
-
-    def describe(self) -> dict:
-        from dataclasses import fields
-
-        cal = {f.name: getattr(self.cal, f.name) for f in fields(self.cal) if f.init}
-        cal = {k: list(v) if isinstance(v, (tuple, np.ndarray)) else v for k, v in cal.items()}
-        return {"estimator": type(self).__name__, "fsr": cal}
-
-    @staticmethod
-    def rebuild(desc: dict, geom: Geometry) -> "FsrWrenchEstimator":
-        """The estimator a session recorded (`describe()` output), for replay."""
-        from teleop.sensors import FsrCalibration
-
-        cal = {k: tuple(v) if isinstance(v, list) else v for k, v in desc["fsr"].items()}
-        return FsrWrenchEstimator(geom, FsrCalibration(**cal))
 
 
 def structure_matrix_at(p, Rr: np.ndarray, B: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 
 from teleop.geometry import Geometry, default_geometry
 from teleop.kinematics import lengths2pose
-from teleop.loop.compute import FsrWrenchEstimator, clamp_force, ramp_factor, render_force
+from teleop.loop.compute import clamp_force, ramp_factor, render_force
 from teleop.loop.params import LoopParams
 from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
 from teleop.loop.states import BEHAVIOURS, State
@@ -61,7 +61,7 @@ class Teleop:
         robot: Robot (opened by the caller).
         params: LoopParams.
         geom: CDPR geometry (default_geometry()).
-        estimator: readings -> (tensions, wrench); default FsrWrenchEstimator.
+        estimator: readings -> (tensions, wrench); default ReadingEstimator(geom, "dynamic").
         on_event: callback(Event) for state changes (the recorder's event channel).
     """
 
@@ -70,7 +70,11 @@ class Teleop:
         self.haptic, self.robot = haptic, robot
         self.params = params or LoopParams()
         self.geom = geom or default_geometry()
-        self.estimator = estimator if estimator is not None else FsrWrenchEstimator(self.geom)
+        if estimator is None:
+            from teleop.estimation.reading import ReadingEstimator
+
+            estimator = ReadingEstimator(self.geom, "dynamic")
+        self.estimator = estimator
         self.on_event = on_event
         self.limit = float(haptic.spec.max_force_continuous)
         p, m = self.params, self.params.mapping

@@ -61,11 +61,11 @@ def geometry_from(conf: dict | None) -> Geometry:
 
 def estimator_from(desc: dict, geom: Geometry):
     """Rebuild the recorded estimator (by its describe() name)."""
-    from teleop.loop.compute import FsrWrenchEstimator
+    from teleop.estimation.reading import ReadingEstimator
 
     name = desc.get("estimator")
-    if name == "FsrWrenchEstimator":
-        return FsrWrenchEstimator.rebuild(desc, geom)
+    if name == "ReadingEstimator":
+        return ReadingEstimator.rebuild(desc, geom)
     raise InputError(f"recording: estimator '{name}' cannot be rebuilt for replay")
 
 

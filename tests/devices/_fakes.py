@@ -113,3 +113,41 @@ class LinearEstimator:
 
     def describe(self):
         return {"estimator": "linear", "N_per_count": N_PER_COUNT}
+
+
+def record_session(path, ticks: int = 400, robot=None, script=None, params=None):
+    """Record `ticks` ticks of the loop on a manual clock straight into an MCAP file (no process, no pacing):
+    sim stylus + fake robot + linear estimator. Returns the Teleop."""
+    from devices.simulated import OperatorParams, Script, SimulatedStylus
+    from teleop.loop import Teleop
+    from teleop.loop.tap import RowTap, numeric_extras, session_layout
+    from teleop.recording import SessionWriter
+
+    class Clock:
+        t = 0.0
+
+        def __call__(self):
+            return self.t
+
+    clock = Clock()
+    stylus = SimulatedStylus(script or Script(kind="pokes", axis=(0.0, 0.0, -1.0), amplitude=0.016, period=0.4),
+                             OperatorParams(), seed=3, clock=clock)
+    robot = robot or FakeRobot(z_pad=0.001)
+    with stylus, robot, open(path, "wb") as fh:
+        tp = Teleop(stylus, robot, params, estimator=LinearEstimator())
+        first = robot.read()
+        extras = numeric_extras(first)
+        layout = session_layout(extras)
+        meta = {"configuration": {"loop": tp.params.as_dict(), "haptic_spec": vars(stylus.spec),
+                                  "robot_spec": vars(robot.spec)},
+                "calibration": tp.estimator.describe(), "firmware_version": "fake", "software_version": "test"}
+        w = SessionWriter(fh, layout, meta, t0_ns=0)
+        tp.tap = RowTap(layout, w.write_row, extras)
+        tp.start(0.0)
+        for k in range(ticks):
+            clock.t = k * 1e-3
+            tp.tick(k * 1e-3)
+            if k % 50 == 49:
+                w.flush()
+        w.finish({"drops": 0})
+    return tp
