@@ -135,6 +135,7 @@ class SimulatedStylus(ContextDevice):
         self.clock = self._clock if self._clock is not None else time.perf_counter
         self.t0 = float(self.clock())
         self.t = 0.0
+        self.steps = 0
         self.p = self.script.target(0.0).astype(float).copy()
         self.v = np.zeros(3)
         self.F_cmd = np.zeros(3)
@@ -149,18 +150,20 @@ class SimulatedStylus(ContextDevice):
     def _advance(self, t_now: float) -> None:
         op = self.operator
         h, m, k, b = op.h, op.m, op.k, op.b
-        n = int((t_now - self.t) / h)
+        target_steps = int(math.floor(t_now / h + 1e-6))  # integer step count: no drift from summing h
+        n = target_steps - self.steps
         if n <= 0:
             return
-        n = min(n, int(1.0 / h))  # a long pause: integrate at most 1 s (the hand has settled anyway)
+        if n > int(1.0 / h):  # a long pause: integrate at most the last 1 s (the hand has settled anyway)
+            self.steps = target_steps - int(1.0 / h)
+            n = int(1.0 / h)
         a_ou = math.exp(-h / 0.05)
         s_ou = op.tremor * math.sqrt(1.0 - a_ou * a_ou)
         noise = self.rng.standard_normal((n, 3)) * s_ou if op.tremor > 0 else None
         p, v, Fr = self.p, self.v, self.F_tremor
         F_cmd = self.F_cmd
-        t = self.t
         for i in range(n):
-            t += h
+            t = (self.steps + i + 1) * h
             if noise is not None:
                 Fr = a_ou * Fr + noise[i]
             present = not any(t0 <= t < t1 for t0, t1 in self.script.absent)
@@ -173,7 +176,8 @@ class SimulatedStylus(ContextDevice):
         lo, hi = np.asarray(self.spec.workspace_min), np.asarray(self.spec.workspace_max)
         clipped = np.clip(p, lo, hi)
         v = np.where(clipped != p, 0.0, v)
-        self.p, self.v, self.F_tremor, self.t = clipped, v, Fr, t
+        self.steps += n
+        self.p, self.v, self.F_tremor, self.t = clipped, v, Fr, self.steps * h
 
     def read(self) -> HapticSample:
         if not self.is_open:
@@ -230,6 +234,9 @@ def from_url(parsed, options: dict) -> SimulatedStylus:
             raise InputError(f"sim:// stylus option '{key}': expected a finite number")
         return v
 
+    for key in ("seed", "amp_mm", "depth_mm", "period_s", "duty", "tilt_deg", "k", "m", "b", "tremor_N"):
+        if key in options:
+            num(key, 0.0)  # every numeric option is checked, used or not
     kind = str(options.get("script", "pokes"))
     axes = {"x": (1.0, 0, 0), "y": (0, 1.0, 0), "z": (0, 0, 1.0), "-x": (-1.0, 0, 0), "-y": (0, -1.0, 0),
             "-z": (0, 0, -1.0)}
