@@ -175,7 +175,12 @@ def run(args) -> int:
         raise InputError(f"--ticks: expected an integer >= 1000, got {args.ticks}")
     if args.estimator not in ESTIMATOR_NAMES:
         raise InputError(f"--estimator: expected one of {', '.join(ESTIMATOR_NAMES)}, got '{args.estimator}'")
+    import os
+    import sys
+
     result = bench_tick(args.ticks, args.estimator, args.seed)
+    if hasattr(os, "getloadavg"):  # context for the numbers: other processes sharing the cores
+        print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cpus", file=sys.stderr)
     if args.json:
         write_json(args.json, result)
     print(dumps_json(result), end="")
