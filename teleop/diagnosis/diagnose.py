@@ -89,7 +89,10 @@ class Diagnosis:
             for before, after in res.steps:
                 name = [n for n in after.names if n not in before.names][0]
                 y0, y1 = predict(d, before.model), predict(d, after.model)
-                loc = locate(d, d.y - y0, d.y, index=self.hold, change=y1 - y0)
+                # the effect's own signature: the final model with and without it (same gain and offset)
+                y1_without = predict(d, after.model.with_effects(
+                    [(n, p) for n, p in after.model.effects if n != name]))
+                loc = locate(d, d.y - y0, d.y, index=self.hold, change=y1 - y1_without)
                 params = dict(after.model.effects)[name]
                 alts = sorted(((n, f.rmse_hold) for n, f in res.ranking.items() if n != name),
                               key=lambda kv: kv[1])[:3] if not before.model.effects else []

@@ -85,12 +85,17 @@ def condition_features(d: LinkData, output: np.ndarray) -> dict:
     return f
 
 
-def r2(r: np.ndarray, X: np.ndarray) -> float:
-    """Fraction of var(r) explained by least squares on [1, X]."""
+def explain(r: np.ndarray, X: np.ndarray) -> tuple[float, np.ndarray]:
+    """(R^2, coefficients) of least squares of r on [1, X]: the fraction of var(r) explained."""
     A = np.column_stack([np.ones(r.size), X])
     coef, *_ = np.linalg.lstsq(A, r, rcond=None)
     tss = float(np.sum((r - r.mean()) ** 2))
-    return 0.0 if tss <= 0 else max(0.0, 1.0 - float(np.sum((r - A @ coef) ** 2)) / tss)
+    return (0.0 if tss <= 0 else max(0.0, 1.0 - float(np.sum((r - A @ coef) ** 2)) / tss)), coef
+
+
+def r2(r: np.ndarray, X: np.ndarray) -> float:
+    """Fraction of var(r) explained by least squares on [1, X]."""
+    return explain(r, X)[0]
 
 
 @dataclass(frozen=True)
@@ -145,7 +150,10 @@ def locate(d: LinkData, r: np.ndarray, output: np.ndarray, index=None, change: n
     best = max(ev, key=ev.get)
     width = max(1, d.n // 400) | 1
     if best in SWITCHING:
-        score = smooth(np.abs(np.gradient(target)), width)
+        # where the part of the target that the condition explains switches (noise-free by construction)
+        _, coef = explain(target[sl], feats[best][sl])
+        explained = np.column_stack([np.ones(d.n), feats[best]]) @ coef
+        score = smooth(np.abs(np.gradient(explained)), width)
     else:
         score = smooth(np.abs(target - np.median(target)), width)
     ev = dict(sorted(ev.items(), key=lambda kv: -kv[1]))
