@@ -224,6 +224,26 @@ def default_fsr_calibration() -> FsrCalibration:
     return fit_fsr_calibration(default_fsr_calibration_data())
 
 
+def plot_fsr_calibration(data: FsrCalibrationData, cal: FsrCalibration):
+    """Figure like seed 000 Fig 7: calibration points and the two quintic branches (conductance vs tension)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    t = np.linspace(0.0, cal.t_max, 200)
+    for b, name, color in ((LOADING, "loading", "tab:red"), (UNLOADING, "unloading", "tab:purple")):
+        m = data.branch == b
+        ax.plot(data.tension[m], data.reading[m] * 1e6, "o", color=color, label=f"{name} points")
+        ax.plot(t, cal.reading(t, b) * 1e6, "-", color=color, label=f"{name} quintic fit")
+    ax.set_xlabel("tension [N]")
+    ax.set_ylabel("conductance [uS]")
+    ax.set_title(f"FSR calibration ({data.source})", fontsize=9)
+    ax.legend(fontsize=8)
+    return fig
+
+
 def eq2_roots(coefs) -> tuple[float, np.ndarray]:
     """(a, x_i): the fitted quintic written as eq 2, P(x) = a prod(x - x_i) (roots may be complex)."""
     p = Polynomial(coefs)

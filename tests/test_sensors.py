@@ -166,3 +166,11 @@ def test_converter_float_path_equals_the_array_calibration():
         a = conv.update(row)
         b = CAL.tension(CAL.counts2conductance(row), conv.branch)
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+
+
+def test_calibration_figure_is_written(tmp_path):
+    from teleop.outputs import save_figure
+    from teleop.sensors import plot_fsr_calibration
+
+    path = save_figure(plot_fsr_calibration(default_fsr_calibration_data(), CAL), tmp_path / "fig7.png")
+    assert path.stat().st_size > 10_000 and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
