@@ -5,8 +5,8 @@ runs the firmware emulated at 16 MHz behind a pseudo-terminal, and measures thro
 - round trip HEARTBEAT (8 bytes) -> TELEMETRY (30 bytes), one per millisecond, wall clock [ms], and the
   firmware's part of it on the emulated clock (request delimiter in -> reply delimiter out) [ms];
 - watchdog: host silent -> last step pulse, on the emulated clock [ms], over --trials episodes.
-JSON: {"roundtrips", "rtt_ms": {"p50","p99","max"}, "firmware_turnaround_ms": {...}, "trials", "watchdog_stop_ms": {"max","mean","min"},
-"early_trips", "link_bytes_per_tick", "link_fraction_of_1ms", "firmware", "host_link": {...}}.
+JSON: {"roundtrips", "rtt_ms": {"p50","p99","max"}, "firmware_turnaround_ms": {"p50","p99","max"}, "trials",
+"watchdog_stop_ms": {"max","mean","min"}, "early_trips", "link_bytes_per_tick", "link_fraction_of_1ms", "firmware", "host_link": {...}}.
 Wall-clock numbers depend on the machine's load (the emulator shares the CPU); nothing is asserted.
 """
 
