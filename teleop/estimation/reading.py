@@ -29,7 +29,7 @@ class ReadingEstimator:
 
     def __init__(self, geom: Geometry, name: str = "dynamic", *, cal: FsrCalibration | None = None,
                  turn: TurnCompensation | None = None, dynamic: DynamicParams = DynamicParams(),
-                 kalman: KalmanNoise | None = KalmanNoise(), deadband_counts: float = 3.0):
+                 kalman: KalmanNoise | None = KalmanNoise(), deadband_counts: float = 8.0):
         self.geom = geom
         self.name = name
         self.cal = cal if cal is not None else default_fsr_calibration()
