@@ -109,6 +109,21 @@ class Script:
         pts = np.asarray(self.points, dtype=float)
         return np.array([np.interp(t, pts[:, 0], pts[:, j]) for j in (1, 2, 3)])
 
+    def target_xyz(self, t: float) -> tuple:
+        """target(t) as three floats (the integrator's hot path)."""
+        if self.kind == "recorded":
+            return tuple(self.target(t).tolist())
+        cx, cy, cz = self.center
+        if self.kind == "hold":
+            return float(cx), float(cy), float(cz)
+        if self.kind == "sine":
+            s = self.amplitude * math.sin(2 * math.pi * t / self.period)
+        else:
+            phase = (t / self.period) % 1.0
+            s = self.amplitude * (0.5 - 0.5 * math.cos(2 * math.pi * phase / self.duty)) if phase < self.duty else 0.0
+        ax, ay, az = self.axis
+        return cx + ax * s, cy + ay * s, cz + az * s
+
     def buttons(self, t: float) -> tuple[int, bool]:
         """(button mask, operator present) at time t."""
         present = not any(t0 <= t < t1 for t0, t1 in self.absent)
@@ -141,6 +156,7 @@ class SimulatedStylus(ContextDevice):
         self.F_cmd = np.zeros(3)
         self.F_tremor = np.zeros(3)
         self.R = rotation_zyx(0.0, 0.0, self.script.tilt)
+        self._lo, self._hi = np.asarray(self.spec.workspace_min), np.asarray(self.spec.workspace_max)
         self.is_open = True
 
     def close(self) -> None:
@@ -159,25 +175,34 @@ class SimulatedStylus(ContextDevice):
             n = int(1.0 / h)
         a_ou = math.exp(-h / 0.05)
         s_ou = op.tremor * math.sqrt(1.0 - a_ou * a_ou)
-        noise = self.rng.standard_normal((n, 3)) * s_ou if op.tremor > 0 else None
-        p, v, Fr = self.p, self.v, self.F_tremor
-        F_cmd = self.F_cmd
+        noise = (self.rng.standard_normal((n, 3)) * s_ou).tolist() if op.tremor > 0 else None
+        # plain floats: a 3-vector in numpy costs more in call overhead than the arithmetic
+        px, py, pz = self.p.tolist()
+        vx, vy, vz = self.v.tolist()
+        rx, ry, rz = self.F_tremor.tolist()
+        fx, fy, fz = self.F_cmd.tolist()
+        absent, target = self.script.absent, self.script.target_xyz
         for i in range(n):
             t = (self.steps + i + 1) * h
             if noise is not None:
-                Fr = a_ou * Fr + noise[i]
-            present = not any(t0 <= t < t1 for t0, t1 in self.script.absent)
-            if present:
-                acc = (k * (self.script.target(t) - p) - b * v + F_cmd + Fr) / m
+                e = noise[i]
+                rx, ry, rz = a_ou * rx + e[0], a_ou * ry + e[1], a_ou * rz + e[2]
+            if not any(t0 <= t < t1 for t0, t1 in absent):
+                tx, ty, tz = target(t)
+                ax = (k * (tx - px) - b * vx + fx + rx) / m
+                ay = (k * (ty - py) - b * vy + fy + ry) / m
+                az = (k * (tz - pz) - b * vz + fz + rz) / m
             else:  # hand off: the stylus alone (light, heavily damped by the device's friction)
-                acc = (F_cmd - 20.0 * v) / 0.05
-            v = v + h * acc
-            p = p + h * v
-        lo, hi = np.asarray(self.spec.workspace_min), np.asarray(self.spec.workspace_max)
-        clipped = np.clip(p, lo, hi)
-        v = np.where(clipped != p, 0.0, v)
+                ax, ay, az = (fx - 20.0 * vx) / 0.05, (fy - 20.0 * vy) / 0.05, (fz - 20.0 * vz) / 0.05
+            vx, vy, vz = vx + h * ax, vy + h * ay, vz + h * az
+            px, py, pz = px + h * vx, py + h * vy, pz + h * vz
+        p, v = np.array([px, py, pz]), np.array([vx, vy, vz])
+        lo, hi = self._lo, self._hi
+        clipped = np.minimum(np.maximum(p, lo), hi)
+        if (clipped != p).any():
+            v = np.where(clipped != p, 0.0, v)
         self.steps += n
-        self.p, self.v, self.F_tremor, self.t = clipped, v, Fr, self.steps * h
+        self.p, self.v, self.F_tremor, self.t = clipped, v, np.array([rx, ry, rz]), self.steps * h
 
     def read(self) -> HapticSample:
         if not self.is_open:

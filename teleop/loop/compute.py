@@ -9,6 +9,7 @@ factor, then the safety clamp to the device's continuous limit (NaN/inf -> zero 
 
 from __future__ import annotations
 
+import math
 from typing import Protocol
 
 import numpy as np
@@ -41,8 +42,13 @@ def structure_matrix_at(p, Rr: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 def render_force(f, R_reg: np.ndarray, force_scale: float, zero_neg_z: bool) -> np.ndarray:
     """(3,) stylus force [N] from the external wrench f (6,) in {B}: k_f R_reg^T f[:3], -z zeroed if asked."""
-    with np.errstate(all="ignore"):  # inf/NaN inputs are caught by clamp_force
-        F = force_scale * (R_reg.T @ np.asarray(f, dtype=float)[:3])
+    f3 = np.asarray(f, dtype=float)[:3]
+    big = not np.isfinite(f3).all() or float(np.max(np.abs(f3))) > 1e150
+    if big:
+        with np.errstate(all="ignore"):  # inf/NaN/overflow: clamp_force turns them into a fault
+            F = force_scale * (R_reg.T @ f3)
+    else:
+        F = force_scale * (R_reg.T @ f3)
     if zero_neg_z and F[2] < 0.0:
         F[2] = 0.0
     return F
@@ -58,13 +64,13 @@ def ramp_factor(elapsed: float, ramp_time: float) -> float:
 def clamp_force(F, limit: float) -> tuple[np.ndarray, bool]:
     """(F', ok): F scaled down to norm <= limit [N]; any non-finite input gives zeros and ok=False."""
     F = np.asarray(F, dtype=float)
-    if F.shape != (3,) or not np.isfinite(F).all():
+    if F.shape != (3,):
         return np.zeros(3), False
-    m = float(np.max(np.abs(F)))
-    if m == 0.0:
-        return F, True
-    u = F / m  # scaled first: no overflow for |F| ~ 1e308
-    n = m * float(np.sqrt(u @ u))
+    x, y, z = F.tolist()
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+        return np.zeros(3), False
+    n = math.hypot(x, y, z)  # no overflow for |F| ~ 1e308
     if n > limit:
-        F = u * (limit / float(np.sqrt(u @ u)))
-    return F, True
+        k = limit / n
+        return np.array([x * k, y * k, z * k]), True
+    return np.array([x, y, z]), True
