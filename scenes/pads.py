@@ -9,6 +9,7 @@ central hole (Fig 14d), whose wall the tip presses sideways.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,6 +20,11 @@ from teleop.errors import InputError
 # Footprint quadrature of a flat tip (unit disc): 3 equal-area rings x 8 angles, equal weights.
 _RING_R = np.sqrt((np.arange(3) + 0.5) / 3.0)
 _ANG = np.arange(8) * np.pi / 4 + np.pi / 8
+@functools.lru_cache(maxsize=256)
+def _layer_k(material: str, thickness: float, tip_radius: float) -> float:
+    return contact_stiffness(get_material(material), thickness, tip_radius)
+
+
 def _pt(v) -> tuple:
     return (float(v[0]), float(v[1]))
 
@@ -103,8 +109,7 @@ class Pad:
         in parallel, i.e. the area-average of the local k over the disc (exact inside one region)."""
         pts = np.asarray(xy, dtype=float)[None, :] + tip_radius * FOOTPRINT
         mats, h = self.layer_at(pts)
-        ks = [contact_stiffness(get_material(m), hh, tip_radius) for m, hh in zip(mats, h)]
-        return float(np.mean(ks))
+        return float(np.mean([_layer_k(m, float(hh), tip_radius) for m, hh in zip(mats, h)]))
 
     def wall_stiffness(self, tip_radius: float) -> float:
         """Target lateral stiffness [N/m] of the hole wall: the flat-punch law on a layer as thick as the

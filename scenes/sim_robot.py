@@ -2,10 +2,10 @@
 
 One reading = `substeps` physics steps of dt. Per reading:
   cable lengths (commanded, ideal steppers) -> pose (forward kinematics, batched Newton on
-  teleop.kinematics.poses2lengths) -> tip target p + R tip -> pybullet: the tip is a mass on the cables'
-  Cartesian spring K = sum_i k_c u_i u_i^T (cable compliance, k_c per cable) and meets the pad's calibrated
-  contact -> contact wrench f (the Nano17 ground truth, moments about p with the force at the tool tip)
-  -> tip tensions t = wrench2tensions(f, A, pretension) (A t + f = 0, eq 8)
+  teleop.kinematics.poses2lengths) -> tip target p + R tip -> pybullet: the contact tip is a small mass
+  held on the commanded tip through a series spring (tip_stiffness, the loop's lumped compliance) and meets
+  the pad's calibrated contact -> contact wrench f (the Nano17 ground truth, moments about p with the force
+  at the tool tip) -> tip tensions t = wrench2tensions(f, A(pose), pretension) (A t + f = 0, eq 8)
   -> sheath friction between the FSR and the end effector: teleop.physics capstan_friction with
      Theta_i = theta_i (eq 6) + theta0, motor position x = -length (shortening = pulling), stick
      transitions of stiffness k at reversals
@@ -45,11 +45,15 @@ class SimRobotParams:
         substeps: physics steps per reading (1: readings at 1 kHz).
         pretension: reference cable tension of the tension distribution [N]; seed 000 Fig 9 pre-tensions
             the cable with 1.96-2.94 N; 2.85 N is the middle of the [0.2, 5.5] N tension range.
-        cable_stiffness: axial stiffness of each cable path (sheath, FSR press block, scaffold) [N/m]:
-            177 N/m per cable (z stiffness 382 N/m at home) reproduces seed 000 Table 1's ground truth of
-            Dragon Skin 30 vs Ecoflex 00-10 (2.27 vs 1.01 N) with this catalogue's pad stiffnesses, and then
-            predicts Ecoflex 00-30 (1.42 N vs the measured 1.43 N); None = rigid robot (tip tracks exactly).
-        ee_damping_ratio: damping ratio of the tip on the cable spring [-].
+        tip_stiffness: series compliance between the commanded tip and the contact [N/m] (isotropic).
+            Seed 000 Table 1's ground truth (Dragon Skin 30 2.27 N, Ecoflex 00-30 1.43 N, 00-10 1.01 N) is
+            far flatter than the pads' stiffness ratio (22:1.8:1); a series spring of 382 N/m and one
+            commanded depth (6.3 mm) fit all three to 0.03 N (least squares over the two unknowns, three
+            values). The compliance is lumped at the tip so the end effector stays at its commanded pose:
+            moving the end effector instead (cable stretch) shifts A(pose) and, in this geometry, puts
+            ~1.6 N of pretension into the wrench of any estimator that only knows the commanded pose
+            (measured). None = rigid (the tip tracks exactly).
+        ee_damping_ratio: damping ratio of the contact tip on its series spring [-].
         capstan_k: stick stiffness of the capstan transition at reversals [N/m] (teleop.physics
             capstan_friction default, 2e4 N/m).
         hysteresis_delta: half the force change over which the FSR loading state flips [N]
@@ -61,7 +65,7 @@ class SimRobotParams:
     world: WorldParams = WorldParams()
     substeps: int = 1
     pretension: float = 2.85
-    cable_stiffness: float | None = 177.0
+    tip_stiffness: float | None = 382.0
     ee_damping_ratio: float = 0.7
     capstan_k: float = 2e4
     hysteresis_delta: float = 0.2
@@ -72,8 +76,8 @@ class SimRobotParams:
         if self.substeps < 1 or not g.t_min < self.pretension < g.t_max:
             raise InputError(f"sim robot: need substeps >= 1 and t_min < pretension < t_max, got "
                              f"{self.substeps}, {self.pretension}")
-        if self.cable_stiffness is not None and self.cable_stiffness <= 0:
-            raise InputError("sim robot: cable_stiffness must be > 0 (or None for a rigid robot)")
+        if self.tip_stiffness is not None and self.tip_stiffness <= 0:
+            raise InputError("sim robot: tip_stiffness must be > 0 (or None for a rigid tip)")
 
     @property
     def dt(self) -> float:
@@ -92,12 +96,6 @@ def home_pose() -> np.ndarray:
 # --------------------------------------------------------------------------------------------------------
 # pure helpers (batched over samples)
 # --------------------------------------------------------------------------------------------------------
-
-def cartesian_stiffness(pose, geom: Geometry, k_cable: float) -> np.ndarray:
-    """(3, 3) translational stiffness [N/m] of the tip on cables of axial stiffness k_cable: sum k u u^T."""
-    u = -structure_matrix(pose, geom)[:3].T  # (6, 3) unit cable directions
-    return k_cable * (u.T @ u)
-
 
 _FREE = [0, 1, 2, 4, 5]  # axial geometry: roll alpha is not set by the cables
 
@@ -127,15 +125,50 @@ def lengths2poses(L, geom: Geometry, guess=None, iters: int = 6, tol: float = 1e
     return q
 
 
+def cable_vectors_batch(poses, geom: Geometry) -> tuple[np.ndarray, np.ndarray]:
+    """((n, 6, 3) cable vectors l_i = p + R r_i - B_i [m], (n, 6, 3) R r_i [m]) for (n, 6) poses (eqs 4-5)."""
+    q = np.atleast_2d(np.asarray(poses, dtype=float))
+    Rr = np.einsum("nij,kj->nki", _rotations(q), geom.r)
+    return q[:, None, :3] + Rr - geom.B[None], Rr
+
+
 def capstan_angles_batch(poses, geom: Geometry) -> np.ndarray:
     """(n, 6) total wrap Theta = theta (eq 6) + theta0 [rad] between each FSR and the end effector."""
-    q = np.atleast_2d(np.asarray(poses, dtype=float))
-    out = np.empty((len(q), 6))
-    for k, pose in enumerate(q):
-        R = rotation_zyx(*pose[3:])
-        l = pose[:3] + geom.r @ R.T - geom.B
-        out[k] = bending_angles(l, geom)
-    return out + geom.theta0
+    l, _ = cable_vectors_batch(poses, geom)
+    return bending_angles(l.reshape(-1, 3), geom).reshape(-1, 6) + geom.theta0
+
+
+def structure_matrices(poses, geom: Geometry) -> np.ndarray:
+    """(n, 6, 6) structure matrices A of eq 8 (as teleop.kinematics.structure_matrix, batched)."""
+    l, Rr = cable_vectors_batch(poses, geom)
+    u = l / np.linalg.norm(l, axis=2)[:, :, None]
+    return np.concatenate([-np.swapaxes(u, 1, 2), -np.swapaxes(np.cross(Rr, u), 1, 2)], axis=1)
+
+
+def wrenches2tensions(f, A, t_min: float, t_max: float, t_ref: float) -> np.ndarray:
+    """(n, 6) tensions for wrenches f (n, 6) and structure matrices A (n, 6, 6): teleop.tension's
+    distribution (A t + f = 0, the one-dimensional null space n > 0, closest to t_ref, clipped to the
+    feasible interval), batched. Samples the batch cannot decide (rank != 5) go to wrench2tensions."""
+    f = np.asarray(f, dtype=float)
+    U, s, Vt = np.linalg.svd(A)
+    rank5 = (s[:, 4] > 1e-9 * s[:, 0]) & (s[:, 5] < 1e-9 * np.maximum(1.0, s[:, 0]))
+    # t_p = -A^+ f over the first five singular directions
+    c = np.einsum("nji,nj->ni", U[:, :, :5], f) / s[:, :5]
+    t_p = -np.einsum("nij,ni->nj", Vt[:, :5, :], c)
+    nvec = Vt[:, 5, :]
+    nvec = nvec * np.where(nvec.sum(axis=1) < 0, -1.0, 1.0)[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = (t_min - t_p) / nvec
+        b = (t_max - t_p) / nvec
+    lo = np.max(np.where(np.abs(nvec) > 1e-12, np.minimum(a, b), -np.inf), axis=1)
+    hi = np.min(np.where(np.abs(nvec) > 1e-12, np.maximum(a, b), np.inf), axis=1)
+    lam = np.clip(np.einsum("ni,ni->n", nvec, t_ref - t_p) / np.einsum("ni,ni->n", nvec, nvec), lo, hi)
+    t = np.clip(t_p + lam[:, None] * nvec, t_min, t_max)
+    resid = np.abs(np.einsum("nij,nj->ni", A, t_p) + f).max(axis=1)
+    odd = ~rank5 | (lo > hi + 1e-12) | (resid > 1e-7 * np.maximum(1.0, np.abs(f).max(axis=1)))
+    for k in np.flatnonzero(odd):  # the reference implementation decides (and raises if infeasible)
+        t[k] = wrench2tensions(f[k], A[k], t_min, t_max, t_ref)
+    return t
 
 
 def fsr_conductance(t, s, cal: FsrCalibration) -> np.ndarray:
@@ -204,10 +237,9 @@ class SimRobot(ContextDevice):
         self.geom = p.geometry
         self.rng = np.random.default_rng(self.seed)
         K = C = None
-        if p.cable_stiffness is not None:
-            K = cartesian_stiffness(HOME_POSE, self.geom, p.cable_stiffness)
-            c = 2.0 * p.ee_damping_ratio * math.sqrt(p.world.indenter_mass * float(np.max(np.diag(K))))
-            C = np.eye(3) * c
+        if p.tip_stiffness is not None:
+            K = np.eye(3) * p.tip_stiffness
+            C = np.eye(3) * 2.0 * p.ee_damping_ratio * math.sqrt(p.world.indenter_mass * p.tip_stiffness)
         self.world = PadWorld(self.pad, p.world, stiffness=K, damping=C)
         self.world.open()
         self.L_home = poses2lengths(HOME_POSE, self.geom)[0]
@@ -240,6 +272,12 @@ class SimRobot(ContextDevice):
             self.pose = lengths2poses(L, self.geom, guess=self.pose)[0]
             self.L_cmd = L.copy()
 
+    def set_pad_offset(self, xy) -> None:
+        """Move the pad so its centre sits at xy (2,) [m] in {B} (a positioning stage; pads wider than the
+        robot's reach are slid under it)."""
+        self._require_open()
+        self.world.set_offset(xy)
+
     def stop(self) -> None:
         """Hold the current lengths; further commands are ignored until `open` again."""
         self.stopped = True
@@ -255,9 +293,7 @@ class SimRobot(ContextDevice):
         F = w.contact_force()
         tip = w.tip()
         f = np.concatenate([F, np.cross(tip_offset, F)])  # force at the tool tip, moments about p
-        actual = self.pose.copy()
-        actual[:3] = tip - tip_offset
-        return tip, f, structure_matrix(actual, g)
+        return tip, f, structure_matrix(self.pose, g)
 
     def read(self) -> RobotReading:
         """Advance one reading period and return the raw reading."""
@@ -305,10 +341,7 @@ class SimRobot(ContextDevice):
             if progress is not None and k % 1000 == 999:
                 progress(1000)
         f = np.concatenate([F, np.cross(R_tip, F)], axis=1)
-        actual = poses.copy()
-        actual[:, :3] = tips - R_tip
-        t_tip = np.array([wrench2tensions(fk, structure_matrix(ak, g), g.t_min, g.t_max, p.pretension)
-                          for fk, ak in zip(f, actual)])
+        t_tip = wrenches2tensions(f, structure_matrices(poses, g), g.t_min, g.t_max, p.pretension)
         theta = capstan_angles_batch(poses, g)
         x = -L  # motor positions: hauling in (shortening) is +
         t_fsr = np.empty((n, 6))
@@ -338,8 +371,13 @@ class SimRobot(ContextDevice):
 
 
 def _rotations(poses: np.ndarray) -> np.ndarray:
-    return np.array([rotation_zyx(*q[3:]) for q in poses]) if np.any(poses[:, 3:]) else \
-        np.broadcast_to(np.eye(3), (len(poses), 3, 3))
+    """(n, 3, 3) R = Rz(alpha) Ry(beta) Rx(gamma) for (n, 6) poses (teleop.kinematics.rotation_zyx, batched)."""
+    q = np.atleast_2d(poses)
+    ca, sa, cb, sb = np.cos(q[:, 3]), np.sin(q[:, 3]), np.cos(q[:, 4]), np.sin(q[:, 4])
+    cg, sg = np.cos(q[:, 5]), np.sin(q[:, 5])
+    return np.stack([np.stack([ca * cb, ca * sb * sg - sa * cg, ca * sb * cg + sa * sg], axis=1),
+                     np.stack([sa * cb, sa * sb * sg + ca * cg, sa * sb * cg - ca * sg], axis=1),
+                     np.stack([-sb, cb * sg, cb * cg], axis=1)], axis=1)
 
 
 def from_url(parsed, options: dict) -> SimRobot:

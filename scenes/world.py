@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import os
 import sys
 from dataclasses import dataclass
@@ -119,17 +120,30 @@ class PadWorld:
         # few mm keeps stale manifold points and doubles the force (measured); 0.1 mm keeps one point.
         c.setPhysicsEngineParameter(numSolverIterations=p.solver_iterations, deterministicOverlappingPairs=1,
                                     contactBreakingThreshold=1e-4)
+        self._xy_cached = np.zeros(2)
+        self._k_set = None
         self._build_pad()
         sph = c.createCollisionShape(pb.GEOM_SPHERE, radius=self.proxy_radius)
         start = [0.0, 0.0, p.surface_z - self.proxy_radius - 0.005]
         self.body = c.createMultiBody(p.indenter_mass, sph, basePosition=start)
-        c.changeDynamics(self.body, -1, linearDamping=0.0, angularDamping=0.0, lateralFriction=p.lateral_friction)
-        self._target = np.array([0.0, 0.0, p.surface_z - 0.005])
+        # the tip does not roll: friction torques turned the sphere and every new contact location on it
+        # became an extra manifold point (measured: up to 4, four times the slope). A huge rotational
+        # inertia and full angular damping keep it from turning.
+        c.changeDynamics(self.body, -1, linearDamping=0.0, angularDamping=1.0, lateralFriction=p.lateral_friction,
+                         localInertiaDiagonal=[1e3, 1e3, 1e3])
         if self.K is None:
             self._cid = c.createConstraint(self.body, -1, -1, -1, pb.JOINT_FIXED, [0, 0, 0], [0, 0, 0], start)
             c.changeConstraint(self._cid, start, maxForce=1e4)
-        self._xy_cached = None
-        self._k_set = None
+        cid = c._client
+        self._get_pos = functools.partial(pb.getBasePositionAndOrientation, physicsClientId=cid)
+        self._get_vel = functools.partial(pb.getBaseVelocity, physicsClientId=cid)
+        self._apply_force = functools.partial(pb.applyExternalForce, physicsClientId=cid)
+        self._change_constraint = functools.partial(pb.changeConstraint, physicsClientId=cid)
+        self._step = functools.partial(pb.stepSimulation, physicsClientId=cid)
+        self._contacts = functools.partial(pb.getContactPoints, physicsClientId=cid)
+        self._world_frame = pb.WORLD_FRAME
+        if self.K is not None:
+            self._Kl, self._Cl = self.K.tolist(), self.C.tolist()
         self.is_open = True
 
     def close(self) -> None:
@@ -154,9 +168,11 @@ class PadWorld:
 
     def _build_pad(self) -> None:
         c, pb, pad, p = self.client, self._pb, self.pad, self.params
+        self._home = {}
         h = pad.thickness
         zc = p.surface_z + h / 2
         self.ring = []
+        self.offset = np.zeros(2)
         if pad.hole_radius > 0:
             ro, ri = pad.size / 2, pad.hole_radius
             half = [(ro - ri) / 2, ro * np.tan(np.pi / N_RING), h / 2]
@@ -166,6 +182,7 @@ class PadWorld:
                 phi = 2 * np.pi * i / N_RING
                 pos = [(ro + ri) / 2 * np.cos(phi), (ro + ri) / 2 * np.sin(phi), zc]
                 b = c.createMultiBody(0, shape, basePosition=pos, baseOrientation=c.getQuaternionFromEuler([0, 0, phi]))
+                self._home[b] = (pos, c.getQuaternionFromEuler([0, 0, phi]))
                 self._set_contact(b, k_wall)
                 self.ring.append(b)
             self.slab = None
@@ -175,18 +192,26 @@ class PadWorld:
         # convex-convex sphere-cylinder manifold was measured to keep two (doubling the slope)
         shape = c.createCollisionShape(pb.GEOM_BOX, halfExtents=[pad.size / 2, pad.size / 2, h / 2])
         self.slab = c.createMultiBody(0, shape, basePosition=[0, 0, zc])
+        self._home[self.slab] = ([0.0, 0.0, zc], (0.0, 0.0, 0.0, 1.0))
         self.pad_bodies = [self.slab]
         self._update_slab(np.zeros(2), force=True)
 
     def _update_slab(self, xy: np.ndarray, force: bool = False) -> None:
-        """Set the slab's contact stiffness to the material map under the tip at xy (cached)."""
-        if not force and self._xy_cached is not None and np.abs(xy - self._xy_cached).max() < 2e-5:
-            return
-        self._xy_cached = xy.copy()
-        k = self.pad.stiffness_at(xy, self.params.tip_radius)
+        """Set the slab's contact stiffness to the material map under the tip at xy (the caller skips
+        moves under 50 um)."""
+        self._xy_cached = np.array(xy, dtype=float)
+        k = self.pad.stiffness_at(self._xy_cached - self.offset, self.params.tip_radius)
         if force or self._k_set is None or abs(k / self._k_set - 1.0) > 1e-3:
             self._set_contact(self.slab, k)
             self._k_set = k
+
+    def set_offset(self, xy) -> None:
+        """Place the pad with its centre at xy (2,) [m] in {B} (a positioning stage under the robot)."""
+        self.offset = np.array(xy, dtype=float).reshape(2)
+        for b, (pos, orn) in self._home.items():
+            self.client.resetBasePositionAndOrientation(b, [pos[0] + self.offset[0], pos[1] + self.offset[1], pos[2]], orn)
+        if self.slab is not None:
+            self._update_slab(np.asarray(self._get_pos(self.body)[0][:2]), force=True)
 
     @property
     def proxy_radius(self) -> float:
@@ -201,7 +226,8 @@ class PadWorld:
 
     def tip(self) -> np.ndarray:
         """(3,) touching point (sphere centre + r z) [m]."""
-        return self.centre() + np.array([0.0, 0.0, self.proxy_radius])
+        x, y, z = self._get_pos(self.body)[0]
+        return np.array([x, y, z + self.proxy_radius])
 
     def velocity(self) -> np.ndarray:
         return np.asarray(self.client.getBaseVelocity(self.body)[0])
@@ -212,31 +238,33 @@ class PadWorld:
 
     def step(self, target) -> None:
         """Advance one dt with the tip (touching point) commanded to `target` (3,) [m]."""
-        target = np.asarray(target, dtype=float)
-        centre_target = target - np.array([0.0, 0.0, self.proxy_radius])
-        c = self.client
-        pos, _ = c.getBasePositionAndOrientation(self.body)
-        pos = np.asarray(pos)
-        if self.slab is not None:
-            self._update_slab(pos[:2])
+        r = self.proxy_radius
+        tx, ty, tz = float(target[0]), float(target[1]), float(target[2]) - r  # sphere centre target
+        pos = self._get_pos(self.body)[0]
+        if self.slab is not None and (abs(pos[0] - self._xy_cached[0]) > 5e-5 or abs(pos[1] - self._xy_cached[1]) > 5e-5):
+            self._update_slab(np.array(pos[:2]))
         if self.K is None:
-            c.changeConstraint(self._cid, centre_target.tolist(), maxForce=1e4)
+            self._change_constraint(self._cid, [tx, ty, tz], maxForce=1e4)
         else:
-            v = np.asarray(c.getBaseVelocity(self.body)[0])
-            f = -self.K @ (pos - centre_target) - self.C @ v  # spring-damper of the cable robot
-            c.applyExternalForce(self.body, -1, f.tolist(), pos.tolist(), self._pb.WORLD_FRAME)
-        # the tip does not roll: friction torques would turn the sphere and every new contact location
-        # on it became an extra manifold point (measured: up to 4, four times the slope)
-        c.resetBasePositionAndOrientation(self.body, pos.tolist(), (0.0, 0.0, 0.0, 1.0))
-        c.resetBaseVelocity(self.body, angularVelocity=[0, 0, 0])
-        c.stepSimulation()
-        self._target = target
+            v = self._get_vel(self.body)[0]
+            e = (pos[0] - tx, pos[1] - ty, pos[2] - tz)
+            K, C = self._Kl, self._Cl
+            f = [-(K[i][0] * e[0] + K[i][1] * e[1] + K[i][2] * e[2])
+                 - (C[i][0] * v[0] + C[i][1] * v[1] + C[i][2] * v[2]) for i in range(3)]  # spring-damper
+            self._apply_force(self.body, -1, f, pos, self._world_frame)
+        self._step()
 
     def contact_force(self) -> np.ndarray:
         """(3,) force of the pad on the tip [N]: normal plus friction forces of every contact point."""
-        F = np.zeros(3)
-        for cp in self.client.getContactPoints(bodyA=self.body):
+        F = [0.0, 0.0, 0.0]
+        for cp in self._contacts(bodyA=self.body):
             # cp[7] normal on B pointing towards A, cp[9] its force; cp[10..13] friction magnitudes and
             # directions as applied to B (measured: a tip sliding +x reads +x), so A gets the opposite
-            F += cp[9] * np.asarray(cp[7]) - cp[10] * np.asarray(cp[11]) - cp[12] * np.asarray(cp[13])
-        return F
+            n, d1, d2 = cp[7], cp[11], cp[13]
+            for i in range(3):
+                F[i] += cp[9] * n[i] - cp[10] * d1[i] - cp[12] * d2[i]
+        return np.array(F)
+
+    def n_contacts(self) -> int:
+        """Number of contact points between the tip and the pad (1 while touching, by construction)."""
+        return len(self._contacts(bodyA=self.body))

@@ -39,3 +39,11 @@ def test_compliant_drive_settles_at_series_stiffness():
             w.step([0.0, 0.0, PARAMS.surface_z + 0.004])
         F = -w.contact_force()[2]
     assert F == pytest.approx(0.004 * k_r * k_p / (k_r + k_p), rel=0.03)
+
+
+def test_one_contact_point_after_sliding_and_deep_poke():
+    K, C = np.eye(3) * 400.0, np.eye(3) * 3.0
+    with PadWorld(z_test_pad(), PARAMS, stiffness=K, damping=C) as w:
+        for i in range(3000):  # slide 3 mm sideways while pressing, then poke 4 mm deeper
+            w.step([1e-6 * i, 0.0, PARAMS.surface_z + 0.002 + (1.3e-6 * (i - 1500) if i > 1500 else 0.0)])
+        assert w.n_contacts() == 1
