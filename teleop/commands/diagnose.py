@@ -62,8 +62,17 @@ def run(args) -> int:
             docs.append(diag.as_dict())
     for doc in docs:
         print(_summary(doc))
+    result = docs[0]
+    if len(docs) > 1:
+        from teleop.diagnosis.crossfile import cross_file
+        cross = cross_file(diags)
+        result = {"recordings": docs, "cross_file": cross}
+        for ch, s in cross["summary"].items():
+            print(f"across files, {ch}: {'+'.join(s['effects'])} fitted on one file, scored on another: "
+                  f"improvement x{s['improvement_geomean']:.2f} (geometric mean of {s['pairs']} pairs), "
+                  f"min x{s['improvement_min']:.2f}")
     if args.json:
-        write_json(args.json, docs[0] if len(docs) == 1 else {"recordings": docs})
+        write_json(args.json, result)
     if args.plot:
         for diag in diags:
             path = Path(args.plot)

@@ -101,7 +101,7 @@ def _rig(rng: np.random.Generator, effect: str, index: int) -> Case:
     A = float(np.ptp(x)) / 2
     v = np.gradient(x, t)
     vmax = float(np.percentile(np.abs(v), 99))
-    vmed = float(np.median(np.abs(v)))
+    v25 = float(np.percentile(np.abs(v), 25))
     L0 = rng.uniform(5.0, 20.0)
     fl = rng.uniform(0.05, 0.4)
     load = L0 * (1 + rng.uniform(0.3, 0.6) * np.sin(2 * np.pi * fl * t + rng.uniform(0, 2 * np.pi))
@@ -132,7 +132,7 @@ def _rig(rng: np.random.Generator, effect: str, index: int) -> Case:
         params = {"b": Fc / vmax * rng.uniform(1.0, 2.0)}
         fm = _run_steps(effect, params, v=v, load=Lref)
     elif effect == "stribeck_friction":
-        params = {"Fc": Fc, "Fs": Fc * rng.uniform(1.8, 3.0), "vs": vmed * rng.uniform(0.3, 0.7)}
+        params = {"Fc": Fc, "Fs": Fc * rng.uniform(1.8, 3.0), "vs": v25 * rng.uniform(0.6, 1.2)}
         fm = _run_steps(effect, params, v=v, load=Lref)
     elif effect == "dahl_hysteresis":
         params = {"Fc": Fc, "sigma": Fc / (rng.uniform(0.05, 0.2) * A)}

@@ -168,6 +168,8 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
         g0 = 0.0
     rng = np.random.default_rng(seed)
     best = None
+    if len(layout) >= 3:  # three or more shape parameters (Stribeck): local minima, try more starts
+        starts = max(starts, 3)
     for s in range(max(starts, 1)):
         w = w0.copy()
         if s > 0:

@@ -117,7 +117,7 @@ def noise_level(r: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(dr - np.median(dr))) / np.sqrt(2.0))
 
 
-def windows_from(t: np.ndarray, score: np.ndarray, frac: float = 0.5, max_windows: int = 12) -> list:
+def windows_from(t: np.ndarray, score: np.ndarray, frac: float = 0.5, max_windows: int = 40) -> list:
     """Merged intervals [[t0, t1], ...] where score > frac * its 99.5th percentile, strongest first."""
     top = float(np.percentile(score, 99.5))
     if top <= 0:
