@@ -27,3 +27,8 @@ def test_cli_bad_arguments_exit_2(capsys):
     assert main(["bench", "tick", "--estimator", "magic"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and all(line.startswith("teleop: error: --") for line in err)
+
+
+def test_cpu_clock_option():
+    out = bench_tick(ticks=200, warmup=20, clock="cpu")
+    assert out["tick_us"]["p50"] > 0 and out["reference_tick_us"]["p50"] > 0
