@@ -206,12 +206,14 @@ class ArduinoRobot(ContextDevice):
     def diag(self) -> msg.DiagReply:
         """Firmware clock and error counters."""
         self._require_open()
-        with self._cond:
-            before = self._diag
-        self._send(msg.DiagRequest(self._next_seq()))
-        if not self._wait(lambda: self._diag is not before, self.timeout_s):
-            raise DeviceError(f"serial robot '{self.port}': no DIAG reply within {self.timeout_s} s")
-        return self._diag
+        for _ in range(3):
+            with self._cond:
+                before = self._diag
+            self._send(msg.DiagRequest(self._next_seq()))
+            if self._wait(lambda: self._diag is not before, self.timeout_s):
+                return self._diag
+            self.stats.timeouts += 1
+        raise DeviceError(f"serial robot '{self.port}': no DIAG reply in 3 attempts of {self.timeout_s} s")
 
     @property
     def boot_id(self) -> int | None:

@@ -80,3 +80,44 @@ def round_trips(robot: ArduinoRobot, n: int = 1000, period_s: float = 0.001) -> 
         if rest > 0:
             time.sleep(rest)
     return out
+
+
+@dataclass(frozen=True)
+class StreamResult:
+    """A loop-like run: one COMMAND and one read() per tick.
+
+    Attributes:
+        ticks: ticks run.
+        fresh: ticks whose read() returned a telemetry frame newer than the previous tick's.
+        age_ms: (ticks,) age of the reading at read() time (host receive clock) [ms].
+        late_ticks: ticks that started more than one period late (host scheduling).
+    """
+
+    ticks: int
+    fresh: int
+    age_ms: np.ndarray
+    late_ticks: int
+
+
+def stream(robot: ArduinoRobot, home_lengths, seconds: float = 5.0, rate_hz: float = 1000.0,
+           amplitude_m: float = 0.002) -> StreamResult:
+    """Command a slow sine on all cables at rate_hz for `seconds` [s], reading back every tick."""
+    home = np.asarray(home_lengths, float)
+    period = 1.0 / rate_hz
+    n = int(seconds * rate_hz)
+    ages = np.empty(n)
+    fresh, late, last_seq = 0, 0, None
+    t0 = time.perf_counter()
+    for k in range(n):
+        due = t0 + k * period
+        now = time.perf_counter()
+        if now < due:
+            time.sleep(due - now)
+        elif now - due > period:
+            late += 1
+        robot.command_lengths(home - amplitude_m * np.sin(2 * np.pi * 0.5 * k * period))
+        reading = robot.read()
+        ages[k] = (time.monotonic() - reading.t) * 1e3
+        fresh += reading.seq != last_seq
+        last_seq = reading.seq
+    return StreamResult(n, fresh, ages, late)

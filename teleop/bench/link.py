@@ -4,8 +4,9 @@ Builds the Mega2560 firmware and the simavr harness (into ~/.cache/cdpr-teleop/a
 runs the firmware emulated at 16 MHz behind a pseudo-terminal, and measures through pyserial at 1 Mbaud:
 - round trip HEARTBEAT (8 bytes) -> TELEMETRY (30 bytes), one per millisecond, wall clock [ms], and the
   firmware's part of it on the emulated clock (request delimiter in -> reply delimiter out) [ms];
+- a loop-like stream: one COMMAND + read() per 1 ms tick: fresh readings, reading age, firmware counters;
 - watchdog: host silent -> last step pulse, on the emulated clock [ms], over --trials episodes.
-JSON: {"roundtrips", "rtt_ms": {"p50","p99","max"}, "firmware_turnaround_ms": {"p50","p99","max"}, "trials",
+JSON: {"roundtrips", "rtt_ms": {"p50","p99","max"}, "firmware_turnaround_ms": {"p50","p99","max"}, "stream_1khz": {...}, "trials",
 "watchdog_stop_ms": {"max","mean","min"}, "early_trips", "link_bytes_per_tick", "link_fraction_of_1ms", "firmware", "host_link": {...}}.
 Wall-clock numbers depend on the machine's load (the emulator shares the CPU); nothing is asserted.
 """
@@ -19,6 +20,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("link", help="Arduino link on the emulated firmware: round trip, watchdog stop time")
     p.add_argument("--roundtrips", type=int, default=2000, help="timed round trips (default 2000)")
     p.add_argument("--trials", type=int, default=100, help="watchdog silence episodes (default 100)")
+    p.add_argument("--stream-seconds", type=float, default=5.0,
+                   help="seconds of a 1 kHz COMMAND + read() stream (default 5)")
     p.add_argument("--build-dir", metavar="DIR", help="build directory (default ~/.cache/cdpr-teleop/arduino)")
     p.add_argument("--json", metavar="F", help="write the result JSON here")
     p.set_defaults(func=run)
@@ -31,7 +34,7 @@ def run(args) -> int:
     from devices.arduino import messages as msg
     from devices.arduino.robot import ArduinoRobot
     from devices.arduino.simulator import EmulatedMega
-    from devices.arduino.trials import round_trips, watchdog_trials
+    from devices.arduino.trials import round_trips, stream, watchdog_trials
     from teleop.errors import InputError
     from teleop.outputs import dumps_json, write_json
 
@@ -45,6 +48,10 @@ def run(args) -> int:
     home = np.full(6, 0.030)
     with EmulatedMega(harness, elf) as mega, ArduinoRobot(mega.port, timeout_s=1.0) as robot:
         robot.home(home)
+        robot.diag()
+        streamed = stream(robot, home, seconds=args.stream_seconds)
+        stream_diag = robot.diag()
+        robot.enable()
         rtt = round_trips(robot, args.roundtrips) * 1e3
         turnaround = np.array(mega.turnaround_s()[-args.roundtrips:]) * 1e3
         wd = watchdog_trials(robot, mega, home, n=args.trials, max_attempts=3 * args.trials)
@@ -58,6 +65,11 @@ def run(args) -> int:
                    "max": float(rtt.max())},
         "firmware_turnaround_ms": {"p50": float(np.percentile(turnaround, 50)),
                                    "p99": float(np.percentile(turnaround, 99)), "max": float(turnaround.max())},
+        "stream_1khz": {"ticks": streamed.ticks, "fresh_fraction": streamed.fresh / streamed.ticks,
+                        "reading_age_ms": {"p50": float(np.percentile(streamed.age_ms, 50)),
+                                           "p99": float(np.percentile(streamed.age_ms, 99))},
+                        "late_ticks": streamed.late_ticks,
+                        "firmware_counters": stream_diag.counters},
         "trials": int(args.trials),
         "watchdog_stop_ms": {"max": float(wd.stop_ms.max()), "mean": float(wd.stop_ms.mean()),
                              "min": float(wd.stop_ms.min())},

