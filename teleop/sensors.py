@@ -219,6 +219,18 @@ def fit_fsr_calibration(data: FsrCalibrationData, degree: int = 5, **kwargs) -> 
                           t_max=float(np.max(data.tension)), **kwargs)
 
 
+def load_fsr_calibration(path: str | Path, **kwargs) -> FsrCalibration:
+    """Read a calibration CSV (`load_fsr_calibration_csv`) and fit its two quintics."""
+    return fit_fsr_calibration(load_fsr_calibration_csv(path), **kwargs)
+
+
+def tension_noise(cal: FsrCalibration, noise_counts: float = 1.0, t: float = 2.85, branch: int = LOADING) -> float:
+    """RMS tension noise [N] that `noise_counts` RMS ADC noise makes at tension t [N]: noise / (dcounts/dt)."""
+    h = 1e-3
+    c = cal.conductance2counts(cal.reading(np.array([t - h, t + h]), branch))
+    return float(noise_counts / ((c[1] - c[0]) / (2 * h)))
+
+
 def default_fsr_calibration() -> FsrCalibration:
     """The quintic fits of the synthetic Fig-7-like calibration (`default_fsr_calibration_data`)."""
     return fit_fsr_calibration(default_fsr_calibration_data())

@@ -174,3 +174,17 @@ def test_calibration_figure_is_written(tmp_path):
 
     path = save_figure(plot_fsr_calibration(default_fsr_calibration_data(), CAL), tmp_path / "fig7.png")
     assert path.stat().st_size > 10_000 and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_tension_noise_matches_the_kalman_noise_model_and_load_helper(tmp_path):
+    from teleop.estimation.kalman import KalmanNoise
+    from teleop.sensors import load_fsr_calibration, tension_noise
+
+    assert tension_noise(CAL, 1.0, 2.85) == pytest.approx(KalmanNoise().sigma_t, rel=0.25)
+    # simulated: the spread of tensions read back from noisy counts
+    rng = np.random.default_rng(1)
+    counts = synthesize_fsr_counts(np.full(20000, 2.85), LOADING, CAL, rng=rng, noise_counts=1.0)
+    back = CAL.tension(CAL.counts2conductance(counts), LOADING)
+    assert np.std(back) == pytest.approx(tension_noise(CAL, np.sqrt(1.0 + 1 / 12)), rel=0.15)
+    path = write_fsr_calibration_csv(tmp_path / "c.csv", default_fsr_calibration_data())
+    assert load_fsr_calibration(path).reading(3.0, LOADING) == pytest.approx(CAL.reading(3.0, LOADING), rel=1e-4)
