@@ -10,8 +10,8 @@ proportional to load    load and load x direction (load centred: a constant load
                         'after motion reversals')
 during holds            indicator of |v| below 2 % of the peak speed
 loading vs unloading    sign of the output's rate of change (held through pauses)
-drifting with temperature, drifting with time, periodic in position (sin/cos at 1/2, 1/4, 1/8 of the
-range), with indentation rate, with indentation depth (d^2: stiffening).
+drifting with temperature, drifting with time, periodic in position (sin/cos of the strongest of 64
+harmonics over the travel), with indentation rate, with indentation depth (d^2: stiffening).
 """
 
 from __future__ import annotations
@@ -66,9 +66,7 @@ def condition_features(d: LinkData, output: np.ndarray) -> dict:
         v_low = float(np.percentile(np.abs(v[moving]), 10)) if moving.sum() > 10 else 0.1 * vmax
         f["at low speed"] = (np.sign(v) * np.exp(-np.abs(v) / max(v_low, 1e-300)))[:, None]
         f["during holds"] = (~moving).astype(float)[:, None]
-        ph = 2 * np.pi * (d.x - d.x.min()) / span
-        f["periodic in position"] = np.column_stack(
-            [fn(m * ph) for m in (2, 4, 8) for fn in (np.sin, np.cos)])
+        f["periodic in position"] = 2 * np.pi * (d.x - d.x.min()) / span   # phase; harmonic picked later
         if d.load is not None or d.link.kind == "force":
             load = d.u if d.link.kind == "force" else d.load
             dl = load - np.mean(load)
@@ -83,6 +81,16 @@ def condition_features(d: LinkData, output: np.ndarray) -> dict:
         f["with indentation rate"] = np.gradient(smooth(d.u, max(1, n // 500) | 1), d.t)[:, None]
         f["with indentation depth"] = (np.maximum(d.u, 0.0) ** 2)[:, None]
     return f
+
+
+def periodic_features(phase: np.ndarray, r: np.ndarray, sl, harmonics: int = 64) -> np.ndarray:
+    """(n, 2) sin/cos of the harmonic m (1..harmonics) of `phase` [rad over the travel] that projects
+    most of r on samples sl (cogging, pulley eccentricity, a damaged tooth: periodic in position)."""
+    ph, rr = phase[sl], r[sl] - np.mean(r[sl])
+    m = np.arange(1, harmonics + 1)[:, None]
+    power = np.abs(np.exp(1j * m * ph[None, ::max(1, ph.size // 4000)]) @ rr[::max(1, ph.size // 4000)])
+    best = int(np.argmax(power)) + 1
+    return np.column_stack([np.sin(best * phase), np.cos(best * phase)])
 
 
 def explain(r: np.ndarray, X: np.ndarray) -> tuple[float, np.ndarray]:
@@ -146,6 +154,8 @@ def locate(d: LinkData, r: np.ndarray, output: np.ndarray, index=None, change: n
     sl = slice(None) if index is None else index
     target = r if change is None else change
     feats = condition_features(d, output)
+    if "periodic in position" in feats:
+        feats["periodic in position"] = periodic_features(feats["periodic in position"], target, sl)
     ev = {name: r2(target[sl], X[sl]) for name, X in feats.items()}
     best = max(ev, key=ev.get)
     width = max(1, d.n // 400) | 1
