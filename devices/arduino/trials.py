@@ -36,7 +36,7 @@ class WatchdogTrials:
 
 
 def watchdog_trials(robot: ArduinoRobot, mega: EmulatedMega, home_lengths, n: int = 100,
-                    stream_s: float = 0.025, silence_ms: float = 70.0, travel_m: float = 0.02,
+                    stream_s: float = 0.010, silence_ms: float = 70.0, travel_m: float = 0.02,
                     max_attempts: int | None = None) -> WatchdogTrials:
     """Run n episodes: ENABLE, command a far target, stream heartbeats for stream_s [s] of wall time
     while the motors accelerate, go silent, and read the stop time from the harness once silence_ms of
@@ -91,12 +91,14 @@ class StreamResult:
         fresh: ticks whose read() returned a telemetry frame newer than the previous tick's.
         age_ms: (ticks,) age of the reading at read() time (host receive clock) [ms].
         late_ticks: ticks that started more than one period late (host scheduling).
+        watchdog_trips: times the firmware stopped on host silence during the run (then re-enabled).
     """
 
     ticks: int
     fresh: int
     age_ms: np.ndarray
     late_ticks: int
+    watchdog_trips: int
 
 
 def stream(robot: ArduinoRobot, home_lengths, seconds: float = 5.0, rate_hz: float = 1000.0,
@@ -106,7 +108,7 @@ def stream(robot: ArduinoRobot, home_lengths, seconds: float = 5.0, rate_hz: flo
     period = 1.0 / rate_hz
     n = int(seconds * rate_hz)
     ages = np.empty(n)
-    fresh, late, last_seq = 0, 0, None
+    fresh, late, trips, last_seq = 0, 0, 0, None
     t0 = time.perf_counter()
     for k in range(n):
         due = t0 + k * period
@@ -120,4 +122,7 @@ def stream(robot: ArduinoRobot, home_lengths, seconds: float = 5.0, rate_hz: flo
         ages[k] = (time.monotonic() - reading.t) * 1e3
         fresh += reading.seq != last_seq
         last_seq = reading.seq
-    return StreamResult(n, fresh, ages, late)
+        if reading.status & msg.Status.WATCHDOG_STOP:  # a host stall > WATCHDOG_MS: resume
+            trips += 1
+            robot.enable()
+    return StreamResult(n, fresh, ages, late, trips)

@@ -68,7 +68,7 @@ def run(args) -> int:
         "stream_1khz": {"ticks": streamed.ticks, "fresh_fraction": streamed.fresh / streamed.ticks,
                         "reading_age_ms": {"p50": float(np.percentile(streamed.age_ms, 50)),
                                            "p99": float(np.percentile(streamed.age_ms, 99))},
-                        "late_ticks": streamed.late_ticks,
+                        "late_ticks": streamed.late_ticks, "watchdog_trips": streamed.watchdog_trips,
                         "firmware_counters": stream_diag.counters},
         "trials": int(args.trials),
         "watchdog_stop_ms": {"max": float(wd.stop_ms.max()), "mean": float(wd.stop_ms.mean()),
