@@ -368,6 +368,30 @@ def synthesize_fbg(force_N, dT_C, p: FbgParams = FbgParams(), rng: np.random.Gen
     return dl1, dl2
 
 
+def plot_fbg_compensation(t_s, force_true, dl1_pm, dl2_pm, dT_C, p: FbgParams = FbgParams(), fc_hz: float = 0.1):
+    """Figure like seed 001 Fig 4c: uncompensated, compensated and low-passed force, and the temperature."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(t_s, dtype=float)
+    comp = fbg2force(dl1_pm, dl2_pm, p)
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot(t, fbg2force_uncompensated(dl2_pm, p), color="tab:gray", lw=0.8, label="FBG2 only (uncompensated)")
+    ax.plot(t, comp, color="tab:blue", lw=0.5, alpha=0.6, label=f"compensated, r = {p.r}")
+    ax.plot(t, lowpass2(comp, 1.0 / np.median(np.diff(t)), fc_hz), color="tab:blue", lw=1.5,
+            label=f"compensated, 2nd-order low-pass {fc_hz:g} Hz")
+    ax.plot(t, np.broadcast_to(force_true, t.shape), "k--", lw=1, label="applied force")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("force [N]")
+    ax2 = ax.twinx()
+    ax2.plot(t, dT_C, color="tab:red", lw=1)
+    ax2.set_ylabel("temperature change [degC]", color="tab:red")
+    ax.legend(fontsize=8, loc="upper left")
+    return fig
+
+
 def lowpass2(x, fs_hz: float, fc_hz: float) -> np.ndarray:
     """Causal second-order Butterworth low-pass (the seed's filter), started at the first sample's value."""
     from scipy.signal import butter, sosfilt, sosfilt_zi

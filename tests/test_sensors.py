@@ -96,7 +96,7 @@ def test_fsr_csv_bad_values_name_the_row(tmp_path):
 
 
 # ----------------------------------------------------------------------------------------------- FBG
-def test_fbg_temperature_compensation_over_a_24_degree_swing():
+def test_fbg_temperature_compensation_over_a_24_degree_swing(tmp_path):
     """Seed 001 §3.1.2: 5.38 N weight, 24.21 degC swing. Uncompensated: max error ~18 N; compensated: within
     the sensor's 0.37 N (RMS, and max after the seed's second-order low-pass)."""
     p = FbgParams()
@@ -117,6 +117,11 @@ def test_fbg_temperature_compensation_over_a_24_degree_swing():
     # with r away from the sensitivity ratio the temperature leaks back in
     bad = fbg2force(dl1, dl2, FbgParams(r=1.5))
     assert np.abs(lowpass2(bad, fs, 0.1) - F).max() > 5.0
+    from teleop.outputs import save_figure
+    from teleop.sensors import plot_fbg_compensation
+
+    png = save_figure(plot_fbg_compensation(t, F, dl1, dl2, dT, p), tmp_path / "fig4c.png")
+    assert png.stat().st_size > 10_000
 
 
 # ------------------------------------------------------------------------------ one sensor for all cables
