@@ -18,8 +18,8 @@ def figure(diag, findings: list | None = None):
 
     findings = diag.findings() if findings is None else findings
     links = diag.links
-    fig, axes = plt.subplots(len(links), 3, figsize=(16, 3.8 * len(links)), squeeze=False,
-                             gridspec_kw={"width_ratios": [2.2, 2.2, 1.2]})
+    fig, axes = plt.subplots(len(links), 4, figsize=(20, 3.8 * len(links)), squeeze=False,
+                             gridspec_kw={"width_ratios": [2.2, 2.2, 1.3, 1.2]})
     hold = diag.hold
     for row, res in zip(axes, links):
         d = res.data
@@ -49,6 +49,21 @@ def figure(diag, findings: list | None = None):
         ax.set_xlabel("t [s]")
         ax.legend(loc="best", fontsize=7)
         ax = row[2]
+        held = [w for w in wins if w[0] >= t[0]]
+        if held:  # zoom on the first located window of the held-out part
+            w0, w1 = held[0]
+            pad = max(2 * (w1 - w0), 0.05)
+            z = (d.t >= w0 - pad) & (d.t <= w1 + pad)
+            ax.axvspan(w0, w1, color="orange", alpha=0.2, lw=0)
+            ax.plot(d.t[z], d.y[z], "k.", ms=2, label="measured")
+            ax.plot(d.t[z], yb[z], "-", c="tab:blue", lw=1, label="baseline")
+            ax.plot(d.t[z], yf[z], "-", c="tab:red", lw=1, label="improved")
+            ax.set_title(f"located window {w0:.2f}-{w1:.2f} s")
+            ax.legend(loc="best", fontsize=7)
+        else:
+            ax.set_title("no located window (no finding)")
+        ax.set_xlabel("t [s]")
+        ax = row[3]
         ax.plot(d.u[hold], d.y[hold], "k.", ms=1, label="measured")
         ax.plot(d.u[hold], yf[hold], "-", c="tab:red", lw=0.8, label="model")
         ax.set_xlabel(d.link.input)
