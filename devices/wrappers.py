@@ -152,9 +152,18 @@ def _unpack(v: np.ndarray, keys: list) -> RobotReading:
                         wrench_truth=v[22:28].copy() if v[28] else None, extras=extras)
 
 
-def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, parent_pid: int) -> None:
+def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, parent_pid: int,
+            rt_priority: int | None = None) -> None:
     """Child: own the device, apply the latest command, read, publish, at rate_hz (sleeping, not spinning)."""
     from devices.base import open_device
+
+    try:
+        if rt_priority:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(rt_priority)))
+        else:
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))  # do not inherit the loop's policy
+    except (AttributeError, OSError):
+        pass
 
     pub = np.frombuffer(shm_read, dtype=np.float64)  # [version, slot...]
     cmd = np.frombuffer(shm_cmd, dtype=np.float64)
@@ -174,8 +183,14 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
     except Exception as exc:  # noqa: BLE001 - reported to the parent as one line
         conn.send_bytes(pickle.dumps(("error", f"{type(exc).__name__}: {exc}", None, None)))
         return
+    import gc
+
+    gc.collect()
+    gc.freeze()  # long-lived objects out of the collector's way
+    gc.disable()  # a full collection would stall the link for many milliseconds
     period = 1.0 / rate_hz
     slot = np.zeros(_SLOT)
+    n_iter = 0
     last_cmd_version = 0.0
     stopped = False
     next_t = time.monotonic()
@@ -194,6 +209,9 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
             pub[0] += 1  # odd: being written (seqlock)
             pub[1:] = slot
             pub[0] += 1  # even: consistent
+            n_iter += 1
+            if n_iter % 1000 == 0:
+                gc.collect(0)  # young generation only: short
             next_t += period
             delay = next_t - time.monotonic()
             if delay > 0:
@@ -217,8 +235,10 @@ class ProcessRobot(ContextDevice):
     seq when nothing new arrived, so the loop's staleness watchdog works), command_lengths() posts the
     latest command. Errors in the child come back as DeviceError on the next read()."""
 
-    def __init__(self, url: str, rate_hz: float = 1000.0, start_timeout: float = 30.0, **options):
+    def __init__(self, url: str, rate_hz: float = 1000.0, start_timeout: float = 30.0, rt_priority: int | None = None,
+                 **options):
         self.url, self.rate_hz, self.options, self.start_timeout = url, float(rate_hz), options, start_timeout
+        self.rt_priority = rt_priority
         self.is_open = False
         self.spec = None
         self.firmware_version = None
@@ -232,7 +252,7 @@ class ProcessRobot(ContextDevice):
         rx, tx = ctx.Pipe(duplex=False)
         self.proc = ctx.Process(target=_worker, name="teleop-robot", daemon=True,
                                 args=(self.url, self.options, self.rate_hz, self.shm_read, self.shm_cmd, tx,
-                                      os.getpid()))
+                                      os.getpid(), self.rt_priority))
         self.proc.start()
         self.rx = rx
         if not rx.poll(self.start_timeout):

@@ -290,6 +290,10 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
     """Recorder process: drain the ring into the MCAP file until stopped or the loop process is gone."""
     layout = Layout.from_json(layout_json)
     ctrl = ring.ctrl
+    try:  # never inherit a real-time policy from the loop: the recorder must yield to it
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+    except (AttributeError, OSError):
+        pass
     try:
         stream = stream_factory() if stream_factory is not None else open(path, "wb")
         writer = SessionWriter(stream, layout, metadata, t0_ns)

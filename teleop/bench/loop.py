@@ -24,6 +24,9 @@ def register(subparsers) -> None:
     p.add_argument("--record", metavar="FILE", help="keep the recording here (default: a temporary file)")
     p.add_argument("--no-record", action="store_true", help="benchmark without the recorder")
     p.add_argument("--spin-us", type=float, default=200.0, help="spin this long before each deadline [us]")
+    p.add_argument("--stale-ms", type=float, default=20.0,
+                   help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
+    p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO")
     p.add_argument("--find-max-rate", action="store_true",
                    help="run --seconds at increasing rates; report the highest with <= 0.1 %% misses")
     p.set_defaults(func=run)
@@ -35,11 +38,14 @@ def bench_once(args, rate: float) -> dict:
 
     with tempfile.TemporaryDirectory() as tmp:
         record = None if args.no_record else (args.record or os.path.join(tmp, "bench.mcap"))
-        res = run_session(args.haptic, args.robot, args.seconds, record=record, params=LoopParams(rate_hz=rate),
-                          spin_us=args.spin_us)
+        params = LoopParams(rate_hz=rate, stale_limit=args.stale_ms * 1e-3)
+        res = run_session(args.haptic, args.robot, args.seconds, record=record, params=params,
+                          spin_us=args.spin_us, realtime=not args.no_realtime)
     out = dict(res.timing)
     out["recording"] = {"on": record is not None, "drops": res.drops, "alarm": res.alarm}
     out["final_state"] = res.final_state
+    out["fault_reason"] = res.fault_reason
+    out["scheduling"] = res.scheduling
     out["miss_fraction"] = out["deadline_misses"] / max(1, out["ticks"])
     return out
 
@@ -54,7 +60,8 @@ def run(args) -> int:
         la = out["lateness_us"]
         print(f"loop {out['rate_hz']:g} Hz, {out['ticks']} ticks: lateness p50 {la['p50']} us, p99 {la['p99']} us, "
               f"p99.9 {la['p999']} us, max {la['max']} us; misses {out['deadline_misses']} "
-              f"({100 * out['miss_fraction']:.3f} %); tick p50 {out['tick_us']['p50']} us")
+              f"({100 * out['miss_fraction']:.3f} %); tick p50 {out['tick_us']['p50']} us; {out['scheduling']}; "
+              f"final state {out['final_state']}")
         for name, st in out["stages_us"].items():
             print(f"  {name:9s} p50 {st['p50']:8.1f} us  p99 {st['p99']:8.1f} us")
         if args.json:

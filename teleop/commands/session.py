@@ -21,6 +21,9 @@ def register(subparsers) -> None:
     p.add_argument("--motion-scale", type=float, default=None, help="robot displacement per stylus displacement")
     p.add_argument("--force-scale", type=float, default=1.0, help="stylus force per newton at the tip")
     p.add_argument("--zero-neg-z", action="store_true", help="zero stylus forces along -z (seed 000 blind test)")
+    p.add_argument("--stale-ms", type=float, default=20.0,
+                   help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
+    p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
     p.add_argument("--json", metavar="F", help="write the timing summary and events as JSON")
     p.set_defaults(func=run)
 
@@ -36,17 +39,17 @@ def run(args) -> int:
         raise InputError(f"--seconds must be > 0, got {args.seconds}")
     if args.record and not args.record.endswith(".mcap"):
         raise InputError(f"--record {args.record}: expected a file name ending in .mcap")
-    params = LoopParams(rate_hz=args.rate, force_scale=args.force_scale,
+    params = LoopParams(rate_hz=args.rate, force_scale=args.force_scale, stale_limit=args.stale_ms * 1e-3,
                         zero_neg_z=args.zero_neg_z)
     if args.motion_scale is not None:
         params = replace(params, mapping=replace(params.mapping, motion_scale=args.motion_scale))
     res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
-                      robot_process_hz=None if args.robot_inline else args.robot_rate)
+                      robot_process_hz=None if args.robot_inline else args.robot_rate, realtime=not args.no_realtime)
     t = res.timing
     print(f"session: {t['ticks']} ticks at {t['rate_hz']:g} Hz, lateness p50/p99/max "
           f"{t['lateness_us']['p50']:.0f}/{t['lateness_us']['p99']:.0f}/{t['lateness_us']['max']:.0f} us, "
           f"{t['deadline_misses']} misses; final state {res.final_state}"
-          + (f" ({res.fault_reason})" if res.fault_reason else ""))
+          + (f" ({res.fault_reason})" if res.fault_reason else "") + f"; {res.scheduling}")
     for ev in res.events:
         print(f"  t={ev['t']:.3f} s  {ev['src']} -> {ev['dst']}" + (f": {ev['reason']}" if ev["reason"] else ""))
     if args.record:
@@ -55,5 +58,6 @@ def run(args) -> int:
         print(f"teleop: warning: {res.alarm}", file=sys.stderr)
     if args.json:
         write_json(args.json, {"timing": t, "events": res.events, "final_state": res.final_state,
+                               "scheduling": res.scheduling,
                                "fault_reason": res.fault_reason, "drops": res.drops, "alarm": res.alarm})
     return 0

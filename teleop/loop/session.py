@@ -22,7 +22,7 @@ from devices.base import open_device
 from teleop.loop.core import Teleop
 from teleop.loop.params import LoopParams
 from teleop.loop.tap import RowTap, numeric_extras, session_layout
-from teleop.loop.timing import TimingLog, run_paced
+from teleop.loop.timing import TimingLog, run_paced, set_normal, set_realtime
 
 
 @dataclass
@@ -36,6 +36,7 @@ class SessionResult:
     drops: int = 0
     alarm: str = ""
     record: str | None = None
+    scheduling: str = ""
 
 
 def software_version() -> str:
@@ -80,12 +81,13 @@ def _on_sigterm(signum, frame):
 def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | None = None,
                 params: LoopParams | None = None, estimator=None, seed: int | None = None,
                 spin_us: float = 200.0, flush_interval: float = 0.1, haptic=None, robot=None,
-                robot_process_hz: float | None = 1000.0) -> SessionResult:
+                robot_process_hz: float | None = 1000.0, realtime: bool = True) -> SessionResult:
     """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
 
     With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
     .ProcessRobot) and the loop exchanges the latest command/reading with it every tick; None runs the
-    robot's I/O inline in the tick (at LoopParams.robot_rate_hz).
+    robot's I/O inline in the tick (at LoopParams.robot_rate_hz). With `realtime` the loop runs under
+    SCHED_FIFO 50 and the robot process under SCHED_FIFO 45 when the OS allows it (the recorder never).
     """
     params = params or LoopParams()
     haptic = haptic if haptic is not None else open_device(haptic_url)
@@ -94,7 +96,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             from devices.wrappers import ProcessRobot
 
             open_device(robot_url)  # validates the URL here (one clear line) before forking
-            robot = ProcessRobot(robot_url, rate_hz=robot_process_hz)
+            robot = ProcessRobot(robot_url, rate_hz=robot_process_hz, rt_priority=45 if realtime else None)
         else:
             robot = open_device(robot_url)
     recorder = None
@@ -116,6 +118,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 tp.tap = tap
                 tp.on_event = lambda ev: recorder.event(vars(ev))
             log = TimingLog(int(round(seconds * params.rate_hz)))
+            scheduling = set_realtime(50) if realtime else "SCHED_OTHER (not requested)"
             gc.collect()
             gc.disable()
             try:
@@ -125,6 +128,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 pass
             finally:
                 gc.enable()
+                if realtime:
+                    set_normal()
                 try:
                     haptic.servo_cf(np.zeros(3))
                 finally:
@@ -134,7 +139,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                         pass
             timing = log.summary(params.rate_hz)
             result = SessionResult(timing=timing, events=[vars(e) for e in tp.events], final_state=tp.state.name,
-                                   fault_reason=tp.fault_reason, record=record)
+                                   fault_reason=tp.fault_reason, record=record, scheduling=scheduling)
     finally:
         signal.signal(signal.SIGTERM, old)
         if recorder is not None:

@@ -16,6 +16,31 @@ from teleop.loop.core import STAGES
 LATE_NS = 500_000  # a tick more than 0.5 ms late is a deadline miss (RELIABILITY.md)
 
 
+def set_realtime(priority: int) -> str:
+    """Ask for SCHED_FIFO at `priority` for this process (as haptic servo threads run on a real rig).
+
+    Returns what was obtained, e.g. "SCHED_FIFO 50" or "SCHED_OTHER (PermissionError: ...)". The kernel's
+    RT throttling (sched_rt_runtime_us) still leaves other processes 5 % of each CPU.
+    """
+    import os
+
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(priority)))
+        return f"SCHED_FIFO {int(priority)}"
+    except (AttributeError, OSError) as exc:
+        return f"SCHED_OTHER ({type(exc).__name__}: {exc})"
+
+
+def set_normal() -> None:
+    """Back to the default time-sharing policy."""
+    import os
+
+    try:
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+    except (AttributeError, OSError):
+        pass
+
+
 def wait_until(deadline_ns: int, spin_ns: int = 200_000) -> int:
     """Sleep, then spin, until perf_counter_ns() >= deadline_ns; returns the wake time [ns]."""
     pc, sleep = time.perf_counter_ns, time.sleep
