@@ -200,6 +200,32 @@ def test_speed_limit_respected(robot, mega):
     robot.stop()
 
 
+def test_acceleration_limit_respected_from_rest(robot, mega):
+    """From rest, steps taken by emulated time t after the command are <= a (t + 1 ms)^2 / 2 + 1."""
+    accel = robot.hello.accel_steps_per_s2
+    target = HOME_LENGTHS - 0.010
+    for _ in range(3):                                     # retry if a host stall trips the watchdog
+        robot.enable()
+        before = mega.status()
+        start = np.array(before["pos"])
+        robot.command_lengths(target)
+        wire = msg.wire_size(msg.MsgType.COMMAND)
+        st = wait_for(lambda: (lambda s: s if s["rx_bytes"] >= before["rx_bytes"] + wire else None)(mega.status()),
+                      timeout=2.0, period=0.0)
+        t0 = st["last_rx_ns"]                              # the COMMAND's delimiter entered the UART
+        samples = []
+        for _ in range(25):
+            reading = robot.read_fresh()
+            st = mega.status()
+            samples.append(((st["t_ns"] - t0) * 1e-9, np.abs(np.array(st["pos"]) - start).max()))
+        if not reading.status & msg.Status.WATCHDOG_STOP:
+            break
+    t, x = np.array(samples).T
+    assert x.max() > 0
+    assert np.all(x <= 0.5 * accel * (t + 0.001) ** 2 + 1), list(zip(t, x))
+    robot.stop()
+
+
 def test_firmware_reset_detected_and_motion_refused_until_rehomed(robot, mega):
     boot = robot.boot_id
     mega.reset()
