@@ -172,8 +172,19 @@ class TickComputer:
         w = [fx, fy, fz, mx, my, mz]
         if self.turn_axes:
             self._turn(w, (x, y, z), dt)
-        if self.kalman is not None:
-            w = self.kalman.update(w)
+        dt_k = self.kalman.dt if self.kalman is not None else 0.0
+        kf = self.kalman
+        if kf is not None:
+            if kf.started:  # SteadyWrenchKalman.update, inlined: predict, innovation, steady-gain update
+                kw, kwd, K0, K1 = kf.w, kf.w_dot, kf.K0, kf.K1
+                for j in range(6):
+                    wp = kw[j] + dt_k * kwd[j]
+                    yj = w[j] - wp
+                    kw[j] = wp + K0[j] * yj
+                    kwd[j] += K1[j] * yj
+                w = list(kw)
+            else:
+                w = kf.update(w)
         return lengths, w
 
     def _turn(self, w: list, pos: tuple, dt: float) -> None:
