@@ -12,8 +12,8 @@ It computes exactly what `make_estimator(name, ...)` followed by `Renderer.rende
 them sample by sample to 1e-9), but with Python floats instead of numpy calls on 6-element arrays: at this
 size numpy's per-call overhead (~1 us) dominates, while a float operation costs ~30 ns. The steps are
 the same formulas as teleop.kinematics (eqs 4-6, 8), teleop.physics.capstan (motor2tip, capstan_band),
-teleop.physics.friction (viscous, DahlStep), estimation.turn and estimation.direction; the Kalman step and
-the renderer are the same objects the estimators use (`SteadyWrenchKalman`, `Renderer.render_xyz`).
+teleop.physics.friction (viscous, DahlStep), estimation.turn and estimation.direction; the Kalman step is
+`SteadyWrenchKalman.update` inlined on that object's state, and the renderer is `Renderer.render_xyz`.
 A non-finite input propagates to a renderer fault (zero force); call `reset()` after a fault.
 """
 
