@@ -235,8 +235,10 @@ def test_firmware_reset_detected_and_motion_refused_until_rehomed(robot, mega):
         robot.command_lengths(HOME_LENGTHS)
     reading = robot.read_fresh()
     assert not reading.status & msg.Status.HOMED        # the firmware itself refuses motion as well
+    assert mega.status()["enable"] == 1                  # power-on default: drivers disabled (EN high)
     assert robot.stats.resets == 1
     robot.home(HOME_LENGTHS)
+    assert mega.status()["enable"] == 0                  # HOME enables the drivers
     robot.command_lengths(HOME_LENGTHS - 0.0005)
     reading = robot.read_fresh()
     if reading.status & msg.Status.WATCHDOG_STOP:        # a host stall after HOME: not the point here
