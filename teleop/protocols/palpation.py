@@ -42,7 +42,9 @@ class PalpationParams:
         repeats_z: repetitions of the 25-point z test (seed: 5).
         pokes_per_region: stiffness test pokes per region (Table 1: 2).
         pokes_xy: pokes each way in the hole (seed: 3).
-        substeps: physics steps per reading (readings at 1 / (substeps dt)).
+        substeps: physics steps per reading (readings at 1 / (substeps physics_dt): 100 Hz).
+        physics_dt: pybullet time step [s] (500 Hz: the contact is implicit and the tip's series spring
+            has omega dt = 0.39, both stable; the calibration is measured at this step).
         fit_travel, fit_cycles: the turn-compensation run (seed 000 §4 step 3: 20 mm, twice; 10 mm here,
             what the default geometry can travel along z in front of the pad and still hold pretension).
         reach: largest distance from the axis the robot pokes at [m] (see `reach_scale`).
@@ -64,6 +66,7 @@ class PalpationParams:
     pokes_per_region: int = 2
     pokes_xy: int = 3
     substeps: int = 5
+    physics_dt: float = 2e-3
     fit_travel: float = 0.010
     fit_cycles: int = 2
     variable_speeds: tuple = (0.25e-3, 2.0e-3)
@@ -373,7 +376,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     seeds = ss.generate_state(2 * len(sessions))
     from scenes.world import WorldParams
 
-    sim = SimRobotParams(substeps=params.substeps, world=WorldParams(surface_z=params.surface_z))
+    sim = SimRobotParams(substeps=params.substeps, world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt))
     geom, dt = sim.geometry, sim.dt
     tool = np.asarray(geom.tip)
     home_tip = home_pose()[:3] + tool
