@@ -46,6 +46,8 @@ def add_rig_options(p) -> None:
                    help="ablation: render the raw FSR wrench (no friction compensation, no Kalman)")
     p.add_argument("--force-scale", type=float, default=None, metavar="G",
                    help="stylus force per newton at the tip (default: the rig's; a tiny value degrades the chain)")
+    p.add_argument("--tip-stiffness", type=float, default=None, metavar="N_PER_M",
+                   help="series compliance of the simulated robot's tip [N/m] (default: the sim robot's)")
     p.add_argument("--depth-mm", type=float, default=None, metavar="MM",
                    help="participants' mean stylus push depth [mm]")
     p.add_argument("--speed-mm-s", type=float, default=None, metavar="MM_S",
@@ -94,6 +96,8 @@ def rig_options(args):
     kw = {"compensation": not args.no_compensation}
     if args.force_scale is not None:
         kw["force_scale"] = args.force_scale
+    if args.tip_stiffness is not None:
+        kw["tip_stiffness"] = args.tip_stiffness
     return RigOptions(**kw)
 
 
@@ -124,9 +128,12 @@ def run_sim(args) -> int:
         result = run_simulated_study(rig, args.participants, args.seed, params, progress=bar.update)
         config = {"operator": "sim", "participants": args.participants, "seed": args.seed,
                   "participant_params": _asdict(params), "rig": rig.describe()}
-    result = type(result)(areas=result.areas, records=result.records, config=config)
+        expected = rig.expected_stiffness()
+    result = type(result)(areas=result.areas, records=result.records, config=config, expected=expected)
     print(result.table())
-    print(f"\n(seed 000 Table 3 beside the simulated ratings; {rig.attribution})")
+    print("\n(seed 000 Table 3 beside the simulated ratings; 'transparent chain': force scale x motion scale x the pad"
+          " in series with the simulated robot's tip compliance)")
+    print(rig.attribution)
     if args.json:
         write_json(args.json, result.to_dict())
     if args.plot:

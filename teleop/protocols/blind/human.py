@@ -118,10 +118,10 @@ class Coordinator:
 
 
 def run_human_study(state_path, seed: int, participants: int, areas, coordinator: Coordinator,
-                    station: Callable[[int], str] | None = None) -> StudyResult | None:
+                    station: Callable[[tuple, int], str] | None = None) -> StudyResult | None:
     """Guide the coordinator through the study; returns the result when every participant is done.
 
-    station(slot) -> str, optional: pokes a slot on a rehearsal rig and says what the stylus felt.
+    station(layout, slot) -> str, optional: pokes a slot on a rehearsal rig and says what the stylus felt.
     Returns None when input ends early (everything answered so far is saved in `state_path`).
     """
     path = Path(state_path)
@@ -155,7 +155,7 @@ def run_human_study(state_path, seed: int, participants: int, areas, coordinator
                 f"zone {z + 1} = slot {SLOT_NAMES[s]}" for z, s in enumerate(order)) + ".\n")
             step = next_step(n, answers)
             while isinstance(step, Compare):
-                _announce(step, answers, order, say, station)
+                _announce(step, answers, layout, order, say, station)
                 answer = coordinator.comparison(step)
                 rec["answers"].append([step.new + 1, step.ref + 1, answer])
                 save_state(path, state)
@@ -172,7 +172,7 @@ def run_human_study(state_path, seed: int, participants: int, areas, coordinator
     return result_from_state(state, areas)
 
 
-def _announce(step: Compare, answers, order, say, station) -> None:
+def _announce(step: Compare, answers, layout, order, say, station) -> None:
     """Tell the coordinator which zones to poke: on a new question the ones not felt yet (the others are
     compared from memory, as in the seed), on an unsure answer both again."""
     felt = {z for s, _ in answers for z in (s.new, s.ref)}
@@ -188,7 +188,7 @@ def _announce(step: Compare, answers, order, say, station) -> None:
         slot = order[z]
         say(f"  move the effector over zone {z + 1} (slot {SLOT_NAMES[slot]}); the participant pushes.\n")
         if station is not None:
-            say(f"    rehearsal rig: {station(slot)}\n")
+            say(f"    rehearsal rig: {station(tuple(layout), slot)}\n")
 
 
 def result_from_state(state: dict, areas) -> StudyResult:

@@ -45,8 +45,9 @@ class ParticipantParams:
 
     Attributes:
         jnd: stiffness Weber fraction (see module docstring; Jones & Hunter 1990: 0.23).
-        depth: mean stylus push depth [m].
-        speed: mean stylus push speed [m/s].
+        depth: mean travel of the hand's push target along the stylus axis [m] (the stylus itself stops
+            short of it against the rendered force).
+        speed: mean speed of the hand's push target [m/s].
         person_spread: log-normal std of a person's own mean depth and speed around the population's.
         poke_spread: log-normal std of depth and speed from one poke to the next.
         memory_noise: drift of a remembered log stiffness per palpation of another zone.
@@ -56,13 +57,13 @@ class ParticipantParams:
     """
 
     jnd: float = 0.23
-    depth: float = 0.004
-    speed: float = 0.010
+    depth: float = 0.008
+    speed: float = 0.020
     person_spread: float = 0.15
     poke_spread: float = 0.10
     memory_noise: float = 0.05
     force_threshold: float = 0.02
-    max_repeats: int = 3
+    max_repeats: int = 2
     spacing: float = 0.6
 
     def __post_init__(self):

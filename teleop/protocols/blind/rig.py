@@ -9,10 +9,10 @@ Chain of one tick (teleop.loop.Teleop, unpaced on a manual clock: simulated time
     (force scale, -z zeroed, ramp-in, clamp to the device limit) -> stylus.servo_cf.
 
 The CDPR reaches only a few millimetres sideways (wrench-feasible tensions), while the seed's pad puts its
-areas 16 mm from the centre. So the coordinator's "move the effector over the next area" is done with a
-pad stage: for each slot the pad is the seed layout slid so that the slot's area is centred under the
-effector, 0.5 mm below the tip at the home pose (the coordinator brought the effector just over the
-pad). Each slot gets its own simulated robot and loop for the participant.
+areas 16 mm from the centre. So the coordinator's "move the effector over the next area" is done with the
+simulated robot's pad stage (SimRobot.set_pad_offset): the pad slides until the zone's area is centred
+under the effector, whose tip hovers 0.5 mm above the surface at the home pose (the coordinator brought
+the effector just over the pad).
 """
 
 from __future__ import annotations
@@ -42,7 +42,11 @@ class RigOptions:
         compensation: render the friction-compensated, Kalman-filtered wrench (the project's `dynamic`
             estimator); False renders the raw FSR wrench f = -A t (ablation).
         estimator: DESIGN.md estimator name used when compensation is on.
-        force_scale: stylus force per newton of estimated tip force [-].
+        force_scale: stylus force per newton of estimated tip force [-]. 0.5: at 1.0 the stylus rendered
+            ~190 N/m against the operator model's 150 N/m hand with the estimator's lag, the hand bounced
+            on the stiff areas, the cables reversed and the friction estimate jumped (measured: loading
+            slope spread ~30 % between pokes at 1.0 against ~3 % at 0.5), and rigid pokes hit the 0.88 N
+            continuous limit of the Touch.
         motion_scale: robot displacement per stylus displacement [-].
         gap: pad surface distance ahead of the tip at the home pose [m] (effector brought just over it).
         robot_substeps: physics steps (1 ms) per robot-link exchange: the robot link runs at 1 kHz / this.
@@ -50,20 +54,23 @@ class RigOptions:
         hold: time the participant holds at the deepest point [s].
         release_speed: stylus speed back to rest after a poke [m/s].
         rest: time at rest after a poke [s].
-        seed: seeds the stylus tremor and the FSR noise (mixed with the slot and participant).
+        seed: seeds the stylus tremor and the FSR noise (mixed with the area).
+        tip_stiffness: series compliance between the commanded tip and the pad [N/m] in the simulated
+            robot; None keeps scenes.sim_robot's default (382 N/m, fitted there to seed 000 Table 1).
     """
 
     compensation: bool = True
     estimator: str = "dynamic"
-    force_scale: float = 1.0
+    force_scale: float = 0.5
     motion_scale: float = 0.5
     gap: float = 0.0005
     robot_substeps: int = 4
-    settle: float = 0.35
-    hold: float = 0.05
-    release_speed: float = 0.05
-    rest: float = 0.08
+    settle: float = 0.3
+    hold: float = 0.03
+    release_speed: float = 0.08
+    rest: float = 0.05
     seed: int = 0
+    tip_stiffness: float | None = None
 
     def __post_init__(self):
         from teleop.errors import InputError
@@ -76,34 +83,10 @@ class RigOptions:
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise InputError(f"blind-test rig: {name} must be >= 0, got {v!r}")
+        if self.tip_stiffness is not None and not (np.isfinite(self.tip_stiffness) and self.tip_stiffness > 0):
+            raise InputError(f"blind-test rig: tip_stiffness must be > 0 N/m, got {self.tip_stiffness!r}")
         if int(self.robot_substeps) < 1:
             raise InputError(f"blind-test rig: robot_substeps must be >= 1, got {self.robot_substeps}")
-
-
-class FsrChainEstimator:
-    """The loop's Estimator protocol over the estimation package: FSR counts -> tensions (teleop.sensors,
-    loading/unloading branch) -> `teleop.estimation` estimator (compensation, f = -A t, Kalman)."""
-
-    def __init__(self, geom, name: str, kalman: bool = True):
-        from teleop.estimation.estimators import make_estimator
-        from teleop.sensors import FsrConverter, default_fsr_calibration
-
-        self.name = name
-        self.cal = default_fsr_calibration()
-        self.converter = FsrConverter(self.cal, n=len(geom.B))
-        self.estimator = make_estimator(name, geom) if kalman else make_estimator(name, geom, kalman=None)
-
-    def reset(self) -> None:
-        self.converter.reset()
-        self.estimator.reset()
-
-    def update(self, reading, pose, dt: float):
-        t = np.asarray(self.converter.update(reading.fsr_counts), dtype=float)
-        f = np.asarray(self.estimator.update(t, reading.commanded_lengths, pose, dt), dtype=float)
-        return t, f
-
-    def describe(self) -> dict:
-        return {"estimator": self.name, "kalman": self.estimator.kalman is not None}
 
 
 class _ManualClock:
@@ -116,22 +99,17 @@ class _ManualClock:
         return self.t
 
 
-def _slid_pad(pad, centre):
-    """The pad slid by -centre (2,) [m]: the area at `centre` comes under the effector."""
-    regions = tuple(dataclasses.replace(r, centre=(float(r.centre[0] - centre[0]), float(r.centre[1] - centre[1])))
-                    for r in pad.regions)
-    return dataclasses.replace(pad, regions=regions)
-
-
 class _Station:
-    """One slot: its simulated robot (pad slid under the effector), stylus and loop."""
+    """One participant's rig: the simulated robot over the arranged pad, the stylus and the loop."""
 
     def __init__(self, pad, options: RigOptions, seed: tuple):
         from devices.simulated import Script, SimulatedStylus
         from scenes.sim_robot import SimRobot, SimRobotParams
         from scenes.world import WorldParams
         from teleop.geometry import default_geometry
-        from teleop.loop import LoopParams, Teleop
+        from teleop.estimation.kalman import KalmanNoise
+        from teleop.estimation.reading import ReadingEstimator
+        from teleop.loop import LoopParams
         from teleop.mapping import MappingParams
 
         o = options
@@ -141,7 +119,10 @@ class _Station:
         robot_seed, stylus_seed = (int(s) for s in ss.generate_state(2) % (2 ** 31))
         home_tip_z = WorldParams().surface_z - 0.005  # the sim robot's home: tip 5 mm before the surface
         world = WorldParams(surface_z=home_tip_z + o.gap)
-        self.robot = SimRobot(pad, SimRobotParams(world=world, substeps=int(o.robot_substeps)), seed=robot_seed)
+        robot_params = SimRobotParams(world=world, substeps=int(o.robot_substeps))
+        if o.tip_stiffness is not None:
+            robot_params = dataclasses.replace(robot_params, tip_stiffness=float(o.tip_stiffness))
+        self.robot = SimRobot(pad, robot_params, seed=robot_seed)
         self.clock = _ManualClock()
         self.stylus = SimulatedStylus(Script(kind="hold"), clock=self.clock, seed=stylus_seed)
         # stylus -z (pushing down on the handle) drives the robot +z, into the pad
@@ -149,11 +130,15 @@ class _Station:
         mapping = MappingParams(motion_scale=o.motion_scale, R_reg=R_reg)
         self.params = LoopParams(rate_hz=1000.0, robot_rate_hz=1000.0 / int(o.robot_substeps),
                                  force_scale=o.force_scale, zero_neg_z=True, mapping=mapping)
-        name = o.estimator if o.compensation else "non_compensated"
-        self.estimator = FsrChainEstimator(geom, name, kalman=o.compensation)
+        if o.compensation:  # the Kalman gain is designed for the period the estimator actually runs at
+            noise = KalmanNoise(dt=self.params.dt * self.params.robot_every)
+            self.estimator = ReadingEstimator(geom, o.estimator, kalman=noise)
+        else:  # the raw FSR wrench: no friction compensation, no Kalman filter
+            self.estimator = ReadingEstimator(geom, "non_compensated", kalman=None)
         self.geom = geom
         self.tp = None
         self.rest = None
+        self.slot = None
 
     def open(self) -> None:
         from teleop.loop import Teleop
@@ -199,6 +184,13 @@ class _Station:
         self.stylus.script = Script(kind="hold", center=tuple(self.rest))
         self._run(self.options.settle, record=False)
 
+    def move_to(self, slot: int, centre) -> None:
+        """The coordinator brings slot `slot` (area centre (2,) [m] in the pad frame) under the effector:
+        the pad stage slides the pad while the tip hovers above it."""
+        if slot != self.slot:
+            self.robot.set_pad_offset((-float(centre[0]), -float(centre[1])))
+            self.slot = slot
+
     def poke(self, request: PokeRequest) -> Poke:
         """The participant's hand target goes `depth` along -z at `speed`, holds, and returns to rest."""
         from devices.simulated import Script
@@ -217,12 +209,16 @@ class _Station:
 
 
 class SimRig:
-    """The simulated rig (study.Rig): four areas, rearranged per participant, poked through the chain."""
+    """The simulated rig (study.Rig): the four-area pad laid out for each participant, poked through the chain.
+
+    Each participant gets a fresh robot over the pad as laid out for them and a fresh loop (engaged once,
+    then kept running between pokes); the pad stage moves from zone to zone.
+    """
 
     def __init__(self, options: RigOptions = RigOptions()):
         self.options = options
         self.areas = blind_areas()
-        self.stations: list = []
+        self.station = None
         self.layout = None
         self.n_arranged = 0
 
@@ -233,44 +229,122 @@ class SimRig:
         self.close()
 
     def open(self) -> None:
-        """Nothing to open until a layout is arranged (kept for symmetry with devices)."""
+        """The station opens on the first poke after `arrange` (kept for symmetry with devices)."""
 
     def close(self) -> None:
-        for s in self.stations:
-            s.close()
-        self.stations = []
+        if self.station is not None:
+            self.station.close()
+            self.station = None
 
     def arrange(self, layout) -> None:
-        """Lay out the pad (area name per slot) and set up one station per slot."""
-        from scenes.pads import blind_area_centres, blind_test_pad
+        """Lay out the pad: area name per slot (a permutation of the four areas)."""
+        from scenes.pads import blind_test_pad
 
         self.close()
+        self.pad = blind_test_pad(tuple(layout))  # validates the layout
         self.layout = tuple(layout)
-        pad = blind_test_pad(self.layout)
-        centres = blind_area_centres()
         self.n_arranged += 1
-        self.stations = [None] * len(self.layout)
-        self._pad, self._centres = pad, centres
-
-    def _station(self, slot: int) -> _Station:
-        st = self.stations[slot]
-        if st is None:
-            st = _Station(_slid_pad(self._pad, self._centres[slot]), self.options,
-                          (self.options.seed, self.n_arranged, slot))
-            st.open()
-            st.settle()
-            self.stations[slot] = st
-        return st
 
     def poke(self, slot: int, request: PokeRequest) -> Poke:
-        return self._station(int(slot)).poke(request)
+        from scenes.pads import blind_area_centres
+
+        if self.layout is None:
+            from teleop.errors import InputError
+
+            raise InputError("blind-test rig: arrange(layout) before poking")
+        if self.station is None:
+            self.station = _Station(self.pad, self.options, (self.options.seed, self.n_arranged))
+            self.station.open()
+            self.station.move_to(int(slot), blind_area_centres()[int(slot)])
+            self.station.settle()
+        self.station.move_to(int(slot), blind_area_centres()[int(slot)])
+        return self.station.poke(request)
 
     def describe(self) -> dict:
         """The chain's settings for the results' config."""
-        return dataclasses.asdict(self.options)
+        d = dataclasses.asdict(self.options)
+        d["tip_stiffness_used"] = self.tip_stiffness()
+        return d
+
+    def tip_stiffness(self) -> float | None:
+        """The simulated robot's series compliance [N/m] (None: rigid tip)."""
+        from scenes.sim_robot import SimRobotParams
+
+        o = self.options
+        return float(o.tip_stiffness) if o.tip_stiffness is not None else SimRobotParams().tip_stiffness
+
+    def expected_stiffness(self) -> dict:
+        """area name -> the stiffness a transparent chain renders on the stylus [N/m]:
+        force_scale * motion_scale * (k_tip k / (k_tip + k)), the pad in series with the robot's compliance
+        (the most any estimator can show; the device limits and filtering come on top)."""
+        o = self.options
+        kt = self.tip_stiffness()
+        return {a.name: o.force_scale * o.motion_scale * (a.stiffness if kt is None else kt * a.stiffness / (kt + a.stiffness))
+                for a in self.areas}
 
     @property
     def attribution(self) -> str:
         from scenes.materials import ATTRIBUTION
 
         return ATTRIBUTION
+
+
+class RehearsalStation:
+    """`--operator human` on the simulated stylus: each time the coordinator is told to let the participant
+    push on a zone, a simulated participant's push is run through the whole chain and what the stylus felt
+    is printed, so the coordinator can rehearse the protocol."""
+
+    def __init__(self, options: RigOptions, params):
+        self.rig = SimRig(options)
+        self.areas = self.rig.areas
+        self.params = params
+
+    def open(self) -> None:
+        self.rig.open()
+
+    def close(self) -> None:
+        self.rig.close()
+
+    def poke_and_describe(self, layout, slot: int) -> str:
+        from teleop.protocols.blind.stats import loading_slope
+
+        if self.rig.layout != tuple(layout):
+            self.rig.arrange(layout)
+        p = self.rig.poke(slot, PokeRequest(self.params.depth, self.params.speed))
+        k = loading_slope(p.x, p.f, self.params.force_threshold)
+        return (f"pushed {p.x.max() * 1e3:.1f} mm, peak force {p.f.max():.2f} N, "
+                f"loading stiffness {k:.0f} N/m on the stylus")
+
+
+class BackgroundSession:
+    """`--operator human` at a real stylus: `teleop session` runs the loop (with -z zeroed, as in the seed)
+    in a child process for as long as the study takes; its output goes to `log_path`."""
+
+    def __init__(self, haptic_url: str, robot_url: str, options: RigOptions, log_path: str = "blind_test_session.log"):
+        self.argv = ["session", "--haptic", haptic_url, "--robot", robot_url, "--seconds", "86400", "--zero-neg-z",
+                     "--force-scale", repr(options.force_scale), "--motion-scale", repr(options.motion_scale)]
+        self.log_path = log_path
+        self.proc = None
+
+    def open(self) -> None:
+        import subprocess
+        import sys
+
+        from devices.base import open_device
+
+        open_device(self.argv[2])  # a bad URL fails here with one clear line
+        open_device(self.argv[4])
+        self.log = open(self.log_path, "ab")
+        self.proc = subprocess.Popen([sys.executable, "-m", "teleop.cli", *self.argv], stdout=self.log,
+                                     stderr=subprocess.STDOUT)
+
+    def close(self) -> None:
+        if self.proc is not None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=10)
+            except Exception:  # noqa: BLE001 - it did not stop in time: stop it hard
+                self.proc.kill()
+                self.proc.wait()
+            self.proc = None
+            self.log.close()

@@ -128,12 +128,14 @@ def run_simulated_study(rig: Rig, participants: int, seed: int, params: Particip
 class StudyResult:
     """Results of a blind study: per-participant records and the statistics of Table 3 and beyond.
 
-    areas: Area, hardest first (the true order); records: ParticipantRecord per participant.
+    areas: Area, hardest first (the true order); records: ParticipantRecord per participant; config: the
+    settings, stored in the JSON; expected: what a transparent chain would render per area (rig-dependent).
     """
 
     areas: tuple
     records: tuple
     config: dict = field(default_factory=dict)
+    expected: dict = field(default_factory=dict)  # area name -> stiffness a transparent chain renders [N/m]
 
     @property
     def truth(self) -> tuple:
@@ -201,6 +203,7 @@ class StudyResult:
             "labels": {a.name: a.label for a in self.areas},
             "true_stiffness_N_per_m": {a.name: a.stiffness for a in self.areas},
             "rendered_stiffness_N_per_m": rendered,
+            "expected_stiffness_N_per_m": dict(self.expected),
             "neighbour_ratios": [{"harder": h, "softer": s, "rendered": r, "true": t, "relative_error": e}
                                  for h, s, r, t, e in self.neighbour_ratios()],
             "seed_table3": {a: {"mean": row["mean"], "std": row["std"]} for a, row in zip(self.truth, SEED_TABLE3)},
@@ -226,11 +229,15 @@ class StudyResult:
         rendered = self.rendered_stiffness()
         if any(v is not None for v in rendered.values()):
             lines.append("")
-            lines.append("area".ljust(width) + " rendered dF/dx [N/m]   pad stiffness [N/m]")
+            head = "area".ljust(width) + " rendered dF/dx [N/m]   pad stiffness [N/m]"
+            lines.append(head + ("   transparent chain [N/m]" if self.expected else ""))
             for a in self.areas:
                 k = rendered[a.name]
                 ks = "        -" if k is None else f"{k:9.1f}"
-                lines.append(a.label.ljust(width) + f" {ks:>20}   {a.stiffness:19.1f}")
+                row = a.label.ljust(width) + f" {ks:>20}   {a.stiffness:19.1f}"
+                if a.name in self.expected:
+                    row += f"   {self.expected[a.name]:23.1f}"
+                lines.append(row)
             lines.append("")
             lines.append("neighbours".ljust(2 * width) + " rendered ratio   true ratio   error")
             labels = {a.name: a.label for a in self.areas}
