@@ -31,7 +31,8 @@ class AxisTurnFit:
         duration: length of the jump segment after a turn [s].
         forward, backward: (6, deg+1) power-series coefficients in s = tau / duration in [0, 1] of the wrench
             error [N, N m] after a turn to + (forward) and to - (backward) motion along the axis.
-        deadband: position dead band of the turn detector [m].
+        deadband: position dead band of the turn detector [m]; 0 (default) detects the turn on the sample
+            where the cables flip direction (single's jump starts there: a later detection misses its peak).
     """
 
     axis: int
