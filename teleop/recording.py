@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import orjson
 
 from teleop.errors import InputError
 
@@ -128,7 +129,7 @@ class RowEncoder:
                 if kind == INT:
                     v = [int(x) if x == x else 0 for x in v]
                 msg[name] = v[0] if width == 1 else v
-            yield topic, tick, t, json.dumps(msg, separators=(",", ":")).encode()
+            yield topic, tick, t, orjson.dumps(msg)
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -146,51 +147,118 @@ def metadata_record(d: dict) -> dict:
     return enc
 
 
-class SessionWriter:
-    """MCAP writer for one session: JSON messages per topic, small zstd chunks, CRCs everywhere."""
+class McapWriter:
+    """Minimal MCAP writer (spec v0): header, zstd chunks holding schemas, channels and messages, metadata,
+    a data-section CRC and a footer. No indexes or summary (optional in the spec; readers then scan), so a
+    message costs one struct.pack and a list append - the recorder keeps up with 1 kHz x 6 channels.
+    """
 
-    def __init__(self, stream, layout: Layout, metadata: dict, t0_ns: int, events: bool = True):
-        from mcap.writer import CompressionType, Writer
+    def __init__(self, stream, profile: str = PROFILE, library: str = "cdpr-teleop recorder"):
+        import zstandard
 
         self.stream = stream
-        self.t0_ns = int(t0_ns)
-        self.w = Writer(stream, chunk_size=4 * 1024 * 1024, compression=CompressionType.ZSTD,
-                        enable_crcs=True, enable_data_crcs=True)
-        self.w.start(profile=PROFILE, library="cdpr-teleop recorder")
-        self.encoder = RowEncoder(layout)
-        self.channels = {}
-        for topic in layout.topics():
-            sid = self.w.register_schema(topic, "jsonschema", json_schema(layout, topic))
-            self.channels[topic] = self.w.register_channel(topic, "json", sid)
-        for topic, schema in (("/teleop/events", {"type": "object"}), ("/loop/timing", {"type": "object"})):
-            sid = self.w.register_schema(topic, "jsonschema", json.dumps(schema).encode())
-            self.channels[topic] = self.w.register_channel(topic, "json", sid)
-        self.event_seq = 0
-        self.w.add_metadata("session", metadata_record(metadata))
-        self.w.flush()
+        self.zstd = zstandard.ZstdCompressor(level=3)
+        self.crc = 0
+        self.parts: list = []
+        self.n_messages = 0
+        self.t_min = self.t_max = 0
+        self._write(MAGIC)
+        self._write(_rec(0x01, _mstr(profile) + _mstr(library)))
+
+    def _write(self, b: bytes) -> None:
+        self.crc = zlib.crc32(b, self.crc)
+        self.stream.write(b)
+
+    def add_schema(self, sid: int, name: str, encoding: str, data: bytes) -> None:
+        self.parts.append(_rec(0x03, struct.pack("<H", sid) + _mstr(name) + _mstr(encoding)
+                                  + struct.pack("<I", len(data)) + data))
+
+    def add_channel(self, cid: int, sid: int, topic: str, encoding: str) -> None:
+        self.parts.append(_rec(0x04, struct.pack("<HH", cid, sid) + _mstr(topic) + _mstr(encoding)
+                                  + struct.pack("<I", 0)))
+
+    def add_message(self, cid: int, seq: int, log_time: int, data: bytes) -> None:
+        # opcode, record length, channel id, sequence, log time, publish time, payload
+        self.parts.append(struct.pack("<BQHIQQ", 0x05, 22 + len(data), cid, seq & 0xFFFFFFFF, log_time, log_time)
+                          + data)
+        if self.n_messages == 0 or log_time < self.t_min:
+            self.t_min = log_time
+        self.t_max = max(self.t_max, log_time)
+        self.n_messages += 1
+
+    def flush(self) -> None:
+        """Write the open chunk (if any) and flush the stream: everything so far survives a crash."""
+        if self.parts:
+            raw = b"".join(self.parts)
+            comp = self.zstd.compress(raw)
+            body = (struct.pack("<QQQI", self.t_min, self.t_max, len(raw), zlib.crc32(raw)) + _mstr("zstd")
+                    + struct.pack("<Q", len(comp)) + comp)
+            self._write(_rec(0x06, body))
+            self.parts = []
+            self.n_messages = 0
         self.stream.flush()
 
+    def add_metadata(self, name: str, data: dict) -> None:
+        self.flush()
+        m = b"".join(_mstr(k) + _mstr(v) for k, v in data.items())
+        self._write(_rec(0x0C, _mstr(name) + struct.pack("<I", len(m)) + m))
+        self.stream.flush()
+
+    def finish(self) -> None:
+        self.flush()
+        self._write(_rec(0x0F, struct.pack("<I", self.crc & 0xFFFFFFFF)))
+        self.stream.write(_rec(0x02, struct.pack("<QQI", 0, 0, 0)) + MAGIC)
+        self.stream.flush()
+
+
+def _mstr(s: str) -> bytes:
+    b = s.encode("utf-8")
+    return struct.pack("<I", len(b)) + b
+
+
+def _rec(op: int, body: bytes) -> bytes:
+    return struct.pack("<BQ", op, len(body)) + body
+
+
+class SessionWriter:
+    """One session's MCAP file: JSON messages per topic (floats bit-exact; NaN/inf stored as null), small
+    zstd chunks with CRCs, metadata records with their own CRC, a data-section CRC."""
+
+    def __init__(self, stream, layout: Layout, metadata: dict, t0_ns: int):
+        self.stream = stream
+        self.t0_ns = int(t0_ns)
+        self.w = McapWriter(stream)
+        self.encoder = RowEncoder(layout)
+        self.channels = {}
+        extra = (("/teleop/events", b'{"type": "object"}'), ("/loop/timing", b'{"type": "object"}'))
+        topics = [(t, json_schema(layout, t)) for t in layout.topics()] + list(extra)
+        for i, (topic, schema) in enumerate(topics, start=1):
+            self.w.add_schema(i, topic, "jsonschema", schema)
+            self.w.add_channel(i, i, topic, "json")
+            self.channels[topic] = i
+        self.event_seq = 0
+        self.w.flush()  # schemas and channels in the first chunk
+        self.w.add_metadata("session", metadata_record(metadata))
+
     def log_time(self, t: float) -> int:
-        return self.t0_ns + int(round(t * 1e9))
+        return max(0, self.t0_ns + int(round(t * 1e9)))
 
     def write_row(self, row: np.ndarray) -> None:
+        ch, add = self.channels, self.w.add_message
         for topic, tick, t, payload in self.encoder.encode(row):
-            lt = self.log_time(t)
-            self.w.add_message(self.channels[topic], lt, payload, lt, tick & 0xFFFFFFFF)
+            add(ch[topic], tick, self.log_time(t), payload)
 
     def write_json(self, topic: str, t: float, obj: dict) -> None:
-        lt = self.log_time(t)
         self.event_seq += 1
-        self.w.add_message(self.channels[topic], lt, json.dumps(obj, default=str).encode(), lt, self.event_seq)
+        self.w.add_message(self.channels[topic], self.event_seq, self.log_time(t),
+                           json.dumps(obj, default=str).encode())
 
     def flush(self) -> None:
         self.w.flush()
-        self.stream.flush()
 
     def finish(self, end_metadata: dict) -> None:
         self.w.add_metadata("session_end", metadata_record(end_metadata))
         self.w.finish()
-        self.stream.flush()
 
 
 class SecondStats:
@@ -589,9 +657,11 @@ def parse_session(data: bytes, name: str = "<bytes>") -> Session:
 
 def _footer(data: bytes, pos: int, end: int, n: int) -> None:
     b = _Buf(data, pos + 9, end)
-    summary_start, _offsets, crc = b.u64(), b.u64(), b.u32()
+    summary_start, offsets, crc = b.u64(), b.u64(), b.u32()
     if end + len(MAGIC) != n or data[end:] != MAGIC:
         raise _Damage("bad trailing magic after the footer")
+    if not crc and (summary_start or offsets):  # nothing to check the offsets against: they must be absent
+        raise _Damage("footer points to a summary without a CRC")
     if crc:
         if not 0 < summary_start <= pos:
             raise _Damage("summary start outside the file")
@@ -655,9 +725,12 @@ def _chunk(b: _Buf, s: Session, schemas: dict) -> None:
         import zstandard
 
         try:
+            declared = zstandard.frame_content_size(payload)
+            if declared not in (size, -1):  # a damaged frame header must not size an allocation
+                raise _Damage(f"zstd frame declares {declared} bytes, chunk {size}")
             raw = zstandard.ZstdDecompressor().decompress(payload, max_output_size=size)
-        except zstandard.ZstdError as exc:
-            raise _Damage(f"zstd: {exc}") from None
+        except (zstandard.ZstdError, MemoryError) as exc:
+            raise _Damage(f"zstd: {type(exc).__name__}: {exc}") from None
     elif comp == "lz4":
         import lz4.frame
 

@@ -181,3 +181,13 @@ def test_slow_or_full_disk_drops_and_alarms_never_blocks(tmp_path, disk):
     rec.proc.kill()
     rec.proc.join()
     rec.proc = None
+
+
+def test_files_open_with_the_reference_mcap_reader():
+    from mcap.reader import make_reader
+
+    _, R, data = write_file(30)
+    reader = make_reader(io.BytesIO(data))
+    topics = [ch.topic for _, ch, _ in reader.iter_messages()]
+    assert topics.count("/stylus") == 30 and "/teleop/events" in topics
+    assert {m.name for m in make_reader(io.BytesIO(data)).iter_metadata()} == {"session", "session_end"}
