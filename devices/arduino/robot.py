@@ -57,13 +57,21 @@ class ArduinoRobot(ContextDevice):
         spec: limits (steps_per_m converts lengths to steps).
         timeout_s: reply timeout for the blocking calls (handshake, home, stop, diag) [s].
         boot_timeout_s: how long open() retries the handshake (a real Mega reboots on open) [s].
+        home_lengths: (6,) cable lengths [m] the rig is set up at; when given, open() declares them
+            (HOME) after the handshake. A firmware reset later still needs an explicit home().
     """
 
     def __init__(self, port: str, baud: int = DEFAULT_BAUD, spec: RobotSpec = RobotSpec(),
-                 timeout_s: float = 0.25, boot_timeout_s: float = 3.0):
+                 timeout_s: float = 0.25, boot_timeout_s: float = 3.0, home_lengths=None):
         if baud <= 0 or timeout_s <= 0 or boot_timeout_s <= 0:
             raise InputError(f"serial robot '{port}': baud, timeout and boot timeout must be positive")
         self.port, self.baud, self.spec = port, int(baud), spec
+        self.home_lengths = None
+        if home_lengths is not None:
+            try:
+                self.home_lengths = self._check_lengths(home_lengths)
+            except ValueError as exc:
+                raise InputError(f"serial robot '{port}': home lengths: {exc}") from None
         self.timeout_s, self.boot_timeout_s = float(timeout_s), float(boot_timeout_s)
         self.is_open = False
         self.stats = LinkStats()
@@ -75,9 +83,11 @@ class ArduinoRobot(ContextDevice):
     def _reset_state(self) -> None:
         self._tx_seq = 0
         self._rx_seq: int | None = None
+        self._rx_count = 0  # telemetry-side frames counted by sequence number (unwrapped, monotonic)
         self._boot_id: int | None = None
         self._latest: msg.Telemetry | None = None
         self._latest_t = 0.0
+        self._latest_count = 0
         self._replies: list[tuple[msg.Telemetry, float]] = []
         self._diag: msg.DiagReply | None = None
         self._hello_count = 0
@@ -116,6 +126,12 @@ class ArduinoRobot(ContextDevice):
             self.stats = LinkStats()  # bytes before the handshake (a half frame at power-up) don't count
             self._reset_seen = False
         self.is_open = True
+        if self.home_lengths is not None:
+            try:
+                self.home(self.home_lengths)
+            except Exception:
+                self.close()
+                raise
 
     def close(self) -> None:
         if self._transport is not None:
@@ -175,14 +191,14 @@ class ArduinoRobot(ContextDevice):
             self._send(msg.Heartbeat(self._next_seq()))
         self._sent_since_read = False
         with self._cond:
-            return self._reading(self._latest, self._latest_t)
+            return self._reading(self._latest, self._latest_t, self._latest_count)
 
     def read_fresh(self) -> RobotReading:
         """Send a HEARTBEAT and wait for its telemetry (one round trip)."""
         self._require_open()
         reply = self._request(msg.Heartbeat)
         with self._cond:
-            return self._reading(reply, self._latest_t)
+            return self._reading(reply, self._latest_t, self._latest_count)
 
     def heartbeat(self) -> None:
         """Keep the firmware watchdog fed without commanding motion."""
@@ -279,12 +295,12 @@ class ArduinoRobot(ContextDevice):
             raise DeviceError(f"serial robot '{self.port}': no reply to frame {seq} within {self.timeout_s} s")
         return found[-1]
 
-    def _reading(self, t: msg.Telemetry, t_rx: float) -> RobotReading:
+    def _reading(self, t: msg.Telemetry, t_rx: float, count: int) -> RobotReading:
         return RobotReading(
-            t=t_rx, seq=t.seq, fsr_counts=np.array(t.adc_counts, dtype=int),
+            t=t_rx, seq=count, fsr_counts=np.array(t.adc_counts, dtype=int),
             position_steps=np.array(t.position_steps, dtype=int), commanded_lengths=self._commanded.copy(),
             status=t.status, boot_id=self._boot_id or 0,
-            extras={"reply_to": t.reply_to, "rejected": bool(t.status & msg.Status.REJECTED),
+            extras={"link_seq": t.seq, "reply_to": t.reply_to, "rejected": bool(t.status & msg.Status.REJECTED),
                     "lengths": msg.steps2lengths(t.position_steps, self._home_lengths, self.spec.steps_per_m)})
 
     def _firmware_reset(self) -> None:
@@ -320,10 +336,11 @@ class ArduinoRobot(ContextDevice):
                     self.stats.reordered += 1
                     continue
                 self.stats.gaps += missing
+                self._rx_count += 1 + missing
                 self._rx_seq = m.seq
                 self.stats.frames += 1
                 if isinstance(m, msg.Telemetry):
-                    self._latest, self._latest_t = m, t_rx
+                    self._latest, self._latest_t, self._latest_count = m, t_rx, self._rx_count
                     self._replies = self._replies[-31:] + [(m, t_rx)]
                     applied = [s for s in self._pending if s & 0xFF == m.reply_to]
                     for s in applied:
@@ -336,11 +353,12 @@ class ArduinoRobot(ContextDevice):
 
 
 def from_url(parsed, options: dict) -> ArduinoRobot:
-    """``serial:///dev/ttyACM0?baud=1000000&timeout=0.25`` -> ArduinoRobot (not opened)."""
-    allowed = {"baud", "timeout"}
+    """``serial:///dev/ttyACM0?baud=1000000&timeout=0.25&home_mm=30,30,30,30,30,30`` -> ArduinoRobot
+    (not opened; with home_mm, open() declares those cable lengths as home)."""
+    allowed = {"baud", "timeout", "home_mm"}
     unknown = sorted(set(options) - allowed)
     if unknown:
-        raise InputError(f"serial URL: unknown option(s) {', '.join(unknown)} (expected: baud, timeout)")
+        raise InputError(f"serial URL: unknown option(s) {', '.join(unknown)} (expected: baud, timeout, home_mm)")
     port = parsed.path or parsed.netloc
     if not port:
         raise InputError("serial URL: expected serial:///dev/ttyXXX (a device path)")
@@ -350,4 +368,11 @@ def from_url(parsed, options: dict) -> ArduinoRobot:
     except (TypeError, ValueError):
         raise InputError(f"serial URL: baud must be an integer and timeout a number, got "
                          f"baud={options.get('baud')!r} timeout={options.get('timeout')!r}") from None
-    return ArduinoRobot(port, baud=baud, timeout_s=timeout)
+    home = None
+    if "home_mm" in options:
+        try:
+            home = np.array([float(v) for v in str(options["home_mm"]).split(",")]) * 1e-3
+        except ValueError:
+            raise InputError(f"serial URL: home_mm must be comma-separated numbers [mm], "
+                             f"got {options['home_mm']!r}") from None
+    return ArduinoRobot(port, baud=baud, timeout_s=timeout, home_lengths=home)

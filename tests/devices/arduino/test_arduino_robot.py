@@ -20,6 +20,14 @@ def test_conformance_sequence_on_the_emulated_firmware(mega):
                 lengths=HOME_LENGTHS - 0.0005)
 
 
+def test_project_conformance_check_passes_with_home_lengths_configured(mega):
+    """devices.conformance.check_robot (the loop's check) on the serial robot: open() homes at the
+    configured lengths, readings' seq is monotonic (unwrapped from the 12-bit link seq)."""
+    from devices.conformance import check_robot as project_check_robot
+
+    project_check_robot(ArduinoRobot(mega.port, timeout_s=1.0, home_lengths=HOME_LENGTHS), reads=20)
+
+
 def test_motion_refused_before_home_and_after_stop(mega):
     with ArduinoRobot(mega.port, timeout_s=1.0) as robot:
         with pytest.raises(DeviceError, match="not homed"):
@@ -43,6 +51,12 @@ def test_serial_url_builds_an_unopened_robot_and_rejects_bad_options():
         from_url(urlparse("serial:///dev/ttyACM0?baud=fast"), {"baud": "fast"})
     with pytest.raises(InputError):
         from_url(urlparse("serial://"), {})
+    homed = open_device("serial:///dev/ttyACM0?home_mm=30,30,30,30,30,30")
+    np.testing.assert_allclose(homed.home_lengths, HOME_LENGTHS)
+    with pytest.raises(InputError, match="home"):
+        open_device("serial:///dev/ttyACM0?home_mm=30,30")
+    with pytest.raises(InputError, match="home_mm"):
+        open_device("serial:///dev/ttyACM0?home_mm=a,b")
 
 
 def test_opening_a_missing_port_is_one_clear_error():
