@@ -324,6 +324,7 @@ class PalpationResult:
     extra: dict
     simulated_s: float
     wall_s: float
+    cpu_s: float = 0.0
 
     def to_json(self) -> dict:
         """The DESIGN.md JSON object (wall time left out: same seed, same bytes)."""
@@ -349,7 +350,9 @@ class PalpationResult:
             if key in self.extra:
                 lines.append(f"{key}: {self.extra[key]}")
         rt = self.simulated_s / self.wall_s if self.wall_s > 0 else float("inf")
-        lines.append(f"simulated {self.simulated_s:.1f} s in {self.wall_s:.1f} s wall ({rt:.1f}x real time)")
+        rc = self.simulated_s / self.cpu_s if self.cpu_s > 0 else float("inf")
+        lines.append(f"simulated {self.simulated_s:.1f} s in {self.wall_s:.1f} s wall ({rt:.1f}x real time), "
+                     f"{self.cpu_s:.1f} s CPU ({rc:.1f}x)")
         return "\n".join(lines)
 
     def plot(self):
@@ -371,7 +374,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     if profile not in PROFILES:
         raise InputError(f"unknown speed profile '{profile}' (expected one of: {', '.join(PROFILES)})")
     sessions = sessions_for(test, params, limit)
-    t_wall = time.perf_counter()
+    t_wall, t_cpu = time.perf_counter(), time.process_time()
     ss = np.random.SeedSequence(int(seed))
     seeds = ss.generate_state(2 * len(sessions))
     from scenes.world import WorldParams
@@ -431,7 +434,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     finally:
         bar.close()
     total = sum(len(f) + len(pl.tips) - pl.starts[0] for f, _, pl, _ in plans)
-    wall = time.perf_counter() - t_wall
+    wall, cpu = time.perf_counter() - t_wall, time.process_time() - t_cpu
     simulated = total * dt
     summary = summarise(results)
     extra = {}
@@ -443,7 +446,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     pdict.update({"reading_rate_hz": _num(1.0 / dt), "physics_dt_s": sim.world.dt, "pretension_N": sim.pretension,
                   "tip_stiffness_N_per_m": sim.tip_stiffness, "capstan_k_N_per_m": sim.capstan_k,
                   "mu": geom.mu, "theta0_deg": _num(np.rad2deg(geom.theta0)), "noise_counts": sim.noise_counts})
-    return PalpationResult(test, profile, int(seed), pdict, results, summary, extra, simulated, wall)
+    return PalpationResult(test, profile, int(seed), pdict, results, summary, extra, simulated, wall, cpu)
 
 
 def _tips2lengths(tips, tool, geom):

@@ -24,22 +24,33 @@ def plot_result(res):
 
 
 def _bars_figure(res):
+    """Per poke label (Fig 16a: the 25 points) the mean over repeats, with the spread as error bars."""
     import matplotlib.pyplot as plt
 
     keys = ["ground_truth"] + list(res.summary)
-    n = len(res.pokes)
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.28 * n * len(keys) / 2), 4.2))
+    labels = list(dict.fromkeys(p["label"] for p in res.pokes))
+    n = len(labels)
+    fig, ax = plt.subplots(figsize=(min(14.0, max(6.0, 0.5 * n + 2)), 4.2))
     x = np.arange(n)
     w = 0.8 / len(keys)
+    top, bottom = 0.0, 0.0
     for i, k in enumerate(keys):
-        vals = [p[f"{k}_N"] for p in res.pokes]
+        vals = [[p[f"{k}_N"] for p in res.pokes if p["label"] == lab] for lab in labels]
+        mean = np.array([np.mean(v) for v in vals])
+        spread = np.array([np.std(v) for v in vals])
+        top, bottom = max(top, (mean + spread).max()), min(bottom, (mean - spread).min())
         label = k if k == "ground_truth" else f"{k} (MAE {res.summary[k]['mean_abs_error_N']:.3f} N)"
-        ax.bar(x + (i - (len(keys) - 1) / 2) * w, vals, w, color=COLOURS.get(k), label=label)
+        ax.bar(x + (i - (len(keys) - 1) / 2) * w, mean, w, yerr=spread if len(res.pokes) > n else None,
+               color=COLOURS.get(k), label=label, error_kw={"elinewidth": 0.6})
+    ax.set_ylim(bottom, top * 1.4)
     ax.set_xticks(x)
-    ax.set_xticklabels([f"{p['label']}" for p in res.pokes], rotation=90, fontsize=6)
+    ax.set_xticklabels(labels, rotation=90 if n > 12 else 0, fontsize=7)
+    ax.set_xlabel("poke point" if res.test == "z" else "poke")
     ax.set_ylabel("force along the poke at its deepest point [N]")
-    ax.set_title(f"palpation {res.test} test, {res.profile} speed, seed {res.seed} (simulated)")
-    ax.legend(fontsize=7, ncol=3)
+    reps = len(res.pokes) // max(n, 1)
+    ax.set_title(f"palpation {res.test} test, {res.profile} speed, seed {res.seed} (simulated"
+                 f"{f', mean of {reps} repeats' if reps > 1 else ''})")
+    ax.legend(fontsize=7, ncol=3, loc="upper left")
     fig.tight_layout(rect=(0, 0.03, 1, 1))
     return fig
 
