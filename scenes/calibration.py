@@ -49,7 +49,7 @@ def _uniform_probe_pad() -> Pad:
 
 
 class _FixedStiffness:
-    """Calibration stand-in mapping every target to itself times a gain (used while measuring)."""
+    """Calibration stand-in giving one fixed contactStiffness K whatever the target (used while measuring)."""
 
     def __init__(self, K: float):
         self.K = K

@@ -28,6 +28,20 @@ def test_every_pad_region_slope_within_5_percent(pad):
             assert slope(d, F) == pytest.approx(target, rel=0.05), label
 
 
+@pytest.mark.parametrize("pad", [three_region_pad(), hole_pad()], ids=lambda p: p.name)
+def test_slopes_hold_at_the_palpation_time_step(pad):
+    """The palpation protocols step pybullet at 500 Hz: the calibration is re-measured there."""
+    params = WorldParams(dt=2e-3, surface_z=0.0235)
+    with PadWorld(pad, params) as w:
+        if pad.hole_radius > 0:
+            d, F = indent(w, (0.0, 0.0), axis=1)
+            assert slope(d, F) == pytest.approx(pad.wall_stiffness(params.tip_radius), rel=0.05)
+            return
+        for label, xy in pad.probe_points(params.tip_radius).items():
+            d, F = indent(w, xy)
+            assert slope(d, F) == pytest.approx(pad.stiffness_at(np.asarray(xy), params.tip_radius), rel=0.05), label
+
+
 def test_three_region_pad_order_of_table_1():
     pad = three_region_pad()
     k = {lab: pad.stiffness_at(np.asarray(xy), PARAMS.tip_radius) for lab, xy in pad.points.items()}
