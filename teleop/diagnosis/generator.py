@@ -71,9 +71,19 @@ def _trajectory(rng: np.random.Generator, t: np.ndarray) -> tuple[str, np.ndarra
     else:
         x = np.zeros_like(t)
         pos, k, direction = 0.0, 0, 1.0
+        # stroke speeds cycle through a shuffled log-spaced set, so fit and held-out parts both see
+        # slow and fast strokes
+        speeds = np.geomspace(0.2, 3.0, 5) * A
+        stroke = 0
         while k < t.size:
-            speed = rng.uniform(0.3, 3.0) * A          # m/s, changes every stroke
-            target = direction * A * rng.uniform(0.5, 1.0)
+            if stroke % speeds.size == 0:
+                speeds = rng.permutation(speeds)
+            speed = speeds[stroke % speeds.size]     # m/s, changes every stroke
+            stroke += 1
+            # strokes last about a second: slow strokes are short, fast ones span the range
+            target = float(np.clip(pos + direction * speed * rng.uniform(0.6, 1.4), -A, A))
+            if abs(target - pos) < 0.05 * A:
+                target = direction * A
             n = max(2, int(abs(target - pos) / speed * FS_HZ))
             seg = np.linspace(pos, target, n, endpoint=False)
             x[k:k + n] = seg[: t.size - k]
