@@ -162,6 +162,7 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
             os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(rt_priority)))
         else:
             os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))  # do not inherit the loop's policy
+            os.nice(-10)  # ahead of ordinary processes where the OS lets us, behind the real-time loop
     except (AttributeError, OSError):
         pass
 

@@ -358,9 +358,13 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
     """Recorder process: drain the ring into the MCAP file until stopped or the loop process is gone."""
     layout = Layout.from_json(layout_json)
     ctrl = ring.ctrl
-    try:  # never inherit a real-time policy from the loop: the recorder must yield to it
+    try:  # never inherit a real-time policy from the loop: the recorder must yield to it ...
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     except (AttributeError, OSError):
+        pass
+    try:  # ... but keep up with the other time-sharing processes where the OS lets us
+        os.nice(-10)
+    except OSError:
         pass
     try:
         stream = stream_factory() if stream_factory is not None else open(path, "wb")

@@ -81,13 +81,15 @@ def _on_sigterm(signum, frame):
 def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | None = None,
                 params: LoopParams | None = None, estimator=None, seed: int | None = None,
                 spin_us: float = 200.0, flush_interval: float = 0.1, haptic=None, robot=None,
-                robot_process_hz: float | None = 1000.0, realtime: bool = True) -> SessionResult:
+                robot_process_hz: float | None = 1000.0, realtime: bool = True,
+                robot_rt_priority: int | None = None) -> SessionResult:
     """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
 
     With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
     .ProcessRobot) and the loop exchanges the latest command/reading with it every tick; None runs the
     robot's I/O inline in the tick (at LoopParams.robot_rate_hz). With `realtime` the loop runs under
-    SCHED_FIFO 50 and the robot process under SCHED_FIFO 45 when the OS allows it (the recorder never).
+    SCHED_FIFO 50 when the OS allows it; the robot process (SCHED_FIFO `robot_rt_priority` if given, else nice -10)
+    and the recorder (nice -10) stay behind it.
     """
     params = params or LoopParams()
     haptic = haptic if haptic is not None else open_device(haptic_url)
@@ -96,7 +98,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             from devices.wrappers import ProcessRobot
 
             open_device(robot_url)  # validates the URL here (one clear line) before forking
-            robot = ProcessRobot(robot_url, rate_hz=robot_process_hz, rt_priority=45 if realtime else None)
+            robot = ProcessRobot(robot_url, rate_hz=robot_process_hz,
+                                 rt_priority=robot_rt_priority if realtime else None)
         else:
             robot = open_device(robot_url)
     recorder = None
