@@ -1,14 +1,16 @@
 """`teleop bench tick --json F [--ticks N]`: time the compute of one loop tick without devices.
 
 Project tick: `teleop.estimation.tick.TickComputer.compute` (plain floats, steady-state Kalman).
-Reference tick: `ReferenceTick.compute`, the same computation written the obvious way: numpy arrays,
-scipy.spatial.transform.Rotation for R, the estimator's numpy compensation, f = -A t with numpy, filterpy
-KalmanFilter predict/update, the renderer. Both see the same inputs (a moving pose, noisy tensions as numpy
-arrays), interleaved tick by tick (alternating which goes first) so machine noise hits both alike; garbage
-collection is off while timing. `--clock cpu` times this thread's CPU time instead of wall time (on a
-machine shared with other processes the wall-clock p99 measures the scheduler more than the tick).
-JSON (DESIGN.md): {"ticks", "tick_us": {"p50","p99","max"},
-"reference_tick_us": {"p50","p99","max"}, "speedup_p50"}.
+Reference tick: `ReferenceTick.compute`, the same computation written the obvious way: numpy on (6,)
+arrays, scipy.spatial.transform.Rotation for R, the physics library's array functions, f = -A t with numpy,
+filterpy KalmanFilter predict/update, the renderer. Both see the same inputs (a moving pose, noisy tensions
+as numpy arrays), interleaved tick by tick (alternating which goes first) so machine noise hits both alike;
+garbage collection is off while timing.
+On a machine shared with other processes the wall-clock p99 measures the scheduler more than the tick:
+`--clock cpu` times this thread's CPU time instead, and `--realtime 50` runs under SCHED_FIFO like the loop
+(teleop.loop.timing.set_realtime).
+JSON (DESIGN.md): {"ticks", "tick_us": {"p50","p99","max"}, "reference_tick_us": {"p50","p99","max"},
+"speedup_p50"}.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ def register(subparsers) -> None:
     p.add_argument("--clock", choices=("wall", "cpu"), default="wall",
                    help="wall: perf_counter (includes preemption by other processes); cpu: this thread's CPU "
                         "time (compute only; ~1 us clock-read overhead included)")
+    p.add_argument("--realtime", type=int, default=0, metavar="PRIO",
+                   help="run under SCHED_FIFO at this priority, as the loop does (0: no; default)")
     p.set_defaults(func=run)
 
 
@@ -188,7 +192,16 @@ def run(args) -> int:
     import os
     import sys
 
-    result = bench_tick(args.ticks, args.estimator, args.seed, clock=args.clock)
+    if args.realtime:
+        from teleop.loop.timing import set_normal, set_realtime
+
+        print(f"scheduling: {set_realtime(args.realtime)}", file=sys.stderr)
+        try:
+            result = bench_tick(args.ticks, args.estimator, args.seed, clock=args.clock)
+        finally:
+            set_normal()
+    else:
+        result = bench_tick(args.ticks, args.estimator, args.seed, clock=args.clock)
     if hasattr(os, "getloadavg"):  # context for the numbers: other processes sharing the cores
         print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cpus", file=sys.stderr)
     if args.json:

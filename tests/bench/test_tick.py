@@ -32,3 +32,9 @@ def test_cli_bad_arguments_exit_2(capsys):
 def test_cpu_clock_option():
     out = bench_tick(ticks=200, warmup=20, clock="cpu")
     assert out["tick_us"]["p50"] > 0 and out["reference_tick_us"]["p50"] > 0
+
+
+def test_cli_realtime_option_runs(tmp_path, capsys):
+    """SCHED_FIFO when the OS allows it, else the bench still runs and says what it got."""
+    assert main(["bench", "tick", "--ticks", "1000", "--realtime", "10", "--json", str(tmp_path / "t.json")]) == 0
+    assert "scheduling: SCHED_" in capsys.readouterr().err
