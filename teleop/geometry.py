@@ -13,6 +13,7 @@ pretension. The roll about the shaft belongs to the instrument, not to the cable
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -79,12 +80,12 @@ class Geometry:
         if np.ptp(radii) > 1e-9 + 1e-6 * radii.max() or np.linalg.svd(centred)[1][-1] > 1e-9:
             raise InputError("geometry: base anchors B must lie on one circle in one plane")
 
-    @property
+    @cached_property
     def v(self) -> np.ndarray:
-        """(3,) unit normal of the base-anchor plane (eq 6), oriented towards +z of {B}."""
+        """(3,) unit normal of the base-anchor plane (eq 6), oriented towards +z of {B} (computed once)."""
         centred = self.B - self.B.mean(axis=0)
         n = np.linalg.svd(centred)[2][-1]
-        return n if n[2] >= 0 else -n
+        return _frozen(n if n[2] >= 0 else -n)
 
     @property
     def base_radius(self) -> float:
