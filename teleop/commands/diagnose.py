@@ -57,7 +57,7 @@ def run(args) -> int:
     with tqdm(total=total, desc="diagnose", unit="fit", file=sys.stderr,
               disable=not sys.stderr.isatty(), leave=False) as bar:
         for rec in recs:
-            diag = diagnose(rec, args.holdout, progress=bar.update)
+            diag = diagnose(rec, args.holdout, progress=bar.update, seed=args.seed)
             diags.append(diag)
             docs.append(diag.as_dict())
     for doc in docs:

@@ -162,13 +162,14 @@ class Diagnosis:
         }
 
 
-def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None) -> Diagnosis:
-    """Diagnose `rec` (see the module docstring); progress(k) is called as candidate fits finish."""
+def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int = 0) -> Diagnosis:
+    """Diagnose `rec` (see the module docstring); progress(k) is called as candidate fits finish; seed
+    drives the extra starts of multi-start fits (the report is reproducible for a given seed)."""
     fit_idx, hold_idx = split(rec.n, holdout)
     results, peer = [], {}
     for link in find_links(rec):
         d = link_data(rec, link)
-        res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress)
+        res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed)
         results.append(res)
         peer[link.output] = {"arx_rmse": arx_rmse(d, fit_idx, hold_idx),
                              "baseline_rmse": res.baseline.rmse_hold, "model_rmse": res.final.rmse_hold}

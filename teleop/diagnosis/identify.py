@@ -241,7 +241,7 @@ class LinkResult:
     final: Fit
 
 
-def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None) -> LinkResult:
+def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, seed: int = 0) -> LinkResult:
     """Greedy identification on one link (see the module docstring)."""
     base = baseline_fit(d, fit_idx, hold_idx)
     current = base
@@ -254,7 +254,7 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None) -
             if name in current.names:
                 continue
             try:
-                f = fit_chain(d, current.model, (name,), fit_idx, hold_idx, freeze=round_ > 0)
+                f = fit_chain(d, current.model, (name,), fit_idx, hold_idx, seed=seed, freeze=round_ > 0)
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 continue
             if round_ == 0:
@@ -267,7 +267,7 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None) -
         pick = _pick(cands)
         if pick is not None and round_ > 0:  # refine the screened addition jointly with the chain
             try:
-                joint = fit_chain(d, pick.model, (), fit_idx, hold_idx)
+                joint = fit_chain(d, pick.model, (), fit_idx, hold_idx, seed=seed)
                 if joint.rmse_fit <= pick.rmse_fit and not joint.at_bound:
                     pick = joint
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):

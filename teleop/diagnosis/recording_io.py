@@ -169,7 +169,10 @@ def read_interchange(path: str | Path) -> Recording:
     if header is None:
         raise InputError(f"{path}: no header row (expected CSV with a 't_s' column)")
     if "t_s" not in header:
-        raise InputError(f"{path}:{header_line}: missing time column 't_s' (header: {', '.join(header)})")
+        shown = ", ".join(header)
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        raise InputError(f"{path}:{header_line}: missing time column 't_s' (header: {shown}; other layouts "
+                         f"need a column map: --map NAME|MAP.toml)")
     if len(set(header)) != len(header):
         raise InputError(f"{path}:{header_line}: duplicate column names")
     data = _parse_rows(path, rows, ",", len(header), header)

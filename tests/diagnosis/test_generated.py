@@ -19,3 +19,15 @@ def test_concealed_effect_is_named(tmp_path, effect, setup):
     if effect != "none":
         assert row["params_ok"], row["param_errors"]
         assert row["improvement"] >= 2.0
+
+
+def test_report_is_reproducible_byte_for_byte(tmp_path):
+    from teleop.diagnosis.diagnose import diagnose
+    from teleop.diagnosis.recording_io import read_interchange
+    from teleop.outputs import dumps_json
+
+    case = make_case(3, "stribeck_friction", "rig", seed=5)
+    path = case.write(tmp_path / "c.csv")
+    a = dumps_json(diagnose(read_interchange(path), seed=1).as_dict())
+    b = dumps_json(diagnose(read_interchange(path), seed=1).as_dict())
+    assert a == b
