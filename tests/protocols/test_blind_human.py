@@ -116,3 +116,25 @@ def test_killed_at_any_moment_the_state_file_is_whole(tmp_path, delay):
     if state.exists():
         saved = json.loads(state.read_text())  # never half-written
         assert saved["study"] == "blind-test"
+
+
+def test_rehearsal_on_the_simulated_stylus_pokes_through_the_chain(tmp_path):
+    from teleop.protocols.blind.human import Coordinator, run_human_study
+    from teleop.protocols.blind.participants import ParticipantParams
+    from teleop.protocols.blind.rig import RehearsalStation, RigOptions
+
+    answers = iter(["h", "h", "h", "h", "h", "h", "10 7 4 2"])
+    out = []
+    coordinator = Coordinator(lambda: next(answers, "") + "\n", out.append)
+    station = RehearsalStation(RigOptions(), ParticipantParams(speed=0.04))
+    station.open()
+    try:
+        result = run_human_study(tmp_path / "s.json", 5, 1, station.areas, coordinator, station.poke_and_describe)
+    finally:
+        station.close()
+    text = "".join(out)
+    felt = [line for line in text.splitlines() if "rehearsal rig: pushed" in line]
+    assert len(felt) == 4  # zones 1 and 2, then 3, then 4: each felt once
+    forces = [float(line.split("peak force ")[1].split(" N")[0]) for line in felt]
+    assert all(0.1 < f <= 0.88 for f in forces)
+    assert result is not None and result.records[0].ratings and json.loads((tmp_path / "s.json").read_text())
