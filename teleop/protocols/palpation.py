@@ -48,6 +48,8 @@ class PalpationParams:
         fit_travel, fit_cycles: the turn-compensation run (seed 000 §4 step 3: 20 mm, twice; 10 mm here,
             what the default geometry can travel along z in front of the pad and still hold pretension).
         reach: largest distance from the axis the robot pokes at [m] (see `reach_scale`).
+        fit_dynamic: calibrate the `dynamic` estimator's friction parameters on the same no-load runs
+            (teleop.estimation.calibrate.fit_dynamic_params), as `double` fits its turn polynomials there.
         surface_z: z of the pad surface in {B} [m]: 1.5 mm past the home tip, so pokes span end-effector
             z from -2.5 to +4.5 mm, where the default geometry holds pretension under ~2.5 N (at +11 mm
             it does only within 1 mm of the axis).
@@ -72,6 +74,7 @@ class PalpationParams:
     variable_speeds: tuple = (0.25e-3, 2.0e-3)
     variable_reversal: tuple = (0.2e-3, 0.6e-3)
     reach: float = 0.006
+    fit_dynamic: bool = True
     surface_z: float = 0.0235
 
 
@@ -198,8 +201,16 @@ def fit_path(start_tip, axis: int, p: PalpationParams, dt: float, direction: flo
 # estimators over a trace
 # --------------------------------------------------------------------------------------------------------
 
+def fsr_tensions(trace, cal=None, deadband_counts: float = 8.0) -> np.ndarray:
+    """(n, 6) FSR tensions [N] from a trace's counts (teleop.sensors.FsrConverter, branch dead band)."""
+    from teleop.sensors import FsrConverter, default_fsr_calibration
+
+    conv = FsrConverter(cal if cal is not None else default_fsr_calibration(), deadband_counts=deadband_counts)
+    return np.array([conv.update(c) for c in trace.counts])
+
+
 def estimate(trace, geom, dt: float, turn=None, names=ESTIMATORS,
-             kalman: bool = True, cal=None, progress=None, deadband_counts: float = 8.0) -> dict:
+             kalman: bool = True, cal=None, progress=None, deadband_counts: float = 8.0, dynamic=None) -> dict:
     """{name: (n, 6) wrench} of each estimator over a SimTrace's counts at its commanded poses.
 
     The FSR branch dead band (8 counts, about 0.4 N at mid range) matches the sensor's own loading-state
@@ -212,7 +223,11 @@ def estimate(trace, geom, dt: float, turn=None, names=ESTIMATORS,
 
     conv = FsrConverter(cal if cal is not None else default_fsr_calibration(), deadband_counts=deadband_counts)
     noise = KalmanNoise(dt=dt) if kalman else None
-    ticks = {n: TickComputer(geom, n, turn=turn if n == "double" else None, kalman=noise) for n in names}
+    from teleop.estimation.estimators import DynamicParams
+
+    dyn = dynamic if dynamic is not None else DynamicParams()
+    ticks = {n: TickComputer(geom, n, turn=turn if n == "double" else None, kalman=noise, dynamic=dyn)
+             for n in names}
     out = {n: np.empty((len(trace.t), 6)) for n in names}
     poses = trace.poses.tolist()
     for k, counts in enumerate(trace.counts):
@@ -399,7 +414,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
         plans.append((fit_tips, spans, plan, scale))
     total = sum(len(f) + len(pl.tips) for f, _, pl, _ in plans)
     bar = _progress_bar(progress, 2 * total, f"palpate {test}")
-    results, extra_grids = [], {}
+    results, extra_grids, calib = [], {}, {}
     try:
         for i, (s, (fit_tips, spans, plan, scale)) in enumerate(zip(sessions, plans)):
             with SimRobot(s.pad, sim, seed=int(seeds[2 * i])) as robot:
@@ -416,7 +431,15 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
             single = estimate(fit_trace, geom, dt, names=("single",), kalman=False, progress=bar.update)["single"]
             fits = tuple(fit_turn_compensation(fit_trace.t[a:b], fit_trace.poses[a:b], single[a:b], axis=axis)
                          for axis, (a, b) in spans.items())
-            w = estimate(poke_trace, geom, dt, turn=TurnCompensation(axes=fits), progress=bar.update)
+            dyn = None
+            if params.fit_dynamic:  # the project's estimator calibrated on the same no-load runs
+                from teleop.estimation.calibrate import fit_dynamic_params
+
+                a, b = min(v[0] for v in spans.values()), max(v[1] for v in spans.values())
+                dyn = fit_dynamic_params(geom, fit_trace.poses[a:b], fsr_tensions(_slice(fit_trace, a, b)), dt)
+            w = estimate(poke_trace, geom, dt, turn=TurnCompensation(axes=fits), progress=bar.update, dynamic=dyn)
+            calib[s.name] = {"turn_duration_s": {"xyz"[f.axis]: _num(f.duration) for f in fits},
+                             "dynamic": None if dyn is None else {k: _num(v) for k, v in asdict(dyn).items()}}
             offset = plan.starts[0]
             for pk, k in zip(plan.pokes, plan.deepest):
                 k = k - offset
@@ -442,6 +465,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
         extra = stiffness_extras(results)
     elif test == "scan":
         extra = scan_extras(extra_grids)
+    extra["calibration"] = calib
     pdict = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(params).items()}
     pdict.update({"reading_rate_hz": _num(1.0 / dt), "physics_dt_s": sim.world.dt, "pretension_N": sim.pretension,
                   "tip_stiffness_N_per_m": sim.tip_stiffness, "capstan_k_N_per_m": sim.capstan_k,

@@ -11,7 +11,7 @@ from teleop.protocols.palpation import (ESTIMATORS, PalpationParams, Poke, line,
                                         stiffness_extras, stroke, summarise)
 
 # short runs: 2 mm/s pokes and a 3 mm turn-compensation run (the CLI defaults are the seed's 0.5 mm/s)
-QUICK = dataclasses.replace(PalpationParams(), speed=2e-3, fit_cycles=2, fit_travel=0.003, depth_stiffness=0.003)
+QUICK = dataclasses.replace(PalpationParams(), fit_dynamic=False, speed=2e-3, fit_cycles=2, fit_travel=0.003, depth_stiffness=0.003)
 
 
 def test_line_and_uniform_stroke_speed():
@@ -70,7 +70,7 @@ def test_short_stiffness_run_is_physical_and_deterministic():
 def test_cli_writes_json_and_plot(tmp_path, capsys, monkeypatch):
     import teleop.protocols.palpation as palpation
 
-    monkeypatch.setattr(palpation, "PalpationParams", lambda: QUICK)
+    monkeypatch.setattr(palpation, "PalpationParams", lambda: dataclasses.replace(QUICK, fit_dynamic=True))
     out, png = tmp_path / "r.json", tmp_path / "r.png"
     rc = main(["palpate", "--test", "stiffness", "--limit", "1", "--seed", "3", "--json", str(out), "--plot", str(png)])
     assert rc == 0 and png.stat().st_size > 1000
@@ -78,6 +78,8 @@ def test_cli_writes_json_and_plot(tmp_path, capsys, monkeypatch):
     assert doc["test"] == "stiffness" and doc["speed_profile"] == "uniform" and len(doc["pokes"]) == 1
     for n in ESTIMATORS:
         assert {"mean_abs_error_N", "rmse_N"} <= set(doc["summary"][n])
+    cal = doc["calibration"]["stiffness3"]
+    assert cal["dynamic"]["dahl_Fc"] > 0 and cal["turn_duration_s"]["z"] > 0
     assert "MAE" in capsys.readouterr().out
 
 
