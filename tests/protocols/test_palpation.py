@@ -74,6 +74,9 @@ def test_cli_writes_json_and_plot(tmp_path, capsys, monkeypatch):
     out, png = tmp_path / "r.json", tmp_path / "r.png"
     rc = main(["palpate", "--test", "stiffness", "--limit", "1", "--seed", "3", "--json", str(out), "--plot", str(png)])
     assert rc == 0 and png.stat().st_size > 1000
+    again = tmp_path / "again.json"
+    assert main(["palpate", "--test", "stiffness", "--limit", "1", "--seed", "3", "--json", str(again)]) == 0
+    assert again.read_bytes() == out.read_bytes()  # same seed, same bytes
     doc = json.loads(out.read_text())
     assert doc["test"] == "stiffness" and doc["speed_profile"] == "uniform" and len(doc["pokes"]) == 1
     for n in ESTIMATORS:
