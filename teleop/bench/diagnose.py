@@ -11,19 +11,16 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="generator seed (0)")
     p.add_argument("--json", metavar="PATH", help="write per-case rows and the summary as JSON")
     p.add_argument("--speed", action="store_true", help="also time a 40 s, 1 kHz recording")
+    p.add_argument("--rate", type=float, default=500.0, help="sampling rate of the cases [Hz] (500)")
+    p.add_argument("--seconds", type=float, default=20.0, help="duration of each case [s] (20)")
+    p.add_argument("--noise", type=float, default=1.0, help="factor on every sensor noise level (1)")
     p.set_defaults(func=run)
 
 
 def speed_case(seed: int = 0):
     """A 40 s, 1 kHz rig recording with Dahl friction (for the timing benchmark)."""
-    from teleop.diagnosis import generator as g
-    import numpy as np
-    old = (g.FS_HZ, g.DURATION_S)
-    try:
-        g.FS_HZ, g.DURATION_S = 1000.0, 40.0
-        return g._rig(np.random.default_rng([seed, 999]), "dahl_hysteresis", 999)
-    finally:
-        g.FS_HZ, g.DURATION_S = old
+    from teleop.diagnosis.generator import GenConfig, make_case
+    return make_case(999, "dahl_hysteresis", "rig", seed, GenConfig(fs_hz=1000.0, duration_s=40.0))
 
 
 def run(args) -> int:
@@ -35,7 +32,7 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from teleop.diagnosis.diagnose import diagnose
-    from teleop.diagnosis.generator import case_plan, make_case
+    from teleop.diagnosis.generator import GenConfig, case_plan, make_case
     from teleop.diagnosis.recording_io import read_interchange
     from teleop.diagnosis.scoring import confusion_text, run_case, summarise
     from teleop.errors import InputError
@@ -43,10 +40,13 @@ def run(args) -> int:
 
     if args.cases < 1:
         raise InputError("--cases must be >= 1")
+    if not (50 <= args.rate <= 20000 and 5 <= args.seconds <= 600 and 0 <= args.noise <= 20):
+        raise InputError("--rate must be 50..20000 Hz, --seconds 5..600, --noise 0..20")
+    cfg = GenConfig(args.rate, args.seconds, args.noise)
     rows = []
     plan = case_plan(args.cases)
     for i, (effect, setup) in enumerate(tqdm(plan, desc="cases", file=sys.stderr, disable=not sys.stderr.isatty())):
-        rows.append(run_case(make_case(i, effect, setup, args.seed)))
+        rows.append(run_case(make_case(i, effect, setup, args.seed, cfg)))
     summary = summarise(rows)
     print(confusion_text(summary))
     for key in ("cases", "effect_cases", "clean_cases", "named_first_rate", "none_rate",
@@ -56,7 +56,8 @@ def run(args) -> int:
     misses = [r for r in rows if not r["correct"]]
     for r in misses:
         print(f"miss: case {r['index']} ({r['setup']}, {r['trajectory']}): {r['truth']} -> {r['all_named'] or ['none']}")
-    out = {"cases": args.cases, "seed": args.seed, "summary": summary, "rows": rows}
+    out = {"cases": args.cases, "seed": args.seed, "rate_hz": args.rate, "seconds": args.seconds,
+           "noise": args.noise, "summary": summary, "rows": rows}
     if args.speed:
         case = speed_case(args.seed)
         with tempfile.TemporaryDirectory() as tmp:

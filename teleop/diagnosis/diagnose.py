@@ -94,13 +94,20 @@ class Diagnosis:
                     [(n, p) for n, p in after.model.effects if n != name]))
                 loc = locate(d, d.y - y0, d.y, index=self.hold, change=y1 - y1_without)
                 params = dict(after.model.effects)[name]
+                block = _param_block(self.rec, d, name, params, after.stderr.get(name, {}))
+                if name == "backlash":  # also in input (motor) units: the play seen at the motor
+                    g = abs(after.model.gain)
+                    w = block["width"]
+                    block["width_input"] = {"value": w["value"] / g,
+                                            "stderr": None if w["stderr"] is None else w["stderr"] / g,
+                                            "unit": self.rec.units[d.link.input], "derived": True}
                 alts = sorted(((n, f.rmse_hold) for n, f in res.ranking.items() if n != name),
                               key=lambda kv: kv[1])[:3] if not before.model.effects else []
                 out.append({
                     "effect": name,
                     "channel": d.link.output,
                     "where": loc.as_dict(),
-                    "params": _param_block(self.rec, d, name, params, after.stderr.get(name, {})),
+                    "params": block,
                     "rmse_before": before.rmse_hold,
                     "rmse_after": after.rmse_hold,
                     "improvement": before.rmse_hold / max(after.rmse_hold, 1e-300),

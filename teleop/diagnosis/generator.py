@@ -36,8 +36,15 @@ PRIMARY = {"backlash": ("width",), "cable_compliance": ("k",), "capstan_friction
            "hertz_contact": ("k",), "viscoelasticity": ("g", "tau"), "contact_damping": ("c",)}
 CHANNEL = {"backlash": "tip_pos", "cable_compliance": "tip_pos", "hertz_contact": "force",
            "viscoelasticity": "force", "contact_damping": "force"}
-FS_HZ = 500.0
-DURATION_S = 20.0
+
+
+@dataclass(frozen=True)
+class GenConfig:
+    """Sampling rate [Hz], duration [s] and a factor on every sensor noise level."""
+
+    fs_hz: float = 500.0
+    duration_s: float = 20.0
+    noise: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -57,7 +64,7 @@ class Case:
         return atomic_write(path, lambda tmp: tmp.write_text(self.csv, encoding="utf-8"))
 
 
-def _trajectory(rng: np.random.Generator, t: np.ndarray) -> tuple[str, np.ndarray]:
+def _trajectory(rng: np.random.Generator, t: np.ndarray, cfg: GenConfig) -> tuple[str, np.ndarray]:
     """Motor position [m]: sine, sum of sines, or a triangle of changing speed; amplitude 3-10 mm."""
     kind = ("sine", "sines", "triangle")[int(rng.integers(3))]
     A = rng.uniform(3e-3, 10e-3)
@@ -84,12 +91,12 @@ def _trajectory(rng: np.random.Generator, t: np.ndarray) -> tuple[str, np.ndarra
             target = float(np.clip(pos + direction * speed * rng.uniform(0.6, 1.4), -A, A))
             if abs(target - pos) < 0.05 * A:
                 target = direction * A
-            n = max(2, int(abs(target - pos) / speed * FS_HZ))
+            n = max(2, int(abs(target - pos) / speed * cfg.fs_hz))
             seg = np.linspace(pos, target, n, endpoint=False)
             x[k:k + n] = seg[: t.size - k]
             k += n
             pos, direction = target, -direction
-        x = smooth(x, 5)  # an actuator cannot turn instantly
+        x = smooth(x, max(1, int(0.01 * cfg.fs_hz)) | 1)  # an actuator cannot turn instantly
     return kind, x
 
 
@@ -105,9 +112,9 @@ def _run_steps(name: str, params: dict, **channels) -> np.ndarray:
     return out
 
 
-def _rig(rng: np.random.Generator, effect: str, index: int) -> Case:
-    t = np.arange(int(DURATION_S * FS_HZ)) / FS_HZ
-    traj, x = _trajectory(rng, t)
+def _rig(rng: np.random.Generator, effect: str, index: int, cfg: GenConfig) -> Case:
+    t = np.arange(int(cfg.duration_s * cfg.fs_hz)) / cfg.fs_hz
+    traj, x = _trajectory(rng, t, cfg)
     A = float(np.ptp(x)) / 2
     v = np.gradient(x, t)
     vmax = float(np.percentile(np.abs(v), 99))
@@ -164,8 +171,8 @@ def _rig(rng: np.random.Generator, effect: str, index: int) -> Case:
         fm = _run_steps(effect, params, force=fm, temperature=temp)
     # sensors: noise, encoder quantisation (1 um), tip force sensor noise
     q = 1e-6
-    sp = 0.004 * A
-    sf = 0.005 * L0
+    sp = 0.004 * A * cfg.noise
+    sf = 0.005 * L0 * cfg.noise
     chans = {
         "motor_pos": np.round((x + rng.normal(0, sp * 0.1, t.size)) / q) * q,
         "tip_pos": np.round((tip + rng.normal(0, sp, t.size)) / q) * q,
@@ -181,26 +188,26 @@ def _rig(rng: np.random.Generator, effect: str, index: int) -> Case:
     return Case(index, effect, channel, params, "rig", traj, interchange_text(t, chans, units, meta))
 
 
-def _pokes(rng: np.random.Generator, t: np.ndarray) -> np.ndarray:
+def _pokes(rng: np.random.Generator, t: np.ndarray, cfg: GenConfig) -> np.ndarray:
     """Indentation [m]: ramp-hold-release pokes of varied depth, speed and hold; d < 0 is off the pad."""
     d = np.full(t.shape, -1e-3)
-    k = int(rng.uniform(0.3, 1.0) * FS_HZ)
+    k = int(rng.uniform(0.3, 1.0) * cfg.fs_hz)
     while k < t.size:
         depth = rng.uniform(2e-3, 6e-3)
-        ramp = int(rng.uniform(0.2, 1.5) * FS_HZ)
-        hold = int(rng.uniform(0.5, 3.0) * FS_HZ)
-        rel = int(rng.uniform(0.2, 1.5) * FS_HZ)
+        ramp = int(rng.uniform(0.2, 1.5) * cfg.fs_hz)
+        hold = int(rng.uniform(0.5, 3.0) * cfg.fs_hz)
+        rel = int(rng.uniform(0.2, 1.5) * cfg.fs_hz)
         shape = np.concatenate([np.linspace(-1e-3, depth, ramp), np.full(hold, depth),
                                 np.linspace(depth, -1e-3, rel)])
         n = min(shape.size, t.size - k)
         d[k:k + n] = shape[:n]
-        k += n + int(rng.uniform(0.3, 1.0) * FS_HZ)
+        k += n + int(rng.uniform(0.3, 1.0) * cfg.fs_hz)
     return d
 
 
-def _pad(rng: np.random.Generator, effect: str, index: int) -> Case:
-    t = np.arange(int(DURATION_S * FS_HZ)) / FS_HZ
-    d = _pokes(rng, t)
+def _pad(rng: np.random.Generator, effect: str, index: int, cfg: GenConfig) -> Case:
+    t = np.arange(int(cfg.duration_s * cfg.fs_hz)) / cfg.fs_hz
+    d = _pokes(rng, t, cfg)
     d_dot = np.gradient(d, t)
     k_lin = rng.uniform(300.0, 3000.0)                  # N/m
     params: dict = {}
@@ -217,8 +224,8 @@ def _pad(rng: np.random.Generator, effect: str, index: int) -> Case:
             params = {"c": rng.uniform(0.15, 0.4) * k_lin * 5e-3 / vmax}
             F = _run_steps(effect, params, force=F, d=d, d_dot=d_dot)
     Fmax = float(np.max(F))
-    chans = {"indentation": np.round((d + rng.normal(0, 5e-6, t.size)) / 1e-6) * 1e-6,
-             "force": F + rng.uniform(-0.05, 0.05) + rng.normal(0, 0.005 * Fmax, t.size)}
+    chans = {"indentation": np.round((d + rng.normal(0, 5e-6 * cfg.noise, t.size)) / 1e-6) * 1e-6,
+             "force": F + rng.uniform(-0.05, 0.05) + rng.normal(0, 0.005 * Fmax * cfg.noise, t.size)}
     meta = {"source": f"teleop.diagnosis.generator case {index}"}
     channel = "force" if effect != "none" else None
     return Case(index, effect, channel, params, "pad", "pokes",
@@ -236,12 +243,12 @@ def case_plan(n: int) -> list[tuple[str, str]]:
     return [cycle[i % len(cycle)] for i in range(n)]
 
 
-def make_case(index: int, effect: str, setup: str, seed: int) -> Case:
+def make_case(index: int, effect: str, setup: str, seed: int, cfg: GenConfig = GenConfig()) -> Case:
     """Case `index` of a run seeded with `seed` (independent of the other cases)."""
     rng = np.random.default_rng([seed, index])
-    return _pad(rng, effect, index) if setup == "pad" else _rig(rng, effect, index)
+    return _pad(rng, effect, index, cfg) if setup == "pad" else _rig(rng, effect, index, cfg)
 
 
-def generate(n: int, seed: int) -> list[Case]:
+def generate(n: int, seed: int, cfg: GenConfig = GenConfig()) -> list[Case]:
     """n cases (see case_plan), reproducible from seed."""
-    return [make_case(i, e, s, seed) for i, (e, s) in enumerate(case_plan(n))]
+    return [make_case(i, e, s, seed, cfg) for i, (e, s) in enumerate(case_plan(n))]

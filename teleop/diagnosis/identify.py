@@ -29,6 +29,7 @@ PARSIMONY = 0.08     # candidates within 8 % of the best held-out RMSE count as 
 MAX_EFFECTS = 3      # per link
 FIT_SAMPLES = 2000   # fits run on the fit part decimated to about this many samples (stateful effects
                      # integrate along the smoothed drive, exact on monotone stretches); scores use all
+MIN_FIT_RATE_DT = 0.01  # ... but never decimated below 100 Hz (reversal timing), so long records fit more
 # never candidates: the contact baseline law itself, and time drift (no physical cause named: a drift
 # with time and no temperature channel is reported as unexplained, correlate "time")
 EXCLUDED = ("linear_contact", "thermal_drift_time")
@@ -144,7 +145,8 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
                     layout.append((i, spec))
     ysc = max(float(np.std(d.y[fit_idx])), 1e-12)
     g0 = start.gain if start.gain != 0 else 1.0
-    stride = max(1, (fit_idx.stop - (fit_idx.start or 0)) // FIT_SAMPLES)
+    dt = float(np.median(np.diff(d.t[:100])))
+    stride = max(1, min((fit_idx.stop - (fit_idx.start or 0)) // FIT_SAMPLES, int(MIN_FIT_RATE_DT / dt)))
     dfit = d.window(slice(fit_idx.start, fit_idx.stop, stride))
     contact_law = d.link.kind == "contact" and any(is_contact_law(n) for n, _ in effects)
 
