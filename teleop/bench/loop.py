@@ -20,15 +20,17 @@ def register(subparsers) -> None:
     p.add_argument("--rate", type=float, default=1000.0)
     p.add_argument("--json", metavar="F", help="write the DESIGN.md loop JSON")
     p.add_argument("--haptic", default="sim://?script=pokes")
-    p.add_argument("--robot", default="sim://robot")
+    p.add_argument("--robot", default="sim://robot?substeps=2",
+                   help="robot URL (default: the pybullet slave, 2 physics steps of 1 ms per reading)")
     p.add_argument("--record", metavar="FILE", help="keep the recording here (default: a temporary file)")
     p.add_argument("--no-record", action="store_true", help="benchmark without the recorder")
     p.add_argument("--spin-us", type=float, default=200.0, help="spin this long before each deadline [us]")
     p.add_argument("--stale-ms", type=float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO")
-    p.add_argument("--robot-rt", type=int, default=0,
-                   help="SCHED_FIFO priority of the robot process (default 0: time-sharing at nice -10)")
+    p.add_argument("--robot-rate", type=float, default=500.0, help="robot process rate [Hz] (default 500)")
+    p.add_argument("--robot-rt", type=int, default=45,
+                   help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
     p.add_argument("--find-max-rate", action="store_true",
                    help="run --seconds at increasing rates; report the highest with <= 0.1 %% misses")
     p.set_defaults(func=run)
@@ -42,7 +44,8 @@ def bench_once(args, rate: float) -> dict:
         record = None if args.no_record else (args.record or os.path.join(tmp, "bench.mcap"))
         params = LoopParams(rate_hz=rate, stale_limit=args.stale_ms * 1e-3)
         res = run_session(args.haptic, args.robot, args.seconds, record=record, params=params,
-                          spin_us=args.spin_us, realtime=not args.no_realtime, robot_rt_priority=args.robot_rt or None)
+                          spin_us=args.spin_us, realtime=not args.no_realtime, robot_rt_priority=args.robot_rt or None,
+                          robot_process_hz=args.robot_rate)
     out = dict(res.timing)
     out["recording"] = {"on": record is not None, "drops": res.drops, "alarm": res.alarm}
     out["final_state"] = res.final_state

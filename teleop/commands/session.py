@@ -10,12 +10,15 @@ from teleop.errors import InputError
 def register(subparsers) -> None:
     p = subparsers.add_parser("session", help="run teleoperation (stylus -> robot -> force feedback) and record it")
     p.add_argument("--haptic", default="sim://?script=pokes", help="stylus URL (default: simulated operator poking)")
-    p.add_argument("--robot", default="sim://robot", help="robot URL (default: the pybullet slave sim://robot)")
+    p.add_argument("--robot", default="sim://robot?substeps=2",
+                   help="robot URL (default: the pybullet slave, 2 physics steps of 1 ms per reading)")
     p.add_argument("--record", metavar="FILE", help="record the session to FILE (.mcap)")
     p.add_argument("--seconds", type=float, default=10.0, help="session length [s] (default 10)")
     p.add_argument("--rate", type=float, default=1000.0, help="haptic loop rate [Hz] (default 1000)")
-    p.add_argument("--robot-rate", type=float, default=1000.0,
-                   help="robot link rate [Hz]; the robot runs in its own process at this rate (default 1000)")
+    p.add_argument("--robot-rate", type=float, default=500.0,
+                   help="robot link rate [Hz]; the robot runs in its own process at this rate (default 500)")
+    p.add_argument("--robot-rt", type=int, default=45,
+                   help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
     p.add_argument("--robot-inline", action="store_true",
                    help="do the robot I/O inside the haptic tick instead (every tick)")
     p.add_argument("--motion-scale", type=float, default=None, help="robot displacement per stylus displacement")
@@ -44,7 +47,8 @@ def run(args) -> int:
     if args.motion_scale is not None:
         params = replace(params, mapping=replace(params.mapping, motion_scale=args.motion_scale))
     res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
-                      robot_process_hz=None if args.robot_inline else args.robot_rate, realtime=not args.no_realtime)
+                      robot_process_hz=None if args.robot_inline else args.robot_rate, realtime=not args.no_realtime,
+                      robot_rt_priority=args.robot_rt or None)
     t = res.timing
     print(f"session: {t['ticks']} ticks at {t['rate_hz']:g} Hz, lateness p50/p99/max "
           f"{t['lateness_us']['p50']:.0f}/{t['lateness_us']['p99']:.0f}/{t['lateness_us']['max']:.0f} us, "
