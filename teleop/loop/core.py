@@ -20,7 +20,7 @@ from teleop.loop.compute import clamp_force, ramp_factor, render_force
 from teleop.loop.params import LoopParams
 from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
 from teleop.loop.states import BEHAVIOURS, State
-from teleop.mapping import limit_lengths, platform_offsets, position2lengths, stylus2target
+from teleop.mapping import limit_lengths, platform_offsets, position2lengths
 
 STAGES = ("read", "map", "robot", "estimate", "render", "write", "record")
 HOMED, WATCHDOG_STOP, FIRMWARE_FAULT = 1, 2, 4
@@ -104,6 +104,7 @@ class Teleop:
         self.anchor_robot = self.pose[:3].copy()
         self.tap = None
         self.last_reading = None
+        self._follow_consts = None
         self.lateness_ns = 0  # set by the runner before each tick (recorded)
         self.prev_tick_ns = 0
 
@@ -155,17 +156,27 @@ class Teleop:
                 self.L_last = position2lengths(self.pose[:3], self.offsets)
 
     def follow(self, x) -> np.ndarray:
-        """ENABLED: stylus -> target -> lengths, step-limited to v_max dt and clipped to the length limits."""
-        m, g = self.params.mapping, self.geom
-        dt = self.params.dt * self.params.robot_every
-        p_t = stylus2target(x.sample.measured_cp, self.anchor_stylus, self.anchor_robot, m)
-        L_t = position2lengths(p_t, self.offsets)
-        step = float(np.max(np.abs(L_t - self.L_last)))
-        dmax = g.v_max * dt
+        """ENABLED: stylus -> target -> lengths, step-limited to v_max dt and clipped to the length limits.
+
+        Same math as teleop.mapping.stylus2target / position2lengths / limit_lengths, with the constant
+        parts precomputed (this runs every tick).
+        """
+        c = self._follow_consts
+        if c is None:
+            m, g = self.params.mapping, self.geom
+            c = self._follow_consts = (m.motion_scale * m.R_reg, m.workspace_min, m.workspace_max,
+                                       g.v_max * self.params.dt * self.params.robot_every, g.l_min, g.l_max)
+        sR, lo, hi, dmax, l_min, l_max = c
+        p_t = np.minimum(np.maximum(self.anchor_robot + sR @ (x.sample.measured_cp - self.anchor_stylus), lo), hi)
+        v = self.offsets + p_t
+        L_t = np.sqrt(np.einsum("ij,ij->i", v, v))
+        step = float(np.abs(L_t - self.L_last).max())
         if step > dmax:  # move along the straight line as far as the cable speed allows this tick
             p_t = self.pose[:3] + (p_t - self.pose[:3]) * (dmax / step)
             L_t = position2lengths(p_t, self.offsets)
-        L = limit_lengths(L_t, self.L_last, g, dt)
+        L = np.minimum(np.maximum(L_t, l_min), l_max)
+        if float(np.abs(L - self.L_last).max()) > dmax:  # second-order residue of the line step: hard limit
+            L = limit_lengths(L, self.L_last, self.geom, dmax / self.geom.v_max)
         self.pose[:3] = p_t
         return L
 
