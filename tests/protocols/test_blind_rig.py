@@ -84,13 +84,16 @@ def test_without_compensation_every_area_pushes_back_at_the_force_limit(chains):
 
 def test_cli_json_is_reproducible_byte_for_byte(tmp_path):
     outs = []
-    for name in ("a.json", "b.json"):
-        out = tmp_path / name
+    for name in ("a", "b"):
+        out = tmp_path / f"{name}.json"
+        extra = ["--plot", str(tmp_path / "a.png")] if name == "a" else []
         r = subprocess.run([sys.executable, "-m", "teleop.cli", "blind-test", "--participants", "1", "--seed", "3",
-                            "--speed-mm-s", "40", "--json", str(out)], capture_output=True, text=True, timeout=300)
+                            "--speed-mm-s", "40", "--json", str(out), *extra], capture_output=True, text=True,
+                           timeout=300)
         assert r.returncode == 0, r.stderr
         outs.append(out.read_bytes())
     assert outs[0] == outs[1]
+    assert (tmp_path / "a.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     data = json.loads(outs[0])
     for key in ("participants", "mean", "std", "correct_ranking_rate", "kendall_tau_mean", "kendall_w",
                 "rendered_stiffness_N_per_m", "true_stiffness_N_per_m"):

@@ -50,11 +50,11 @@ class RigOptions:
         motion_scale: robot displacement per stylus displacement [-].
         gap: pad surface distance ahead of the tip at the home pose [m] (effector brought just over it).
         robot_substeps: physics steps (1 ms) per robot-link exchange: the robot link runs at 1 kHz / this.
-        settle: time the chain runs before the first poke of a slot (engage + force ramp-in) [s].
+        settle: time the chain runs before a participant's first poke (engage + force ramp-in) [s].
         hold: time the participant holds at the deepest point [s].
         release_speed: stylus speed back to rest after a poke [m/s].
         rest: time at rest after a poke [s].
-        seed: seeds the stylus tremor and the FSR noise (mixed with the area).
+        seed: seeds the stylus tremor and the FSR noise (mixed with the arrangement number).
         tip_stiffness: series compliance between the commanded tip and the pad [N/m] in the simulated
             robot; None keeps scenes.sim_robot's default (382 N/m, fitted there to seed 000 Table 1).
     """
@@ -125,7 +125,8 @@ class _Station:
         self.robot = SimRobot(pad, robot_params, seed=robot_seed)
         self.clock = _ManualClock()
         self.stylus = SimulatedStylus(Script(kind="hold"), clock=self.clock, seed=stylus_seed)
-        # stylus -z (pushing down on the handle) drives the robot +z, into the pad
+        # stylus -z (pushing down on the handle) drives the robot +z, into the pad; the pad's reaction (-z in
+        # {B}) comes back as +z on the stylus, and the loop zeroes -z stylus forces as in the seed
         R_reg = np.diag([1.0, -1.0, -1.0])
         mapping = MappingParams(motion_scale=o.motion_scale, R_reg=R_reg)
         self.params = LoopParams(rate_hz=1000.0, robot_rate_hz=1000.0 / int(o.robot_substeps),

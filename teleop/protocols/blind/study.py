@@ -260,7 +260,8 @@ class StudyResult:
         R = self.ratings()
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
         labels = [a.label for a in self.areas]
-        ax1.boxplot([R[:, i] for i in range(R.shape[1])], labels=labels)
+        ax1.boxplot([R[:, i] for i in range(R.shape[1])])
+        ax1.set_xticks(range(1, len(labels) + 1), labels)
         ax1.plot(range(1, len(labels) + 1), [row["mean"] for row in SEED_TABLE3], "r*", ms=10,
                  label="seed 000 Table 3 mean")
         ax1.set_ylabel("rating (1 soft - 10 hard)")
@@ -279,6 +280,9 @@ class StudyResult:
             g = np.exp(np.mean(np.log(k_r)) - np.mean(np.log(k_true)))
             xs = np.array([min(k_true), max(k_true)])
             ax2.loglog(xs, g * xs, "k--", lw=0.8, label="ratios kept (slope 1)")
+            if self.expected:
+                ax2.loglog([a.stiffness for a in self.areas], [self.expected[a.name] for a in self.areas], "s:",
+                           color="grey", label="transparent chain (robot compliance in series)")
             ax2.legend(loc="upper left")
         ax2.set_xlabel("pad stiffness [N/m]")
         ax2.set_ylabel("rendered on the stylus dF/dx [N/m]")
