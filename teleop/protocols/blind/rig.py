@@ -326,6 +326,7 @@ class BackgroundSession:
                      "--force-scale", repr(options.force_scale), "--motion-scale", repr(options.motion_scale)]
         self.log_path = log_path
         self.proc = None
+        self.startup_check = 3.0  # [s] the session must still be running after this long
 
     def open(self) -> None:
         import subprocess
@@ -333,11 +334,27 @@ class BackgroundSession:
 
         from devices.base import open_device
 
-        open_device(self.argv[2])  # a bad URL fails here with one clear line
-        open_device(self.argv[4])
+        for url in (self.argv[2], self.argv[4]):  # a bad URL or a missing SDK fails here with one clear line
+            device = open_device(url)
+            device.open()
+            device.close()
         self.log = open(self.log_path, "ab")
+        start = self.log.tell()
         self.proc = subprocess.Popen([sys.executable, "-m", "teleop.cli", *self.argv], stdout=self.log,
                                      stderr=subprocess.STDOUT)
+        try:  # a session that cannot start (SDK missing, port busy) ends within moments: say why
+            self.proc.wait(timeout=self.startup_check)
+        except subprocess.TimeoutExpired:
+            return
+        self.proc = None
+        self.log.close()
+        with open(self.log_path, "rb") as fh:
+            fh.seek(start)
+            lines = fh.read().decode(errors="replace").strip().splitlines()
+        from teleop.errors import InputError
+
+        raise InputError(f"teleop session stopped at once: {lines[-1] if lines else 'no output'} "
+                         f"(log: {self.log_path})")
 
     def close(self) -> None:
         if self.proc is not None:
