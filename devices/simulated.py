@@ -147,6 +147,7 @@ class SimulatedStylus(ContextDevice):
 
     def open(self) -> None:
         self.rng = np.random.default_rng(self.seed)
+        self._nbuf, self._nbuf_i = [], 0
         self.clock = self._clock if self._clock is not None else time.perf_counter
         self.t0 = float(self.clock())
         self.t = 0.0
@@ -175,7 +176,7 @@ class SimulatedStylus(ContextDevice):
             n = int(1.0 / h)
         a_ou = math.exp(-h / 0.05)
         s_ou = op.tremor * math.sqrt(1.0 - a_ou * a_ou)
-        noise = (self.rng.standard_normal((n, 3)) * s_ou).tolist() if op.tremor > 0 else None
+        noise = self._noise(n, s_ou) if op.tremor > 0 else None
         # plain floats: a 3-vector in numpy costs more in call overhead than the arithmetic
         px, py, pz = self.p.tolist()
         vx, vy, vz = self.v.tolist()
@@ -204,6 +205,17 @@ class SimulatedStylus(ContextDevice):
         self.steps += n
         self.p, self.v, self.F_tremor, self.t = clipped, v, np.array([rx, ry, rz]), self.steps * h
 
+    def _noise(self, n: int, scale: float) -> list:
+        """n rows of 3 N(0, scale^2) draws, taken from blocks drawn 1024 rows at a time (same stream)."""
+        out = []
+        while len(out) < n:
+            if self._nbuf_i >= len(self._nbuf):
+                self._nbuf, self._nbuf_i = self.rng.standard_normal((1024, 3)).tolist(), 0
+            take = min(n - len(out), len(self._nbuf) - self._nbuf_i)
+            out.extend(self._nbuf[self._nbuf_i:self._nbuf_i + take])
+            self._nbuf_i += take
+        return [[scale * a, scale * b, scale * c] for a, b, c in out]
+
     def read(self) -> HapticSample:
         if not self.is_open:
             raise DeviceError("sim stylus: read() before open()")
@@ -218,9 +230,10 @@ class SimulatedStylus(ContextDevice):
         F = np.asarray(force, dtype=float)
         if F.shape != (3,):
             raise DeviceError(f"sim stylus: force must have 3 components, got shape {F.shape}")
-        if not np.isfinite(F).all():
-            F = np.zeros(3)  # the device's own guard: never apply NaN
-        n = float(np.linalg.norm(F))
+        x, y, z = F.tolist()
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+            F, x, y, z = np.zeros(3), 0.0, 0.0, 0.0  # the device's own guard: never apply NaN
+        n = math.sqrt(x * x + y * y + z * z)
         peak = self.spec.max_force_peak
         self.F_cmd = F if n <= peak else F * (peak / n)
 
