@@ -102,3 +102,22 @@ def test_larger_jnd_lowers_accuracy_on_close_stiffnesses():
         res = run_simulated_study(SpringRig(close, gain=1.0, cap=100.0), 40, seed=5, params=ParticipantParams(jnd=jnd))
         acc[jnd] = res.correct_ranking_rate
     assert acc[0.1] >= acc[0.6] + 0.3
+
+
+def test_jnd_curve_shares_pushes_across_jnds_and_accuracy_falls_with_jnd():
+    from teleop.bench.blind_jnd import jnd_curve, parse_jnds, wilson
+
+    assert parse_jnds("0.4, 23%,0.1") == [0.1, 0.23, 0.4]
+    lo, hi = wilson(50, 100)
+    assert lo < 0.5 < hi and hi - lo == pytest.approx(0.19, abs=0.01)
+    close = (Area("a", "A", 1300.0), Area("b", "B", 1000.0), Area("c", "C", 770.0), Area("d", "D", 600.0))
+    rig = SpringRig(close, gain=1.0, cap=100.0)
+    curve = jnd_curve(rig, [0.05, 0.8], 30, seed=4, base_params=ParticipantParams())
+    lo_j, hi_j = curve[0.05], curve[0.8]
+    assert [r.layout for r in lo_j.records] == [r.layout for r in hi_j.records]
+    # the k-th push on an area is the same push at every JND: the rig is poked once per distinct push,
+    # i.e. per participant and area as often as the more demanding JND needed
+    distinct = sum(max(len(a.slopes.get(x.name, [])), len(b.slopes.get(x.name, [])))
+                   for a, b in zip(lo_j.records, hi_j.records) for x in close)
+    assert len(rig.requests) == distinct < sum(r.pokes for c in curve.values() for r in c.records)
+    assert lo_j.correct_ranking_rate >= hi_j.correct_ranking_rate + 0.3

@@ -54,7 +54,8 @@ class RigOptions:
         hold: time the participant holds at the deepest point [s].
         release_speed: stylus speed back to rest after a poke [m/s].
         rest: time at rest after a poke [s].
-        seed: seeds the stylus tremor and the FSR noise (mixed with the arrangement number).
+        seed: seeds the stylus tremor and the FSR noise of the chain (mixed with the arrangement number;
+            fixed by default, so studies with different --seed share the chain's noise draws).
         tip_stiffness: series compliance between the commanded tip and the pad [N/m] in the simulated
             robot; None keeps scenes.sim_robot's default (382 N/m, fitted there to seed 000 Table 1).
     """
