@@ -41,17 +41,20 @@ def structure_matrix_at(p, Rr: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 
 def render_force(f, R_reg: np.ndarray, force_scale: float, zero_neg_z: bool) -> np.ndarray:
-    """(3,) stylus force [N] from the external wrench f (6,) in {B}: k_f R_reg^T f[:3], -z zeroed if asked."""
-    f3 = np.asarray(f, dtype=float)[:3]
-    big = not np.isfinite(f3).all() or float(np.max(np.abs(f3))) > 1e150
-    if big:
-        with np.errstate(all="ignore"):  # inf/NaN/overflow: clamp_force turns them into a fault
-            F = force_scale * (R_reg.T @ f3)
-    else:
-        F = force_scale * (R_reg.T @ f3)
-    if zero_neg_z and F[2] < 0.0:
-        F[2] = 0.0
-    return F
+    """(3,) stylus force [N] from the external wrench f (6,) in {B}: k_f R_reg^T f[:3], -z zeroed if asked.
+
+    Non-finite or overflowing inputs give non-finite output, which clamp_force turns into a fault.
+    """
+    fx, fy, fz = np.asarray(f, dtype=float)[:3].tolist()
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R_reg.tolist()
+    k = force_scale
+    # F = k R^T f, written out (a 3x3 product in numpy costs more in call overhead than in arithmetic)
+    Fx = k * (r00 * fx + r10 * fy + r20 * fz)
+    Fy = k * (r01 * fx + r11 * fy + r21 * fz)
+    Fz = k * (r02 * fx + r12 * fy + r22 * fz)
+    if zero_neg_z and Fz < 0.0:
+        Fz = 0.0
+    return np.array([Fx, Fy, Fz])
 
 
 def ramp_factor(elapsed: float, ramp_time: float) -> float:
