@@ -99,7 +99,8 @@ def test_larger_jnd_lowers_accuracy_on_close_stiffnesses():
     close = (Area("a", "A", 1300.0), Area("b", "B", 1000.0), Area("c", "C", 770.0), Area("d", "D", 600.0))
     acc = {}
     for jnd in (0.1, 0.6):
-        res = run_simulated_study(SpringRig(close, gain=1.0, cap=100.0), 40, seed=5, params=ParticipantParams(jnd=jnd))
+        rig = SpringRig(close, gain=1.0, cap=100.0)
+        res = run_simulated_study(rig, 40, seed=5, params=ParticipantParams(jnd=jnd))
         acc[jnd] = res.correct_ranking_rate
     assert acc[0.1] >= acc[0.6] + 0.3
 

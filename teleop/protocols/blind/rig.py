@@ -281,7 +281,8 @@ class SimRig:
         (the most any estimator can show; the device limits and filtering come on top)."""
         o = self.options
         kt = self.tip_stiffness()
-        return {a.name: o.force_scale * o.motion_scale * (a.stiffness if kt is None else kt * a.stiffness / (kt + a.stiffness))
+        gain = o.force_scale * o.motion_scale
+        return {a.name: gain * (a.stiffness if kt is None else kt * a.stiffness / (kt + a.stiffness))
                 for a in self.areas}
 
     @property
@@ -322,7 +323,8 @@ class BackgroundSession:
     """`--operator human` at a real stylus: `teleop session` runs the loop (with -z zeroed, as in the seed)
     in a child process for as long as the study takes; its output goes to `log_path`."""
 
-    def __init__(self, haptic_url: str, robot_url: str, options: RigOptions, log_path: str = "blind_test_session.log"):
+    def __init__(self, haptic_url: str, robot_url: str, options: RigOptions,
+                 log_path: str = "blind_test_session.log"):
         self.argv = ["session", "--haptic", haptic_url, "--robot", robot_url, "--seconds", "86400", "--zero-neg-z",
                      "--force-scale", repr(options.force_scale), "--motion-scale", repr(options.motion_scale)]
         self.log_path = log_path

@@ -10,10 +10,14 @@ import numpy as np
 # ratings of its ten participants and the mean and sample std (ddof=1) per area as printed. The printed std
 # of the white row (0.80) does not follow from its printed ratings (0.88 with ddof=1); the others do.
 SEED_TABLE3 = (
-    {"colour": "black", "material": "rigid PLA", "ratings": (10, 9, 9, 10, 10, 8, 10, 9, 9, 10), "mean": 9.4, "std": 0.70},
-    {"colour": "red", "material": "Dragon Skin 30", "ratings": (6, 7, 7, 7, 6, 5, 7, 7, 7, 8), "mean": 6.7, "std": 0.82},
-    {"colour": "yellow", "material": "Ecoflex 00-50", "ratings": (4, 6, 6, 4, 4, 3, 4, 5, 4, 5), "mean": 4.5, "std": 0.97},
-    {"colour": "white", "material": "Ecoflex 00-20", "ratings": (1, 3, 3, 2, 1, 1, 1, 2, 2, 3), "mean": 1.9, "std": 0.80},
+    {"colour": "black", "material": "rigid PLA", "ratings": (10, 9, 9, 10, 10, 8, 10, 9, 9, 10),
+     "mean": 9.4, "std": 0.70},
+    {"colour": "red", "material": "Dragon Skin 30", "ratings": (6, 7, 7, 7, 6, 5, 7, 7, 7, 8),
+     "mean": 6.7, "std": 0.82},
+    {"colour": "yellow", "material": "Ecoflex 00-50", "ratings": (4, 6, 6, 4, 4, 3, 4, 5, 4, 5),
+     "mean": 4.5, "std": 0.97},
+    {"colour": "white", "material": "Ecoflex 00-20", "ratings": (1, 3, 3, 2, 1, 1, 1, 2, 2, 3),
+     "mean": 1.9, "std": 0.80},
 )
 
 
