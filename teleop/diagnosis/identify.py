@@ -212,18 +212,21 @@ def baseline_fit(d: LinkData, fit_idx: slice, hold_idx: slice) -> Fit:
     return Fit(m, {"baseline": {"gain": 0.0, "offset": 0.0}}, rf, rms(r[hold_idx]), 2, n_eff)
 
 
-def wrong_form(name: str, params: dict) -> bool:
+def wrong_form(name: str, params: dict, d: LinkData) -> bool:
     """True when fitted parameters contradict the effect's defining signature (then it is not named):
-    Stribeck means more friction at low speed than in sliding (Fs > Fc)."""
+    Stribeck means more friction at low speed than in sliding (Fs > Fc); a relaxation faster than the
+    data resolve (tau below twice the inputs' smoothing) is damping, not viscoelasticity."""
     if name == "stribeck_friction":
         return params["Fs"] <= 1.1 * params["Fc"]
+    if name == "viscoelasticity":
+        return params["tau"] < 2.0 * d.resolution_s
     return False
 
 
-def _pick(cands: list[Fit]) -> Fit | None:
+def _pick(cands: list[Fit], d: LinkData) -> Fit | None:
     """Best held-out RMSE, preferring fewer parameters among candidates within PARSIMONY of it; fits
     with a parameter pinned on its bound (the effect's form does not fit the data) never win."""
-    cands = [c for c in cands if not c.at_bound and not any(wrong_form(n, p) for n, p in c.model.effects)]
+    cands = [c for c in cands if not c.at_bound and not any(wrong_form(n, p, d) for n, p in c.model.effects)]
     if not cands:
         return None
     best = min(c.rmse_hold for c in cands)
@@ -266,7 +269,7 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
                 progress(1)
         if not cands:
             break
-        pick = _pick(cands)
+        pick = _pick(cands, d)
         if pick is not None and round_ > 0:  # refine the screened addition jointly with the chain
             try:
                 joint = fit_chain(d, pick.model, (), fit_idx, hold_idx, seed=seed)

@@ -33,6 +33,21 @@ from teleop.physics import Signals, get_effect
 # encoder quantisation and sensor noise on an input would otherwise reach the rate estimates (sign(v)
 # flicker at reversals) and let hysteretic models win by filtering the noise instead of by physics
 SMOOTH_S = 0.02
+SMOOTH_MAX_S = 0.06   # noisier inputs are smoothed more, up to this width, so that the noise left on
+RATE_NOISE = 0.02     # their rate is at most this fraction of the rate's 99th percentile
+
+
+def smooth_width(x: np.ndarray, dt: float) -> int:
+    """Odd moving-average width [samples] for input x sampled every dt: at least SMOOTH_S, and enough
+    that the rate noise (sigma / (w dt) after a w-sample average and a central difference) stays below
+    RATE_NOISE of the rate's 99th percentile; at most SMOOTH_MAX_S."""
+    lo = max(1, int(round(SMOOTH_S / dt)))
+    hi = max(lo, int(round(SMOOTH_MAX_S / dt)))
+    dx = np.diff(x)
+    sigma = 1.4826 * float(np.median(np.abs(dx - np.median(dx)))) / np.sqrt(2.0)
+    v99 = float(np.percentile(np.abs(np.gradient(smooth(x, lo | 1), dt)), 99))
+    need = sigma / (RATE_NOISE * v99 * dt) if v99 > 0 else 0.0
+    return int(min(max(lo, need), hi)) | 1
 
 
 @dataclass(frozen=True)
@@ -91,7 +106,8 @@ def smooth(x: np.ndarray, width: int) -> np.ndarray:
 @dataclass(frozen=True)
 class LinkData:
     """A link's arrays: t (n,) [s], u (n,) input, y (n,) output, x (n,) smoothed drive or None, load,
-    temperature, theta (bend angle) or None."""
+    temperature, theta (bend angle) or None; resolution_s: the inputs' smoothing width [s] (the shortest
+    time scale the data resolves)."""
 
     link: Link
     t: np.ndarray
@@ -101,6 +117,7 @@ class LinkData:
     load: np.ndarray | None
     temperature: np.ndarray | None
     theta: np.ndarray | None
+    resolution_s: float = 0.0
     cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property
@@ -111,18 +128,26 @@ class LinkData:
         def cut(a):
             return None if a is None else a[sl]
         return LinkData(self.link, self.t[sl], self.u[sl], self.y[sl], cut(self.x), cut(self.load),
-                        cut(self.temperature), cut(self.theta))
+                        cut(self.temperature), cut(self.theta), self.resolution_s)
 
 
 def link_data(rec: Recording, link: Link) -> LinkData:
-    """The arrays of `link` from `rec`; inputs (not the output) are smoothed over SMOOTH_S."""
+    """The arrays of `link` from `rec`; inputs (not the output) are smoothed (see smooth_width)."""
     ch = rec.channels
-    width = max(1, int(round(SMOOTH_S / rec.dt)) | 1)
-    x = smooth(ch[link.drive], width) if link.drive and link.kind != "contact" else None
-    u = smooth(ch[link.input], width)
-    load = smooth(ch[link.load], width) if link.load else None
-    temp = smooth(ch["temperature"], width) if "temperature" in ch else None
-    return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"))
+    dt = rec.dt
+
+    widths = []
+
+    def sm(name):
+        w = smooth_width(ch[name], dt)
+        widths.append(w)
+        return smooth(ch[name], w)
+
+    x = sm(link.drive) if link.drive and link.kind != "contact" else None
+    u = sm(link.input)
+    load = sm(link.load) if link.load else None
+    temp = sm("temperature") if "temperature" in ch else None
+    return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"), max(widths) * dt)
 
 
 @dataclass(frozen=True)
