@@ -7,7 +7,7 @@ towards a scripted target; the commanded stylus force acts on the same mass, so 
     m a = k (p_target(t) - p) - b v + F_cmd + F_tremor(t)
 
 integrated with semi-implicit Euler at a fixed step h (so a run is deterministic for a seed whatever the
-read timing). Scripts: `hold`, `sine` (amplitude along an axis), `pokes` (press down by a depth and
+read timing); the script's time starts at the first read(). Scripts: `hold`, `sine` (amplitude along an axis), `pokes` (press down by a depth and
 release, periodically), `recorded` (targets from an (N, 4) array of t, x, y, z). Buttons: bit 0 deadman
 (operator present), bit 1 clutch, each from a list of (t0, t1) intervals. Time comes from `clock` (default
 time.perf_counter, relative to open()); tests pass a manual clock.
@@ -149,7 +149,7 @@ class SimulatedStylus(ContextDevice):
         self.rng = np.random.default_rng(self.seed)
         self._nbuf, self._nbuf_i = [], 0
         self.clock = self._clock if self._clock is not None else time.perf_counter
-        self.t0 = float(self.clock())
+        self.t0 = None  # the script starts at the first read(), not at open()
         self.t = 0.0
         self.steps = 0
         self.p = self.script.target(0.0).astype(float).copy()
@@ -219,6 +219,8 @@ class SimulatedStylus(ContextDevice):
     def read(self) -> HapticSample:
         if not self.is_open:
             raise DeviceError("sim stylus: read() before open()")
+        if self.t0 is None:
+            self.t0 = float(self.clock())
         self._advance(float(self.clock()) - self.t0)
         buttons, present = self.script.buttons(self.t)
         return HapticSample(t=self.t, measured_cp=self.p.copy(), orientation=self.R, measured_cv=self.v.copy(),
@@ -286,7 +288,7 @@ def from_url(parsed, options: dict) -> SimulatedStylus:
         if "file" not in options:
             raise InputError("sim:// stylus script=recorded needs file=PATH (CSV t_s,x_m,y_m,z_m or a recording)")
         points = load_points(str(options["file"]))
-    amp = num("depth_mm", 12.0) if kind == "pokes" else num("amp_mm", 10.0)
+    amp = num("depth_mm", 30.0) if kind == "pokes" else num("amp_mm", 10.0)
     script = Script(kind=kind, axis=axes[axis], amplitude=amp * 1e-3, period=num("period_s", 2.0),
                     duty=num("duty", 0.5), points=points, clutch=_intervals(str(options.get("clutch", "")), "clutch"),
                     absent=_intervals(str(options.get("absent", "")), "absent"),

@@ -36,8 +36,9 @@ class MappingParams:
         R_reg: (3, 3) rotation from the stylus frame to the robot frame {B}. Default: 180 deg about x, so
             pressing the stylus down (-z of the stylus) pokes the robot forward (+z of {B}, towards tissue),
             and the tissue's reaction (-z in {B}) pushes the hand up (+z of the stylus).
-        workspace_min, workspace_max: (3,) robot target box in {B} [m] (default: the tensionable box of the
-            default geometry, +-5 mm about the home pose).
+        workspace_min, workspace_max: (3,) robot target box in {B} [m] (default: x, y within +-5 mm, z from
+            -5 mm to +12 mm - inside the tensionable set of the default geometry at the home orientation,
+            and deep enough to indent a pad 5 mm ahead of the tool by up to 7 mm).
         home: (6,) robot home pose [x, y, z, alpha, beta, gamma] (m, rad); its orientation is held.
         align_tol: largest stylus tilt from the registered neutral orientation that counts as aligned [rad].
     """
@@ -45,7 +46,7 @@ class MappingParams:
     motion_scale: float = 0.25
     R_reg: np.ndarray = field(default_factory=lambda: _frozen(np.diag([1.0, -1.0, -1.0])))
     workspace_min: np.ndarray = field(default_factory=lambda: _frozen([-0.005, -0.005, -0.005]))
-    workspace_max: np.ndarray = field(default_factory=lambda: _frozen([0.005, 0.005, 0.005]))
+    workspace_max: np.ndarray = field(default_factory=lambda: _frozen([0.005, 0.005, 0.012]))
     home: np.ndarray = field(default_factory=lambda: _frozen(np.zeros(6)))
     align_tol: float = np.deg2rad(20.0)
 
