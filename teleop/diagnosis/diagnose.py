@@ -127,6 +127,13 @@ class Diagnosis:
             noise = max(noise_level(r), float(np.std(np.diff(r))) / math.sqrt(2.0) * 0.5, 1e-300)
             loc = locate(d, r, d.y, index=self.hold)
             best_r2 = loc.evidence[loc.condition]
+            if res.delay:
+                tau, r_delay = res.delay
+                out.append({"channel": d.link.output, "link": d.link.kind,
+                            "correlate": "delay between input and output", "delay_s": tau,
+                            "r2": round(1.0 - (r_delay / max(rms(rh), 1e-300)) ** 2, 4), "rmse": rms(rh),
+                            "rmse_delayed_link": r_delay, "noise_rmse": noise, "windows": loc.windows})
+                continue
             if rms(rh - rh.mean()) > STRUCTURE * noise and best_r2 >= R2_MIN:
                 out.append({"channel": d.link.output, "link": d.link.kind, "correlate": loc.condition,
                             "r2": round(best_r2, 4), "rmse": rms(rh), "noise_rmse": noise,

@@ -244,6 +244,31 @@ class LinkResult:
     steps: tuple
     ranking: dict
     final: Fit
+    delay: tuple = ()      # (tau [s], held-out RMSE) of the delayed ideal link, when it rivals the effects
+
+
+MAX_DELAY_S = 0.25
+
+
+def delay_fit(d: LinkData, fit_idx: slice, hold_idx: slice) -> tuple[float, float]:
+    """(tau [s], held-out RMSE) of the ideal link with a pure delay, y(t) = g u(t - tau) + c, |tau| <=
+    MAX_DELAY_S: the uncatalogued alternative a lag-like effect must beat (a sensor or transport delay
+    is not backlash or friction)."""
+    dt = float(np.median(np.diff(d.t[:100])))
+    u = np.maximum(d.u, 0.0) if d.link.kind == "contact" else d.u
+    stride = max(1, (fit_idx.stop - (fit_idx.start or 0)) // FIT_SAMPLES)
+    fi = np.arange(fit_idx.start or 0, fit_idx.stop, stride)
+    best = (0.0, math.inf, 0.0, 0.0)
+    for tau in np.linspace(-MAX_DELAY_S, MAX_DELAY_S, 2 * int(MAX_DELAY_S / max(dt, 2e-3)) + 1):
+        us = np.interp(d.t - tau, d.t, u)
+        A = np.column_stack([us[fi], np.ones(fi.size)])
+        (g, c), *_ = np.linalg.lstsq(A, d.y[fi], rcond=None)
+        r = rms(d.y[fi] - A @ np.array([g, c]))
+        if r < best[1]:
+            best = (float(tau), r, float(g), float(c))
+    tau, _, g, c = best
+    us = np.interp(d.t - tau, d.t, u)
+    return tau, rms((d.y - (g * us + c))[hold_idx])
 
 
 def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, seed: int = 0) -> LinkResult:
@@ -253,6 +278,7 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
     steps = []
     ranking = {}
     pool = applicable(d)
+    delay = ()
     for round_ in range(MAX_EFFECTS):
         cands = []
         for name in pool:
@@ -277,9 +303,14 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
                     pick = joint
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 pass
+        if pick is not None and round_ == 0 and d.link.kind != "contact":
+            tau, r_delay = delay_fit(d, fit_idx, hold_idx)
+            if abs(tau) > 0 and r_delay <= pick.rmse_hold * (1 + PARSIMONY):
+                delay = (tau, r_delay)   # a plain delay explains it as well: name nothing
+                break
         pays = pick is not None and (pick.rmse_hold * ACCEPT <= current.rmse_hold) and delta_bic(pick, current) < 0
         if not pays:
             break
         steps.append((current, pick))
         current = pick
-    return LinkResult(d, base, tuple(steps), ranking, current)
+    return LinkResult(d, base, tuple(steps), ranking, current, delay)

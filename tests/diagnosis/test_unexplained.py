@@ -45,3 +45,21 @@ def test_spring_load_without_tip_sensor(tmp_path):
     assert force and force[0]["effect"] == "coulomb_friction"
     assert abs(force[0]["params"]["Fc"]["value"] - 0.6) < 0.12
     assert doc["channels"]["motor_force"]["input"] == "tip_pos"
+
+
+def test_pure_delay_is_not_called_backlash(tmp_path):
+    rng = np.random.default_rng(5)
+    t = np.arange(0, 20, 2e-3)
+
+    def motion(tt):
+        return 5e-3 * np.sin(2 * np.pi * 0.4 * tt) + 2e-3 * np.sin(2 * np.pi * 0.93 * tt)
+
+    x, tip = motion(t), 0.95 * motion(t - 0.03)          # a 30 ms sensor delay, no play
+    path = write_interchange(tmp_path / "d.csv", t, {"motor_pos": x + rng.normal(0, 2e-6, t.size),
+                                                     "tip_pos": tip + rng.normal(0, 2e-6, t.size)},
+                             UNITS, {})
+    doc = diagnose(read_interchange(path)).as_dict()
+    assert doc["findings"] == []
+    (u,) = doc["unexplained"]
+    assert u["correlate"] == "delay between input and output"
+    assert abs(u["delay_s"] - 0.03) < 0.005
