@@ -21,16 +21,18 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.polynomial.polynomial import polyval
 
 from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes.pads import Pad, z_test_pad
 from scenes.world import PadWorld, WorldParams
 from teleop.errors import InputError
 from teleop.geometry import Geometry, default_geometry
-from teleop.kinematics import bending_angles, check_lengths, poses2lengths, rotation_zyx, structure_matrix
+from teleop.kinematics import (bending_angles, check_lengths, pose2cables, poses2lengths, rotation_zyx,
+                               structure_matrix)
 from teleop.physics.capstan import CapstanStep, tip2motor_transitions
 from teleop.physics.sensor_effects import SensorHysteresisStep, hysteresis_offset
-from teleop.sensors import LOADING, UNLOADING, FsrCalibration, default_fsr_calibration
+from teleop.sensors import FsrCalibration, default_fsr_calibration
 from teleop.tension import wrench2tensions
 
 
@@ -102,20 +104,20 @@ _FREE = [0, 1, 2, 4, 5]  # axial geometry: roll alpha is not set by the cables
 
 def lengths2poses(L, geom: Geometry, guess=None, iters: int = 6, tol: float = 1e-9) -> np.ndarray:
     """(n, 6) poses for (n, 6) cable lengths [m]: batched Gauss-Newton on poses2lengths (axial geometry,
-    alpha = 0), numerical Jacobian; raises InputError if any sample misses by more than 1 um."""
+    alpha = 0), forward-difference Jacobian; raises InputError if any sample misses by more than 1 um."""
     L = np.atleast_2d(np.asarray(L, dtype=float))
     n = len(L)
     q = np.zeros((n, 6)) if guess is None else np.array(np.broadcast_to(guess, (n, 6)), dtype=float)
     h = 1e-7
     for _ in range(iters):
-        r = poses2lengths(q, geom) - L
+        # one poses2lengths call per iteration: the poses and their 5 perturbations stacked
+        Q = np.repeat(q[:, None, :], 6, axis=1)
+        Q[:, np.arange(1, 6), _FREE] += h
+        Lq = poses2lengths(Q.reshape(-1, 6), geom).reshape(n, 6, 6)
+        r = Lq[:, 0] - L
         if np.abs(r).max() < tol:
             break
-        J = np.empty((n, 6, 5))
-        for j, idx in enumerate(_FREE):
-            dq = q.copy()
-            dq[:, idx] += h
-            J[:, :, j] = (poses2lengths(dq, geom) - L - r) / h
+        J = np.swapaxes((Lq[:, 1:] - Lq[:, :1]) / h, 1, 2)  # (n, 6 lengths, 5 free coordinates)
         JT = np.swapaxes(J, 1, 2)
         step = np.linalg.solve(JT @ J, (JT @ r[:, :, None]))[:, :, 0]
         q[:, _FREE] -= step
@@ -173,9 +175,12 @@ def wrenches2tensions(f, A, t_min: float, t_max: float, t_ref: float) -> np.ndar
 
 def fsr_conductance(t, s, cal: FsrCalibration) -> np.ndarray:
     """Conductance [S] of FSRs at tension t [N] in loading state s in [-1, 1] (+1 loading, -1 unloading):
-    the calibration's two branches blended linearly in s."""
+    the calibration's two branches (FsrCalibration.reading) blended linearly in s."""
     w = 0.5 * (1.0 + np.asarray(s, dtype=float))
-    return w * cal.reading(t, LOADING) + (1.0 - w) * cal.reading(t, UNLOADING)
+    t = np.asarray(t, dtype=float)
+    gl = np.maximum(polyval(t, cal.loading), 0.0)  # = cal.reading(t, LOADING), without building Polynomials
+    gu = np.maximum(polyval(t, cal.unloading), 0.0)
+    return w * gl + (1.0 - w) * gu
 
 
 def counts_from(g, cal: FsrCalibration, noise) -> np.ndarray:
@@ -301,7 +306,7 @@ class SimRobot(ContextDevice):
         p, g = self.params, self.geom
         tip, f, A = self._physics()
         t_tip = wrench2tensions(f, A, g.t_min, g.t_max, p.pretension)
-        theta = capstan_angles_batch(self.pose[None], g)[0]
+        theta = bending_angles(pose2cables(self.pose, g), g) + g.theta0
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
         t_fsr = np.array([cs.step(x=x[i], load=t_tip[i], theta=theta[i]) for i, cs in enumerate(self._capstan)])
         s = np.array([h.step(t_fsr[i]) - t_fsr[i] for i, h in enumerate(self._hyst)])
