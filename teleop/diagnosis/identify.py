@@ -303,9 +303,10 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
                     pick = joint
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 pass
-        if pick is not None and round_ == 0 and d.link.kind != "contact":
+        if round_ == 0 and d.link.kind != "contact":
             tau, r_delay = delay_fit(d, fit_idx, hold_idx)
-            if abs(tau) > 0 and r_delay * ACCEPT <= base.rmse_hold and r_delay <= pick.rmse_hold * (1 + PARSIMONY):
+            if abs(tau) > 0 and r_delay * ACCEPT <= base.rmse_hold and (
+                    pick is None or r_delay <= pick.rmse_hold * (1 + PARSIMONY)):
                 delay = (tau, r_delay)   # a plain delay explains it as well: name nothing
                 break
         pays = pick is not None and (pick.rmse_hold * ACCEPT <= current.rmse_hold) and delta_bic(pick, current) < 0
