@@ -116,8 +116,8 @@ class PadWorld:
         self.client, self._pb = c, pb
         c.setTimeStep(p.dt)
         c.setGravity(0, 0, 0)
-        # Bullet's default contact breaking threshold (0.02 m) is tuned for metre-scale scenes: a tip moving a
-        # few mm keeps stale manifold points and doubles the force (measured); 0.1 mm keeps one point.
+        # Bullet's default contact breaking threshold (0.02 m) is sized for metre-scale scenes; 0.1 mm suits a
+        # millimetre tip. (It alone did not stop extra manifold points: see the contact sphere and no-roll.)
         c.setPhysicsEngineParameter(numSolverIterations=p.solver_iterations, deterministicOverlappingPairs=1,
                                     contactBreakingThreshold=1e-4)
         self._xy_cached = np.zeros(2)
