@@ -7,7 +7,8 @@ towards a scripted target; the commanded stylus force acts on the same mass, so 
     m a = k (p_target(t) - p) - b v + F_cmd + F_tremor(t)
 
 integrated with semi-implicit Euler at a fixed step h (so a run is deterministic for a seed whatever the
-read timing); the script's time starts at the first read(). Scripts: `hold`, `sine` (amplitude along an axis), `pokes` (press down by a depth and
+read timing); the script's time starts at open(), or at the first read() with `start_on_read` (the URL
+default, so a session's script starts with its loop). Scripts: `hold`, `sine` (amplitude along an axis), `pokes` (press down by a depth and
 release, periodically), `recorded` (targets from an (N, 4) array of t, x, y, z). Buttons: bit 0 deadman
 (operator present), bit 1 clutch, each from a list of (t0, t1) intervals. Time comes from `clock` (default
 time.perf_counter, relative to open()); tests pass a manual clock.
@@ -135,12 +136,13 @@ class SimulatedStylus(ContextDevice):
     """A simulated haptic stylus (HapticDevice) driven by an operator model."""
 
     def __init__(self, script: Script | None = None, operator: OperatorParams | None = None,
-                 spec: DeviceSpec = TOUCH_SPEC, seed: int = 0, clock=None):
+                 spec: DeviceSpec = TOUCH_SPEC, seed: int = 0, clock=None, start_on_read: bool = False):
         self.script = script or Script()
         self.operator = operator or OperatorParams()
         self.spec = spec
         self.seed = int(seed)
         self._clock = clock
+        self.start_on_read = bool(start_on_read)
         self.is_open = False
         self.p = np.zeros(3)
         self.v = np.zeros(3)
@@ -149,7 +151,7 @@ class SimulatedStylus(ContextDevice):
         self.rng = np.random.default_rng(self.seed)
         self._nbuf, self._nbuf_i = [], 0
         self.clock = self._clock if self._clock is not None else time.perf_counter
-        self.t0 = None  # the script starts at the first read(), not at open()
+        self.t0 = None if self.start_on_read else float(self.clock())
         self.t = 0.0
         self.steps = 0
         self.p = self.script.target(0.0).astype(float).copy()
@@ -254,7 +256,7 @@ def _intervals(text: str, key: str) -> tuple:
     return tuple(out)
 
 
-_OPTIONS = {"script", "seed", "amp_mm", "depth_mm", "period_s", "duty", "axis", "clutch", "absent", "tilt_deg",
+_OPTIONS = {"start", "script", "seed", "amp_mm", "depth_mm", "period_s", "duty", "axis", "clutch", "absent", "tilt_deg",
             "spec", "k", "m", "b", "tremor_N", "file"}
 
 
@@ -298,7 +300,11 @@ def from_url(parsed, options: dict) -> SimulatedStylus:
     specs = {"touch": TOUCH_SPEC, "omega": OMEGA_SPEC}
     if spec_name not in specs:
         raise InputError(f"sim:// stylus option 'spec': expected touch or omega, got '{spec_name}'")
-    return SimulatedStylus(script, op, spec=specs[spec_name], seed=int(num("seed", 0)), clock=options.get("clock"))
+    start = str(options.get("start", "read"))
+    if start not in ("read", "open"):
+        raise InputError(f"sim:// stylus option 'start': expected read or open, got '{start}'")
+    return SimulatedStylus(script, op, spec=specs[spec_name], seed=int(num("seed", 0)), clock=options.get("clock"),
+                           start_on_read=start == "read")
 
 
 def load_points(path: str) -> np.ndarray:

@@ -42,7 +42,10 @@ def bench_once(args, rate: float) -> dict:
 
     with tempfile.TemporaryDirectory() as tmp:
         record = None if args.no_record else (args.record or os.path.join(tmp, "bench.mcap"))
-        params = LoopParams(rate_hz=rate, stale_limit=args.stale_ms * 1e-3)
+        from teleop.mapping import POKE_WORKSPACE_MAX, MappingParams
+
+        params = LoopParams(rate_hz=rate, stale_limit=args.stale_ms * 1e-3,
+                            mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
         res = run_session(args.haptic, args.robot, args.seconds, record=record, params=params,
                           spin_us=args.spin_us, realtime=not args.no_realtime, robot_rt_priority=args.robot_rt or None,
                           robot_process_hz=args.robot_rate)

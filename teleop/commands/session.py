@@ -42,8 +42,10 @@ def run(args) -> int:
         raise InputError(f"--seconds must be > 0, got {args.seconds}")
     if args.record and not args.record.endswith(".mcap"):
         raise InputError(f"--record {args.record}: expected a file name ending in .mcap")
+    from teleop.mapping import POKE_WORKSPACE_MAX, MappingParams
+
     params = LoopParams(rate_hz=args.rate, force_scale=args.force_scale, stale_limit=args.stale_ms * 1e-3,
-                        zero_neg_z=args.zero_neg_z)
+                        zero_neg_z=args.zero_neg_z, mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     if args.motion_scale is not None:
         params = replace(params, mapping=replace(params.mapping, motion_scale=args.motion_scale))
     res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
