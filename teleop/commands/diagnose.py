@@ -68,9 +68,10 @@ def run(args) -> int:
         cross = cross_file(diags)
         result = {"recordings": docs, "cross_file": cross}
         for ch, s in cross["summary"].items():
-            print(f"across files, {ch}: {'+'.join(s['effects'])} fitted on one file, scored on another: "
-                  f"improvement x{s['improvement_geomean']:.2f} (geometric mean of {s['pairs']} pairs), "
-                  f"min x{s['improvement_min']:.2f}")
+            chains = ", ".join(f"{c} (min x{m:.2f})" for c, m in s["by_chain"].items())
+            print(f"across files, {ch}: effects fitted on one file, scored on another: improvement "
+                  f"x{s['improvement_geomean']:.2f} (geometric mean of {s['pairs']} pairs), min "
+                  f"x{s['improvement_min']:.2f}; by chain: {chains}")
     if args.json:
         write_json(args.json, result)
     if args.plot:

@@ -19,7 +19,8 @@ from teleop.diagnosis.links import LinkModel
 
 def cross_file(diags: list[Diagnosis]) -> dict:
     """{"pairs": [{"channel", "effects", "fitted_on", "scored_on", "rmse_before", "rmse_after",
-    "improvement"}], "summary": {channel: {"effects", "improvement_geomean", "improvement_min"}}}."""
+    "improvement"}], "summary": {channel: {"chains", "pairs", "improvement_geomean", "improvement_min",
+    "by_chain": {chain: min improvement}}}}."""
     pairs = []
     for A in diags:
         for resA in A.links:
@@ -44,8 +45,11 @@ def cross_file(diags: list[Diagnosis]) -> dict:
     summary = {}
     for ch in sorted({p["channel"] for p in pairs}):
         imps = [p["improvement"] for p in pairs if p["channel"] == ch]
-        names = sorted({n for p in pairs if p["channel"] == ch for n in p["effects"]})
-        summary[ch] = {"effects": names, "pairs": len(imps),
+        chains = sorted({"+".join(p["effects"]) for p in pairs if p["channel"] == ch})
+        summary[ch] = {"chains": chains, "pairs": len(imps),
                        "improvement_geomean": math.exp(float(np.mean(np.log(imps)))),
-                       "improvement_min": min(imps)}
+                       "improvement_min": min(imps),
+                       "by_chain": {c: min(p["improvement"] for p in pairs
+                                           if p["channel"] == ch and "+".join(p["effects"]) == c)
+                                    for c in chains}}
     return {"pairs": pairs, "summary": summary}
