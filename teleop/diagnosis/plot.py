@@ -27,9 +27,9 @@ def figure(diag, findings: list | None = None):
         t = d.t[hold]
         names = "+".join(res.final.names) or "none"
         wins = [w for f in findings if f["channel"] == d.link.output for w in f["where"]["windows"]]
-        # focus the time axes on a stretch of the held-out part that holds located windows
+        # the held-out part (its first 10 s when longer)
         t0 = t[0]
-        t1 = min(t[-1], t0 + max(4.0, 0.25 * (t[-1] - t0)))
+        t1 = min(t[-1], t0 + 10.0)
         sel = (t >= t0) & (t <= t1)
         ax = row[0]
         ax.plot(t[sel], d.y[hold][sel], "k.", ms=1.5, label="measured")
