@@ -105,6 +105,8 @@ class Teleop:
         self.tap = None
         self.last_reading = None
         self._follow_consts = None
+        self._est_seq = None  # sequence number and robot time of the last frame the estimator saw
+        self._est_t = 0.0
         self.lateness_ns = 0  # set by the runner before each tick (recorded)
         self.prev_tick_ns = 0
 
@@ -224,6 +226,7 @@ class Teleop:
         self.range.reset()
         self.stuck.reset()
         self.estimator.reset()
+        self._est_seq = None
         self.robot_fresh.reset(self.x.now)
         self.stylus_fresh.reset(self.x.now)
 
@@ -291,15 +294,19 @@ class Teleop:
                     self.fault(f"robot status 0x{int(r.status):02x}: "
                                + ("watchdog stop" if r.status & WATCHDOG_STOP else "firmware fault"))
                 self.robot_fresh.update(now, r.seq)
-                t, f = self.estimator.update(r, self.pose, p.dt * p.robot_every)
-                if not (np.isfinite(t).all() and np.isfinite(f).all()):
-                    raise ValueError("estimated tensions/wrench not finite")
-                self.tensions, self.wrench = t, f
-                if self.state != State.FAULT:
-                    reason = self.range.update(now, t) if self.state != State.DISABLED else None
-                    reason = reason or self.stuck.update(now, t, x.dL)
-                    if reason:
-                        self.fault(reason)
+                if r.seq != self._est_seq:  # a new frame: estimate (a repeated frame changes nothing)
+                    dt = r.t - self._est_t if self._est_seq is not None and r.t > self._est_t else \
+                        p.dt * p.robot_every
+                    self._est_seq, self._est_t = r.seq, r.t
+                    t, f = self.estimator.update(r, self.pose, dt)
+                    if not (np.isfinite(t).all() and np.isfinite(f).all()):
+                        raise ValueError("estimated tensions/wrench not finite")
+                    self.tensions, self.wrench = t, f
+                    if self.state != State.FAULT:
+                        reason = self.range.update(now, t) if self.state != State.DISABLED else None
+                        reason = reason or self.stuck.update(now, t, x.dL)
+                        if reason:
+                            self.fault(reason)
             if self.state != State.FAULT:
                 reason = self.robot_fresh.check(now) or self.stylus_fresh.check(now)
                 if reason:
