@@ -1,6 +1,6 @@
 """`teleop export FILE --csv OUT [--cable N]`: a session as the interchange CSV of DESIGN.md, one cable.
 
-Columns (one row per robot reading): t_s; motor_pos_mm (cable hauled in by the motor, from the step count,
+Columns (one row per robot telemetry frame): t_s; motor_pos_mm (cable hauled in by the motor, from the step count,
 + = shortening); tip_pos_mm (cable hauled in at the end effector, from the simulator's actual tip pose when
 the recording has it); motor_force_N (the FSR's calibrated tension, the sensor side of the distal sheath
 segment); tip_force_N (tension at the end effector, when the recording has the simulator's truth);
@@ -40,10 +40,12 @@ def export_rows(session, cable: int):
     sp = {m["tick"]: m for m in session.messages("/teleop/setpoint")}
     header = ["t_s", "motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "cmd_len_mm"]
     rows = []
+    last_seq = None
     for m in session.messages("/robot/measured"):
         k = m["tick"]
-        if k not in est or k not in sp:
-            continue
+        if k not in est or k not in sp or m["seq"] == last_seq:
+            continue  # one row per telemetry frame (the loop may see a frame on several ticks)
+        last_seq = m["seq"]
         pose = home.copy()
         pose[:3] = sp[k]["setpoint_cp"]
         theta = bending_angles(pose2cables(pose, geom), geom)[i] + geom.theta0
