@@ -50,7 +50,7 @@ def test_session_replay_export_commands_default_simulation(tmp_path, capsys):
     lines = csv.read_text().splitlines()
     header = next(line for line in lines if not line.startswith("#"))
     assert header.split(",")[:2] == ["t_s", "motor_pos_mm"] and "motor_force_N" in header
-    assert "bend_angle_deg" in header and len(lines) > 500
+    assert "bend_angle_deg" in header and len(lines) > 300  # one row per 500 Hz telemetry frame
 
 
 @pytest.mark.parametrize("argv, msg", [
