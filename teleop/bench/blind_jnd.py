@@ -57,7 +57,9 @@ def wilson(k: int, n: int, z: float = 1.96) -> tuple:
 
 
 def jnd_curve(rig, jnds, participants: int, seed: int, base_params, progress=None) -> dict:
-    """{jnd: StudyResult} for every JND, each participant run on the same layout and pushes."""
+    """{jnd: StudyResult} for every JND, each participant run on the same layout and pushes.
+
+    progress(partial), optional, is called after each participant with the curve so far."""
     import dataclasses
 
     from teleop.protocols.blind.study import StudyResult, coordinator_draws, record_from, run_participant
@@ -80,8 +82,22 @@ def jnd_curve(rig, jnds, participants: int, seed: int, base_params, progress=Non
             answers, ranking, ratings, person = run_participant(palpate, len(areas), params, (seed, p))
             records[j].append(record_from(p, layout, order, answers, ranking, ratings, person))
         if progress is not None:
-            progress()
+            progress({j: StudyResult(areas=areas, records=tuple(records[j])) for j in jnds})
     return {j: StudyResult(areas=areas, records=tuple(records[j])) for j in jnds}
+
+
+def curve_points(curve: dict) -> list:
+    """Per JND: participants, correct-ranking share with its 95 % Wilson interval, mean tau, pokes."""
+    points = []
+    for j in sorted(curve):
+        res = curve[j]
+        n = len(res.records)
+        k = sum(r.ranking == res.truth for r in res.records)
+        lo, hi = wilson(k, n)
+        points.append({"jnd": j, "participants": n, "correct_ranking_rate": k / n, "ci95": [lo, hi],
+                       "kendall_tau_mean": res.kendall_tau_mean,
+                       "pokes_mean": sum(r.pokes for r in res.records) / n})
+    return points
 
 
 def run(args) -> int:
@@ -95,25 +111,30 @@ def run(args) -> int:
     args.jnd = None
     base = participant_params(args)
     options = rig_options(args)
+
+    def document(points, complete: bool, rig_desc) -> dict:
+        return {"participants": args.participants, "seed": args.seed, "complete": complete, "points": points,
+                "participant_params": dataclasses_asdict(base), "rig": rig_desc}
+
     with SimRig(options) as rig, tqdm(total=args.participants, desc="blind-jnd", unit="participant",
                                       file=sys.stderr, disable=not sys.stderr.isatty()) as bar:
-        curve = jnd_curve(rig, jnds, args.participants, args.seed, base, progress=bar.update)
         rig_desc = rig.describe()
-    points = []
+
+        def progress(partial):
+            bar.update()
+            done = len(next(iter(partial.values())).records)
+            if args.json and done % 10 == 0 and done < args.participants:  # a long run leaves usable results
+                write_json(args.json, document(curve_points(partial), False, rig_desc))
+
+        curve = jnd_curve(rig, jnds, args.participants, args.seed, base, progress=progress)
+    points = curve_points(curve)
     print(f"{'JND':>6}  {'correct':>8}  {'95% CI':>15}  {'tau mean':>8}  {'pokes/participant':>17}")
-    for j in jnds:
-        res = curve[j]
-        n = len(res.records)
-        k = sum(r.ranking == res.truth for r in res.records)
-        lo, hi = wilson(k, n)
-        pokes = sum(r.pokes for r in res.records) / n
-        points.append({"jnd": j, "participants": n, "correct_ranking_rate": k / n, "ci95": [lo, hi],
-                       "kendall_tau_mean": res.kendall_tau_mean, "pokes_mean": pokes})
-        print(f"{j:6.2f}  {k / n:8.2f}  [{lo:5.2f}, {hi:5.2f}]  {res.kendall_tau_mean:8.3f}  {pokes:17.1f}")
-    out = {"participants": args.participants, "seed": args.seed, "points": points,
-           "participant_params": dataclasses_asdict(base), "rig": rig_desc}
+    for pt in points:
+        lo, hi = pt["ci95"]
+        print(f"{pt['jnd']:6.2f}  {pt['correct_ranking_rate']:8.2f}  [{lo:5.2f}, {hi:5.2f}]  "
+              f"{pt['kendall_tau_mean']:8.3f}  {pt['pokes_mean']:17.1f}")
     if args.json:
-        write_json(args.json, out)
+        write_json(args.json, document(points, True, rig_desc))
     if args.plot:
         import matplotlib
 
@@ -125,10 +146,11 @@ def run(args) -> int:
         y = [pt["correct_ranking_rate"] for pt in points]
         err = [[pt["correct_ranking_rate"] - pt["ci95"][0] for pt in points],
                [pt["ci95"][1] - pt["correct_ranking_rate"] for pt in points]]
-        ax.errorbar(x, y, yerr=err, fmt="o-", capsize=3)
+        ax.errorbar(x, y, yerr=err, fmt="o-", capsize=3, label="all four in the right order")
+        ax.plot(x, [pt["kendall_tau_mean"] for pt in points], "s--", label="mean Kendall tau")
         ax.axvline(23, color="grey", ls="--", lw=0.8, label="Jones & Hunter 1990: 23 %")
         ax.set_xlabel("stiffness JND [%]")
-        ax.set_ylabel("share ranking all four areas correctly")
+        ax.set_ylabel("share / tau")
         ax.set_ylim(-0.02, 1.02)
         ax.set_title(f"{args.participants} simulated participants per point"
                      + ("" if options.compensation else " (no compensation)"))
