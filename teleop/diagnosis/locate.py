@@ -78,8 +78,15 @@ def condition_features(d: LinkData, output: np.ndarray) -> dict:
         f["drifting with temperature"] = d.temperature[:, None]
     f["drifting with time"] = d.t[:, None]
     if d.link.kind == "contact":
-        f["with indentation rate"] = np.gradient(smooth(d.u, max(1, n // 500) | 1), d.t)[:, None]
+        rate = np.gradient(smooth(d.u, max(1, n // 500) | 1), d.t)
+        f["with indentation rate"] = rate[:, None]
         f["with indentation depth"] = (np.maximum(d.u, 0.0) ** 2)[:, None]
+        holding = (d.u > 0) & (np.abs(rate) < 0.02 * float(np.max(np.abs(rate)) + 1e-300))
+        # relaxation: the time held so far, inside each hold
+        start = np.where(holding & ~np.concatenate(([False], holding[:-1])), np.arange(n), 0)
+        np.maximum.accumulate(start, out=start)
+        held = np.where(holding, d.t - d.t[start], 0.0)
+        f["during holds"] = np.column_stack([holding.astype(float), held])
     return f
 
 
@@ -153,6 +160,11 @@ def locate(d: LinkData, r: np.ndarray, output: np.ndarray, index=None, change: n
     (switching conditions) or is large (the others)."""
     sl = slice(None) if index is None else index
     target = r if change is None else change
+    if d.link.kind == "contact":
+        # a pad's static stiffness change (linear in depth) is the baseline gain's: project it out
+        A = np.column_stack([np.ones(d.n), np.maximum(d.u, 0.0)])
+        coef, *_ = np.linalg.lstsq(A[sl], target[sl], rcond=None)
+        target = target - A @ coef
     feats = condition_features(d, output)
     if "periodic in position" in feats:
         feats["periodic in position"] = periodic_features(feats["periodic in position"], target, sl)
