@@ -3,8 +3,11 @@
 Pure functions on plain floats (the loop calls them every tick) and a small stateful `Renderer`.
 Order in one tick (`Renderer.render_xyz`):
   1. the force part of the wrench in {B}; any NaN/inf -> zero force and a latched fault;
-  2. optional zeroing of negative z (seed 000 blind test: forces along -z of {B} set to zero);
-  3. frame map f_dev = scale * R_dev_B f_B;
+  2. frame map f_dev = scale * R_dev_B f_B;
+  3. optional zeroing of negative z IN THE DEVICE FRAME (seed 000 sec 5.2, blind test: "all forces generated
+     in the negative direction of the z-axis were set to zero" - the Geomagic Touch's frame, whose z axis
+     points toward the user, so a -z force pulls the hand toward the pad; the pad's reaction, along -z of
+     {B}, arrives as +z on the device with the loop's registration R_dev_B = diag(1, -1, -1) and is kept);
   4. ramp-in (CHAI3D style): after enable(), output stays zero until the computed force has stayed below
      `engage_N` for `engage_ticks` ticks, then it ramps linearly from 0 to 1 over `ramp_s`;
   5. passivity guard: a time-domain passivity observer (Hannaford & Ryu 2002) on the stylus port,
@@ -38,7 +41,8 @@ class RenderParams:
         R_dev_B: rotation from robot frame {B} to the device frame (3x3, rows), the same one the motion
             mapping uses the other way.
         scale: force scale device/robot [-].
-        zero_negative_z: set the -z (in {B}) force component to zero (seed 000 blind test).
+        zero_negative_z: set the -z force component of the DEVICE frame (after the frame map) to zero
+            (seed 000 blind test).
         engage_N, engage_ticks: force must stay below engage_N for engage_ticks ticks before engaging.
         ramp_s: ramp-in duration after engaging [s].
         alpha_max: largest passivity damping [N s/m] (0 switches the passivity guard off).
@@ -102,7 +106,8 @@ class Renderer:
     """Stateful force renderer: `render(wrench, velocity, dt)` -> (3,) stylus force [N] in the device frame.
 
     Starts DISABLED (zero force). `enable()` arms the ramp-in; `fault` latches on non-finite input until
-    `reset()`. `state` is one of disabled, waiting, ramping, engaged.
+    `reset()`. `state` is one of disabled, waiting, ramping, engaged. `mapped` holds the last finite input
+    after steps 2-3 (device frame, scaled, -z zeroed if asked) in every state, before ramp, passivity, clamp.
     """
 
     def __init__(self, params: RenderParams = RenderParams()):
@@ -117,6 +122,7 @@ class Renderer:
         self.small_ticks = 0
         self.ramp = 0.0
         self.energy = 0.0
+        self.mapped = (0.0, 0.0, 0.0)
 
     def enable(self) -> None:
         """Arm the ramp-in (no effect while faulted or already engaged)."""
@@ -130,6 +136,7 @@ class Renderer:
         self.state = DISABLED
 
     def _trip(self, reason: str) -> tuple:
+        self.mapped = (0.0, 0.0, 0.0)
         self.fault = True
         self.fault_reason = reason
         self.state = DISABLED
@@ -143,13 +150,14 @@ class Renderer:
             return self._trip("non-finite force")
         if vx * 0.0 + vy * 0.0 + vz * 0.0 + dt * 0.0 != 0.0:
             return self._trip("non-finite stylus velocity or dt")
+        p = self.params
+        x, y, z = frame_map(p.R_dev_B, p.scale, fx, fy, fz)
+        if p.zero_negative_z and z < 0.0:
+            z = 0.0
+        self.mapped = (x, y, z)
         state = self.state
         if state == DISABLED or self.fault:
             return 0.0, 0.0, 0.0
-        p = self.params
-        if p.zero_negative_z and fz < 0.0:
-            fz = 0.0
-        x, y, z = frame_map(p.R_dev_B, p.scale, fx, fy, fz)
         if state != ENGAGED:
             if state == WAITING:
                 m = max(abs(x), abs(y), abs(z))  # m < engage_N first: no overflow in the squares

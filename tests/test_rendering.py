@@ -97,3 +97,20 @@ def test_passivity_observer_keeps_the_port_passive():
     assert energies[0.0].min() < -0.01                                 # unguarded: the port generates energy
     # guarded: passive up to what alpha_max cannot absorb near the velocity zero crossings
     assert energies[50.0].min() > 0.01 * energies[0.0].min()
+
+
+def test_negative_z_is_zeroed_in_the_device_frame_with_the_loop_registration():
+    """Seed 000 sec 5.2 zeroes -z of the Touch's frame (z toward the user): with the loop's default
+    registration the pad's reaction on the tip (-z of {B}) reaches the hand as +z and is kept, while a force
+    pulling the tip into the pad (+z of {B}, -z on the device: toward the pad) is removed."""
+    from teleop.mapping import MappingParams
+
+    R_dev_B = MappingParams().R_reg.T
+    r = engaged(RenderParams(max_force=5.0, R_dev_B=R_dev_B, zero_negative_z=True, ramp_s=0.0, alpha_max=0.0))
+    reaction = r.render([0.1, 0.2, -0.7, 0, 0, 0], 1e-3)
+    np.testing.assert_allclose(reaction, [0.1, -0.2, 0.7])
+    pulling = r.render([0.1, 0.2, 0.7, 0, 0, 0], 1e-3)
+    np.testing.assert_allclose(pulling, [0.1, -0.2, 0.0])
+    assert r.mapped == (0.1, -0.2, 0.0)
+    kept = engaged(RenderParams(max_force=5.0, R_dev_B=R_dev_B, ramp_s=0.0, alpha_max=0.0))
+    np.testing.assert_allclose(kept.render([0.1, 0.2, 0.7, 0, 0, 0], 1e-3), [0.1, -0.2, -0.7])
