@@ -50,7 +50,7 @@ def _bars_figure(res):
     reps = len(res.pokes) // max(n, 1)
     ax.set_title(f"palpation {res.test} test, {res.profile} speed, seed {res.seed} (simulated"
                  f"{f', mean of {reps} repeats' if reps > 1 else ''})")
-    ax.legend(fontsize=7, ncol=3, loc="upper left")
+    ax.legend(fontsize=7, ncol=3 if n > 6 else 2, loc="upper left")
     fig.tight_layout(rect=(0, 0.03, 1, 1))
     return fig
 
