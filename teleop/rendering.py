@@ -12,7 +12,8 @@ Order in one tick (`Renderer.render_xyz`):
      `engage_N` for `engage_ticks` ticks, then it ramps linearly from 0 to 1 over `ramp_s`;
   5. passivity guard: a time-domain passivity observer (Hannaford & Ryu 2002) on the stylus port,
      E_k = E_{k-1} - f_k . v_k dt (energy absorbed from the hand); when the step would make E negative a
-     damper alpha = -E / (|v|^2 dt), alpha <= alpha_max [N s/m], adds -alpha v so E stays >= 0;
+     damper alpha = -E / (|v|^2 dt), alpha <= alpha_max [N s/m], adds -alpha v so E stays >= 0 (its -z
+     part in the device frame is zeroed too when zero_negative_z is set);
   6. clamp the norm to the device's continuous limit (direction kept).
 """
 
@@ -88,6 +89,12 @@ def frame_map(R, scale: float, x: float, y: float, z: float) -> tuple:
             scale * (r2[0] * x + r2[1] * y + r2[2] * z))
 
 
+def is_small(x: float, y: float, z: float, limit: float) -> bool:
+    """True when |(x, y, z)| < limit (the engage test); huge or non-finite components give False."""
+    m = max(abs(x), abs(y), abs(z))  # m < limit first: no overflow in the squares
+    return m < limit and math.sqrt(x * x + y * y + z * z) < limit
+
+
 def clamp_norm(x: float, y: float, z: float, limit: float) -> tuple:
     """(x, y, z) scaled down to norm <= limit (direction kept); non-finite input gives (0, 0, 0)."""
     m = max(abs(x), abs(y), abs(z))
@@ -160,9 +167,7 @@ class Renderer:
             return 0.0, 0.0, 0.0
         if state != ENGAGED:
             if state == WAITING:
-                m = max(abs(x), abs(y), abs(z))  # m < engage_N first: no overflow in the squares
-                small = m < p.engage_N and math.sqrt(x * x + y * y + z * z) < p.engage_N
-                self.small_ticks = self.small_ticks + 1 if small else 0
+                self.small_ticks = self.small_ticks + 1 if is_small(x, y, z, p.engage_N) else 0
                 if self.small_ticks < p.engage_ticks:
                     return 0.0, 0.0, 0.0
                 self.state, self.ramp = RAMPING, 0.0
@@ -181,6 +186,8 @@ class Renderer:
                 # passivity controller: damper -alpha v that returns the observed energy to >= 0
                 alpha = min(-e_next / (v2 * dt), p.alpha_max)
                 x, y, z = clamp_norm(x - alpha * vx, y - alpha * vy, z - alpha * vz, limit)
+                if p.zero_negative_z and z < 0.0:  # the damper may not pull toward the pad either
+                    z = 0.0
                 e_next = self.energy - (x * vx + y * vy + z * vz) * dt
             self.energy = e_next if e_next * 0.0 == 0.0 else 0.0
         return x, y, z

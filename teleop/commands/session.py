@@ -23,7 +23,13 @@ def register(subparsers) -> None:
                    help="do the robot I/O inside the haptic tick instead (every tick)")
     p.add_argument("--motion-scale", type=float, default=None, help="robot displacement per stylus displacement")
     p.add_argument("--force-scale", type=float, default=1.0, help="stylus force per newton at the tip")
-    p.add_argument("--zero-neg-z", action="store_true", help="zero stylus forces along -z (seed 000 blind test)")
+    p.add_argument("--zero-neg-z", action="store_true",
+                   help="zero forces along -z of the stylus frame, i.e. toward the pad (seed 000 blind test)")
+    p.add_argument("--passivity-damping", type=float, default=0.0, metavar="N_S_PER_M",
+                   help="largest damping of the passivity observer/controller [N s/m] (default 0: off)")
+    p.add_argument("--fsr-calibration", metavar="CSV",
+                   help="FSR calibration (columns tension_N, conductance_uS, branch) for the estimator "
+                        "(default: the built-in synthetic calibration)")
     p.add_argument("--stale-ms", type=float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
@@ -42,13 +48,23 @@ def run(args) -> int:
         raise InputError(f"--seconds must be > 0, got {args.seconds}")
     if args.record and not args.record.endswith(".mcap"):
         raise InputError(f"--record {args.record}: expected a file name ending in .mcap")
+    from teleop.loop.params import LOOP_RENDER
     from teleop.mapping import POKE_WORKSPACE_MAX, MappingParams
 
-    params = LoopParams(rate_hz=args.rate, force_scale=args.force_scale, stale_limit=args.stale_ms * 1e-3,
-                        zero_neg_z=args.zero_neg_z, mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
+    render = replace(LOOP_RENDER, scale=args.force_scale, zero_negative_z=args.zero_neg_z,
+                     alpha_max=args.passivity_damping)
+    params = LoopParams(rate_hz=args.rate, stale_limit=args.stale_ms * 1e-3, render=render,
+                        mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     if args.motion_scale is not None:
         params = replace(params, mapping=replace(params.mapping, motion_scale=args.motion_scale))
-    res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
+    estimator = None
+    if args.fsr_calibration:  # read before any device is opened or file written: a bad file leaves nothing
+        from teleop.estimation.reading import ReadingEstimator
+        from teleop.geometry import default_geometry
+        from teleop.sensors import load_fsr_calibration
+
+        estimator = ReadingEstimator(default_geometry(), "dynamic", cal=load_fsr_calibration(args.fsr_calibration))
+    res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params, estimator=estimator,
                       robot_process_hz=None if args.robot_inline else args.robot_rate, realtime=not args.no_realtime,
                       robot_rt_priority=args.robot_rt or None)
     t = res.timing

@@ -10,17 +10,17 @@ same tick.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from teleop.geometry import Geometry, default_geometry
 from teleop.kinematics import lengths2pose
-from teleop.loop.compute import clamp_force, ramp_factor, render_force
 from teleop.loop.params import LoopParams
 from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
 from teleop.loop.states import BEHAVIOURS, State
 from teleop.mapping import limit_lengths, platform_offsets, position2lengths
+from teleop.rendering import DISABLED, Renderer, is_small
 
 STAGES = ("read", "map", "robot", "estimate", "render", "write", "record")
 HOMED, WATCHDOG_STOP, FIRMWARE_FAULT = 1, 2, 4
@@ -37,7 +37,7 @@ class TickData:
     robot_due: bool = False
     L_cmd: np.ndarray | None = None
     dL: np.ndarray = field(default_factory=lambda: np.zeros(6))
-    F_raw: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    F_raw: tuple = (0.0, 0.0, 0.0)  # mapped force before ramp-in, passivity and clamp [N] (device frame)
     F: np.ndarray = field(default_factory=lambda: np.zeros(3))
     ramp: float = 0.0
 
@@ -54,7 +54,10 @@ class Event:
 
 
 class Teleop:
-    """State of one teleoperation session; the math is delegated to teleop.mapping and teleop.loop.compute.
+    """State of one teleoperation session; the math is delegated to teleop.mapping, the estimator and a
+    teleop.rendering.Renderer (frame map, scale, -z zeroing, ramp-in, passivity, clamp to the device's
+    continuous limit). The state machine decides WHEN force may engage: the Renderer is enabled (engage_ticks
+    0, it ramps in at once) on entering ENABLED and disabled on leaving it.
 
     Args:
         haptic: HapticDevice (opened by the caller).
@@ -76,8 +79,9 @@ class Teleop:
             estimator = ReadingEstimator(self.geom, "dynamic")
         self.estimator = estimator
         self.on_event = on_event
-        self.limit = float(haptic.spec.max_force_continuous)
         p, m = self.params, self.params.mapping
+        self.renderer = Renderer(replace(p.render, max_force=float(haptic.spec.max_force_continuous),
+                                         engage_ticks=0))
         self.offsets = platform_offsets(self.geom, m.home[3:])
         self.stylus_fresh = Freshness("stylus", p.stale_limit, p.startup_timeout)
         self.robot_fresh = Freshness("robot", p.stale_limit, p.startup_timeout)
@@ -99,7 +103,6 @@ class Teleop:
         self.L_last = None  # last commanded lengths [m]
         self.tensions = np.zeros(len(self.geom.B))
         self.wrench = np.zeros(6)
-        self.t_engaged = 0.0
         self.anchor_stylus = np.zeros(3)
         self.anchor_robot = self.pose[:3].copy()
         self.tap = None
@@ -136,15 +139,10 @@ class Teleop:
     def telemetry_fresh(self, now: float) -> bool:
         return self.robot_fresh.is_fresh(now) and self.stylus_fresh.is_fresh(now)
 
-    def ramp(self, now: float) -> float:
-        self.x.ramp = ramp_factor(now - self.t_engaged, self.params.ramp_time)
-        return self.x.ramp
-
     def anchor(self, now: float) -> None:
-        """Engage: stylus and robot anchors for the incremental mapping, restart the force ramp."""
+        """Engage: stylus and robot anchors for the incremental mapping (the Renderer ramps the force in)."""
         self.anchor_stylus = np.array(self.x.sample.measured_cp, dtype=float)
         self.anchor_robot = self.pose[:3].copy()
-        self.t_engaged = now
         if self.L_last is None:  # first engagement: start from where the robot is
             r = self.x.reading if self.x.reading is not None else self.last_reading
             L = None if r is None else np.asarray(r.commanded_lengths, dtype=float)
@@ -204,6 +202,10 @@ class Teleop:
         src = self.state
         self.state = state
         self.behaviour = BEHAVIOURS[state]
+        if state == State.ENABLED:
+            self.renderer.enable()
+        else:
+            self.renderer.disable()
         self._log(src.name, state.name, reason)
         if state == State.DISABLED:
             self.reset_requested = False
@@ -221,6 +223,7 @@ class Teleop:
     def _reset_from_fault(self) -> None:
         self.fault_reason = ""
         self.enable_requested = False
+        self.renderer.reset()
         self.boot_id = None
         self.L_last = None
         self.range.reset()
@@ -316,16 +319,18 @@ class Teleop:
         t4 = ns()
         # RENDER ------------------------------------------------------------------------------------------------
         try:
-            x.F_raw = render_force(self.wrench, p.mapping.R_reg, p.force_scale, p.zero_neg_z)
+            rd = self.renderer
+            fx, fy, fz = self.wrench[:3].tolist()
+            vx, vy, vz = x.sample.measured_cv.tolist() if x.sample is not None else (0.0, 0.0, 0.0)
+            F = rd.render_xyz(fx, fy, fz, p.dt, vx, vy, vz)  # zero force unless ENABLED
+            if rd.fault:
+                self.fault(f"render: {rd.fault_reason}")
+            x.F_raw = rd.mapped  # device frame, scaled, -z zeroed: the force that would be rendered
             if self.state == State.ALIGNING:
-                n = float(np.sqrt(x.F_raw @ x.F_raw))
-                self.small_force_ticks = self.small_force_ticks + 1 if n < p.engage_force else 0
-            x.ramp = 0.0
-            F, ok = clamp_force(self.behaviour.force(self, x), self.limit)
-            if not ok:
-                self.fault("render: commanded force not finite")
-                F = np.zeros(3)
-            x.F = F
+                small = is_small(*x.F_raw, p.render.engage_N)
+                self.small_force_ticks = self.small_force_ticks + 1 if small else 0
+            x.ramp = rd.ramp if rd.state != DISABLED else 0.0
+            x.F = np.array(F)
         except Exception as exc:  # noqa: BLE001
             x.F = np.zeros(3)
             self.fault(f"render: {type(exc).__name__}: {exc}")

@@ -7,20 +7,16 @@ force / transition, no global run flags.
     ENABLED/CLUTCHED --operator gone--> ALIGNING;  any --disable--> DISABLED
     any --fault--> FAULT (latched: only operator_reset() leaves it, to DISABLED)
 
-`command` returns the cable lengths to send this tick (or None: no motion command); `force` returns the
-stylus force before the safety clamp. Only ENABLED moves the robot or pushes on the operator.
+`command` returns the cable lengths to send this tick (or None: no motion command). Only ENABLED moves the
+robot or pushes on the operator: the loop enables its teleop.rendering.Renderer when entering ENABLED (the
+force ramps in) and disables it when leaving (zero force), so the states decide WHEN and the Renderer HOW.
 """
 
 from __future__ import annotations
 
 from enum import IntEnum
 
-import numpy as np
-
 from teleop.mapping import is_aligned
-
-ZERO3 = np.zeros(3)
-ZERO3.setflags(write=False)
 
 
 class State(IntEnum):
@@ -32,7 +28,7 @@ class State(IntEnum):
 
 
 class Behaviour:
-    """Default behaviour: no motion, zero force, stay."""
+    """Default behaviour: no motion, stay."""
 
     state: State
 
@@ -41,9 +37,6 @@ class Behaviour:
 
     def command(self, tp, x):
         return None
-
-    def force(self, tp, x) -> np.ndarray:
-        return ZERO3
 
     def transition(self, tp, x) -> State | None:
         return None
@@ -70,7 +63,7 @@ class Aligning(Behaviour):
         s = x.sample
         ready = (s is not None and s.operator_present and not (s.buttons & 2) and tp.telemetry_fresh(x.now)
                  and tp.robot_homed and is_aligned(s.orientation, tp.params.mapping))
-        if ready and tp.small_force_ticks >= tp.params.engage_ticks:
+        if ready and tp.small_force_ticks >= tp.params.render.engage_ticks:
             return State.ENABLED
         return None
 
@@ -83,9 +76,6 @@ class Enabled(Behaviour):
 
     def command(self, tp, x):
         return tp.follow(x)
-
-    def force(self, tp, x):
-        return x.F_raw * tp.ramp(x.now)
 
     def transition(self, tp, x):
         if not tp.enable_requested:

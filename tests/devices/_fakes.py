@@ -8,8 +8,7 @@ import numpy as np
 
 from devices.base import ContextDevice, DeviceError, RobotReading, RobotSpec
 from teleop.geometry import default_geometry
-from teleop.kinematics import length_jacobian, pose2lengths
-from teleop.loop.compute import structure_matrix_at
+from teleop.kinematics import length_jacobian, pose2lengths, structure_matrix
 from teleop.tension import wrench2tensions
 
 N_PER_COUNT = 0.01
@@ -72,7 +71,7 @@ class FakeRobot(ContextDevice):
             f[2] = -self.k_pad * (p[2] - self.z_pad)  # the pad pushes the tool back (-z)
         key = (tuple(np.round(p, 9)), f[2])
         if key != getattr(self, "_key", None):  # tension distribution only when something changed
-            A = structure_matrix_at(p, self.geom.r, self.geom.B)
+            A = structure_matrix(np.r_[p, 0.0, 0.0, 0.0], self.geom)  # the fake holds the home orientation
             self._key, self._t = key, wrench2tensions(f, A, 0.05, 9.0, t_ref=self.pretension)
         t = self._t.copy()
         if self.stuck is not None:
@@ -109,7 +108,7 @@ class LinearEstimator:
 
     def update(self, reading, pose, dt):
         t = np.asarray(reading.fsr_counts, dtype=float) * N_PER_COUNT
-        return t, -(structure_matrix_at(np.asarray(pose)[:3], self.geom.r, self.geom.B) @ t)
+        return t, -(structure_matrix(pose, self.geom) @ t)
 
     def describe(self):
         return {"estimator": "linear", "N_per_count": N_PER_COUNT}
