@@ -10,12 +10,12 @@ URL: ``omega://`` (first device) or ``omega://?id=N``.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
 
 from devices.base import OMEGA_SPEC, ContextDevice, DeviceError, DeviceUnavailable, HapticSample
+from devices.guard import guarded_force
 from teleop.errors import InputError
 
 
@@ -70,17 +70,7 @@ class OmegaStylus(ContextDevice):
                             buttons=buttons & 3, operator_present=bool(buttons & 1))
 
     def servo_cf(self, force) -> None:
-        if not self.is_open:
-            raise DeviceError("omega://: servo_cf() before open()")
-        F = np.asarray(force, dtype=float)
-        if F.shape != (3,):
-            raise DeviceError(f"omega://: force must have 3 components, got shape {F.shape}")
-        if not np.isfinite(F).all():
-            F = np.zeros(3)
-        n = math.sqrt(float(F @ F))
-        if n > self.spec.max_force_peak:
-            F = F * (self.spec.max_force_peak / n)
-        self._check(self._dhd.setForce([float(F[0]), float(F[1]), float(F[2])], ID=self.ID), "setForce")
+        self._check(self._dhd.setForce(list(guarded_force(self, force, "omega://")), ID=self.ID), "setForce")
 
 
 def from_url(parsed, options: dict) -> OmegaStylus:

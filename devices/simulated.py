@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from devices.base import OMEGA_SPEC, TOUCH_SPEC, ContextDevice, DeviceError, DeviceSpec, HapticSample
+from devices.guard import guarded_force
 from teleop.errors import InputError
 from teleop.kinematics import rotation_zyx
 
@@ -229,17 +230,7 @@ class SimulatedStylus(ContextDevice):
                             buttons=buttons, operator_present=present)
 
     def servo_cf(self, force) -> None:
-        if not self.is_open:
-            raise DeviceError("sim stylus: servo_cf() before open()")
-        F = np.asarray(force, dtype=float)
-        if F.shape != (3,):
-            raise DeviceError(f"sim stylus: force must have 3 components, got shape {F.shape}")
-        x, y, z = F.tolist()
-        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
-            F, x, y, z = np.zeros(3), 0.0, 0.0, 0.0  # the device's own guard: never apply NaN
-        n = math.sqrt(x * x + y * y + z * z)
-        peak = self.spec.max_force_peak
-        self.F_cmd = F if n <= peak else F * (peak / n)
+        self.F_cmd = np.array(guarded_force(self, force, "sim stylus"))
 
 
 def _intervals(text: str, key: str) -> tuple:

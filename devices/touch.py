@@ -12,12 +12,12 @@ URL: ``touch://`` or ``touch://?name=Default%20Device``.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
 
 from devices.base import TOUCH_SPEC, ContextDevice, DeviceError, DeviceUnavailable, HapticSample
+from devices.guard import guarded_force
 from teleop.errors import InputError
 
 MM = 1e-3
@@ -90,17 +90,7 @@ class TouchStylus(ContextDevice):
                             measured_cv=np.array(v), buttons=buttons & 3, operator_present=bool(buttons & 1))
 
     def servo_cf(self, force) -> None:
-        if not self.is_open:
-            raise DeviceError("touch://: servo_cf() before open()")
-        F = np.asarray(force, dtype=float)
-        if F.shape != (3,):
-            raise DeviceError(f"touch://: force must have 3 components, got shape {F.shape}")
-        if not np.isfinite(F).all():
-            F = np.zeros(3)
-        n = math.sqrt(float(F @ F))
-        if n > self.spec.max_force_peak:
-            F = F * (self.spec.max_force_peak / n)
-        self._force = (float(F[0]), float(F[1]), float(F[2]))
+        self._force = guarded_force(self, force, "touch://")
 
 
 def from_url(parsed, options: dict) -> TouchStylus:

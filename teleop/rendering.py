@@ -97,9 +97,9 @@ def is_small(x: float, y: float, z: float, limit: float) -> bool:
 
 def clamp_norm(x: float, y: float, z: float, limit: float) -> tuple:
     """(x, y, z) scaled down to norm <= limit (direction kept); non-finite input gives (0, 0, 0)."""
-    m = max(abs(x), abs(y), abs(z))
-    if not math.isfinite(m):
+    if x * 0.0 + y * 0.0 + z * 0.0 != 0.0:  # any nan/inf (max() would skip a nan that is not first)
         return 0.0, 0.0, 0.0
+    m = max(abs(x), abs(y), abs(z))
     if m == 0.0:
         return 0.0, 0.0, 0.0
     n = m * math.sqrt((x / m) ** 2 + (y / m) ** 2 + (z / m) ** 2)  # no overflow for huge components

@@ -70,6 +70,8 @@ def test_clamp_keeps_direction_and_zero_negative_z():
     out = r.render([0.0, 0.0, 0.5, 0, 0, 0], 1e-3)
     np.testing.assert_allclose(out, [0, 0, 0.5])
     assert clamp_norm(1e308, 1e308, 0.0, 1.0) == pytest.approx((math.sqrt(0.5), math.sqrt(0.5), 0.0))
+    assert clamp_norm(0.0, 1.0, math.nan, 1.0) == (0.0, 0.0, 0.0)        # a nan that max() would skip
+    assert clamp_norm(0.0, math.inf, 0.0, 1.0) == (0.0, 0.0, 0.0)
 
 
 def test_frame_map_and_scale():
