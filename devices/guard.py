@@ -20,4 +20,7 @@ def guarded_force(dev, force, who: str) -> tuple:
     if F.shape != (3,):
         raise DeviceError(f"{who}: force must have 3 components, got shape {F.shape}")
     x, y, z = F.tolist()
-    return clamp_norm(x, y, z, dev.spec.max_force_peak)
+    peak = dev.spec.max_force_peak
+    if x * x + y * y + z * z <= peak * peak:  # the usual case (False for any nan/inf)
+        return x, y, z
+    return clamp_norm(x, y, z, peak)

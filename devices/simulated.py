@@ -157,14 +157,14 @@ class SimulatedStylus(ContextDevice):
         self.steps = 0
         self.p = self.script.target(0.0).astype(float).copy()
         self.v = np.zeros(3)
-        self.F_cmd = np.zeros(3)
+        self.F_cmd = (0.0, 0.0, 0.0)  # commanded force (fx, fy, fz) [N], device frame
         self.F_tremor = np.zeros(3)
         self.R = rotation_zyx(0.0, 0.0, self.script.tilt)
         self._lo, self._hi = np.asarray(self.spec.workspace_min), np.asarray(self.spec.workspace_max)
         self.is_open = True
 
     def close(self) -> None:
-        self.F_cmd = np.zeros(3)
+        self.F_cmd = (0.0, 0.0, 0.0)  # commanded force (fx, fy, fz) [N], device frame
         self.is_open = False
 
     def _advance(self, t_now: float) -> None:
@@ -184,7 +184,7 @@ class SimulatedStylus(ContextDevice):
         px, py, pz = self.p.tolist()
         vx, vy, vz = self.v.tolist()
         rx, ry, rz = self.F_tremor.tolist()
-        fx, fy, fz = self.F_cmd.tolist()
+        fx, fy, fz = self.F_cmd
         absent, target = self.script.absent, self.script.target_xyz
         for i in range(n):
             t = (self.steps + i + 1) * h
@@ -230,7 +230,7 @@ class SimulatedStylus(ContextDevice):
                             buttons=buttons, operator_present=present)
 
     def servo_cf(self, force) -> None:
-        self.F_cmd = np.array(guarded_force(self, force, "sim stylus"))
+        self.F_cmd = guarded_force(self, force, "sim stylus")
 
 
 def _intervals(text: str, key: str) -> tuple:
