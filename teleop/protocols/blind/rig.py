@@ -111,6 +111,7 @@ class _Station:
         from teleop.estimation.kalman import KalmanNoise
         from teleop.estimation.reading import ReadingEstimator
         from teleop.loop import LoopParams
+        from teleop.loop.params import LOOP_RENDER
         from teleop.mapping import MappingParams
 
         o = options
@@ -127,11 +128,12 @@ class _Station:
         self.clock = _ManualClock()
         self.stylus = SimulatedStylus(Script(kind="hold"), clock=self.clock, seed=stylus_seed)
         # stylus -z (pushing down on the handle) drives the robot +z, into the pad; the pad's reaction (-z in
-        # {B}) comes back as +z on the stylus, and the loop zeroes -z stylus forces as in the seed
+        # {B}) comes back as +z on the stylus, and the renderer zeroes -z device-frame forces as in the seed
         R_reg = np.diag([1.0, -1.0, -1.0])
         mapping = MappingParams(motion_scale=o.motion_scale, R_reg=R_reg)
-        self.params = LoopParams(rate_hz=1000.0, robot_rate_hz=1000.0 / int(o.robot_substeps),
-                                 force_scale=o.force_scale, zero_neg_z=True, mapping=mapping)
+        render = dataclasses.replace(LOOP_RENDER, scale=o.force_scale, zero_negative_z=True)
+        self.params = LoopParams(rate_hz=1000.0, robot_rate_hz=1000.0 / int(o.robot_substeps), render=render,
+                                 mapping=mapping)
         if o.compensation:  # the Kalman gain is designed for the period the estimator actually runs at
             noise = KalmanNoise(dt=self.params.dt * self.params.robot_every)
             self.estimator = ReadingEstimator(geom, o.estimator, kalman=noise)
