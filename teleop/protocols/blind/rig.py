@@ -13,6 +13,12 @@ areas 16 mm from the centre. So the coordinator's "move the effector over the ne
 simulated robot's pad stage (SimRobot.set_pad_offset): the pad slides until the zone's area is centred
 under the effector, whose tip hovers 0.5 mm above the surface at the home pose (the coordinator brought
 the effector just over the pad).
+
+What limits transparency (what the participants can feel): the simulated robot's series compliance at the
+tip (scenes.sim_robot tip_stiffness, 382 N/m fitted to seed 000 Table 1) is in series with every pad, so
+the stylus can show at most force_scale * motion_scale * k_tip k / (k_tip + k) (`expected_stiffness`):
+rigid PLA and Dragon Skin 30 differ there by ~5 %, far below a 23 % JND. A stiffer path is limited by the
+robot itself: at 5 kN/m a participant's push on the rigid area drives a cable past its 6 N tension limit.
 """
 
 from __future__ import annotations
