@@ -28,17 +28,20 @@ def test_calibration_with_a_missing_column_is_one_line_exit_2_and_writes_nothing
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "good.csv"]  # no recording, no JSON
 
 
-def test_calibration_file_is_the_one_the_session_uses(tmp_path, capsys):
+def test_calibration_file_and_force_flags_are_what_the_session_uses(tmp_path, capsys):
     data = default_fsr_calibration_data()
     data = replace(data, reading=data.reading * 1.15, source="test: conductance +15 %")
     path = tmp_path / "cal.csv"
     write_fsr_calibration_csv(path, data)
     rec = tmp_path / "s.mcap"
     rc = main(["session", "--fsr-calibration", str(path), "--record", str(rec), "--seconds", "0.2",
-               "--no-realtime", "--robot-inline"])
+               "--no-realtime", "--robot-inline", "--force-scale", "0.5", "--zero-neg-z", "--passivity-damping", "2"])
     capsys.readouterr()
     assert rc == 0
-    recorded = read_session(str(rec)).metadata["session"]["calibration"]
+    meta = read_session(str(rec)).metadata["session"]
+    render = meta["configuration"]["loop"]["render"]  # the force flags land in the loop's render settings
+    assert (render["scale"], render["zero_negative_z"], render["alpha_max"]) == (0.5, True, 2.0)
+    recorded = meta["calibration"]
     expected = ReadingEstimator(default_geometry(), "dynamic", cal=load_fsr_calibration(path)).describe()
     default = ReadingEstimator(default_geometry(), "dynamic").describe()
     assert recorded["fsr"] == json.loads(json.dumps(expected["fsr"], default=str))

@@ -1,4 +1,5 @@
-"""The master-slave loop: state machine, safety monitors, compute step, pacing and timing statistics."""
+"""The master-slave loop: state machine, safety monitors, rendering through teleop.rendering, pacing and timing
+statistics."""
 
 from teleop.loop.core import STAGES, Event, Teleop, TickData
 from teleop.loop.params import LoopParams

@@ -38,8 +38,8 @@ class TickData:
     L_cmd: np.ndarray | None = None
     dL: np.ndarray = field(default_factory=lambda: np.zeros(6))
     F_raw: tuple = (0.0, 0.0, 0.0)  # mapped force before ramp-in, passivity and clamp [N] (device frame)
-    F: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    ramp: float = 0.0
+    F: np.ndarray = field(default_factory=lambda: np.zeros(3))  # stylus force commanded this tick [N]
+    ramp: float = 0.0  # the Renderer's ramp-in gain (0 while it is disabled)
 
 
 @dataclass(frozen=True)
