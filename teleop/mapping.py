@@ -17,14 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from teleop.errors import InputError
-from teleop.geometry import Geometry
+from teleop.geometry import Geometry, _frozen
 from teleop.kinematics import rotation_zyx
-
-
-def _frozen(a) -> np.ndarray:
-    a = np.array(a, dtype=float)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True)

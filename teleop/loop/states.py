@@ -68,6 +68,15 @@ class Aligning(Behaviour):
         return None
 
 
+def _leave(tp, x) -> State | None:
+    """ENABLED/CLUTCHED: DISABLED when enable is withdrawn, ALIGNING when the operator or homing is gone."""
+    if not tp.enable_requested:
+        return State.DISABLED
+    if not x.sample.operator_present or not tp.robot_homed:
+        return State.ALIGNING
+    return None
+
+
 class Enabled(Behaviour):
     state = State.ENABLED
 
@@ -78,28 +87,20 @@ class Enabled(Behaviour):
         return tp.follow(x)
 
     def transition(self, tp, x):
-        if not tp.enable_requested:
-            return State.DISABLED
-        s = x.sample
-        if not s.operator_present or not tp.robot_homed:
-            return State.ALIGNING
-        if s.buttons & 2:
+        nxt = _leave(tp, x)
+        if nxt is None and x.sample.buttons & 2:
             return State.CLUTCHED
-        return None
+        return nxt
 
 
 class Clutched(Behaviour):
     state = State.CLUTCHED
 
     def transition(self, tp, x):
-        if not tp.enable_requested:
-            return State.DISABLED
-        s = x.sample
-        if not s.operator_present or not tp.robot_homed:
-            return State.ALIGNING
-        if not s.buttons & 2:
+        nxt = _leave(tp, x)
+        if nxt is None and not x.sample.buttons & 2:
             return State.ENABLED
-        return None
+        return nxt
 
 
 class Fault(Behaviour):
