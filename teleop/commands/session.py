@@ -57,15 +57,15 @@ def run(args) -> int:
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     if args.motion_scale is not None:
         params = replace(params, mapping=replace(params.mapping, motion_scale=args.motion_scale))
-    estimator = None
-    if args.fsr_calibration:  # read before any device is opened or file written: a bad file leaves nothing
-        from teleop.estimation.reading import ReadingEstimator
-        from teleop.geometry import default_geometry
-        from teleop.sensors import load_fsr_calibration
+    from teleop.loop.session import default_estimator, frame_period
+    from teleop.sensors import load_fsr_calibration
 
-        estimator = ReadingEstimator(default_geometry(), "dynamic", cal=load_fsr_calibration(args.fsr_calibration))
+    # read before any device is opened or file written: a bad file leaves nothing
+    cal = load_fsr_calibration(args.fsr_calibration) if args.fsr_calibration else None
+    robot_hz = None if args.robot_inline else args.robot_rate
+    estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
     res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params, estimator=estimator,
-                      robot_process_hz=None if args.robot_inline else args.robot_rate, realtime=not args.no_realtime,
+                      robot_process_hz=robot_hz, realtime=not args.no_realtime,
                       robot_rt_priority=args.robot_rt or None)
     t = res.timing
     print(f"session: {t['ticks']} ticks at {t['rate_hz']:g} Hz, lateness p50/p99/max "

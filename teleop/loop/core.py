@@ -74,9 +74,12 @@ class Teleop:
         self.params = params or LoopParams()
         self.geom = geom or default_geometry()
         if estimator is None:
+            from teleop.estimation.kalman import KalmanNoise
             from teleop.estimation.reading import ReadingEstimator
 
-            estimator = ReadingEstimator(self.geom, "dynamic")
+            # the Kalman gain is designed for the period the estimator runs at: one robot frame
+            estimator = ReadingEstimator(self.geom, "dynamic",
+                                         kalman=KalmanNoise(dt=self.params.dt * self.params.robot_every))
         self.estimator = estimator
         self.on_event = on_event
         p, m = self.params, self.params.mapping

@@ -78,6 +78,20 @@ def _on_sigterm(signum, frame):
     raise _Terminate()
 
 
+def frame_period(params: LoopParams, robot_process_hz: float | None) -> float:
+    """Period [s] of the robot frames the estimator sees: the robot process's rate, or every robot_every ticks."""
+    return max(params.dt, 1.0 / robot_process_hz) if robot_process_hz else params.dt * params.robot_every
+
+
+def default_estimator(frame_dt: float, cal=None):
+    """The session's estimator: "dynamic" with its Kalman gain designed for `frame_dt` [s]."""
+    from teleop.estimation.kalman import KalmanNoise
+    from teleop.estimation.reading import ReadingEstimator
+    from teleop.geometry import default_geometry
+
+    return ReadingEstimator(default_geometry(), "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt))
+
+
 def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | None = None,
                 params: LoopParams | None = None, estimator=None, seed: int | None = None,
                 spin_us: float = 200.0, flush_interval: float = 0.1, haptic=None, robot=None,
@@ -92,6 +106,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     and the recorder (nice -10) stay behind it.
     """
     params = params or LoopParams()
+    if estimator is None:
+        estimator = default_estimator(frame_period(params, robot_process_hz))
     haptic = haptic if haptic is not None else open_device(haptic_url)
     if robot is None:
         if robot_process_hz:
