@@ -11,6 +11,8 @@ Parameters travel as plain ``{name: float}`` dicts so they map one-to-one to JSO
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -157,7 +159,7 @@ class ParamSpec:
         return float(min(max(value, self.lower), self.upper))
 
 
-class Step:
+class Step(ABC):
     """Per-sample (real-time) form of an effect: same math as the array form, state held here.
 
     Subclasses set `effect_name`, implement `reset()` and `step(<channels>) -> float` whose keyword names
@@ -173,13 +175,13 @@ class Step:
         self.params = effect.check(params)
         self.reset()
 
+    @abstractmethod
     def reset(self) -> None:
         """Forget the state; the next `step` starts afresh."""
-        raise NotImplementedError
 
+    @abstractmethod
     def step(self, **u) -> float:
         """Advance one sample and return the output channel's value."""
-        raise NotImplementedError
 
 
 @dataclass(frozen=True)
