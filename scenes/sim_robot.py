@@ -55,6 +55,29 @@ class SimRobotParams:
             moving the end effector instead (cable stretch) shifts A(pose) and, in this geometry, puts
             ~1.6 N of pretension into the wrench of any estimator that only knows the commanded pose
             (measured). None = rigid (the tip tracks exactly).
+            The fit assumes the three Table 1 pokes had EQUAL commanded depth, which seed 000 does not
+            state, and 382 N/m is far softer than the cables make the robot. Physical estimate: each cable
+            runs from its NEMA17 through the Bowden tube to the effector (seed 000 §2), k_c = EA / L with
+            a 0.3 mm steel cable (E ~ 200 GPa on the full section: EA ~ 14 kN; a 7x7 strand with its
+            fill factor and rope modulus ~ half that) over L ~ 1 m of cable: k_c ~ 0.7-1.4e4 N/m. CDPR
+            stiffness K = A diag(k_c) A^T + sum t_i / l_i (I - u_i u_i^T) (elastic plus geometric tension
+            term; Behzadipour & Khajepour 2006, "Stiffness of cable-based parallel manipulators with
+            application to stability analysis", J Mech Des 128:303). At the home pose every cable has
+            u_z = +-0.6 over l_i = 25 mm, so along z: K_zz = 6 * 0.36 k_c + 6 * (2.85 N / 0.025 m) * 0.64
+            = 2.16 k_c + 438 N/m ~ 1.6-3.1e4 N/m (the stepper's holding stiffness, ~0.4 N m holding torque x 50
+            rotor teeth = 20 N m/rad over a ~5 mm drum ~ 8e5 N/m, and the FSR stack are far stiffer and drop out of the series). Measured
+            with that stiffness in the blind test (teleop blind-test --participants 10 --seed 1
+            --tip-stiffness 30000 --press-force 0.5: participants press until the stylus shows 0.5 N):
+            40 % fully correct, tau 0.70, W 0.70, rendered rigid / Dragon Skin 30 / Ecoflex 00-50 / 00-20
+            = 1697 / 965 / 78 / 115 N/m (15000 N/m: 30 %, tau 0.67, 1479 / 836 / 113 / 105 N/m; this
+            default with depth pushes: 30 %, tau 0.73, 94 / 90 / 63 / 45 N/m). The stiff robot separates
+            rigid and Dragon Skin 30 better (1.8x instead of 1.05x) but moves the limit to the rendering
+            chain: the stylus force lags the contact force by ~20-30 ms (estimation and Kalman at the
+            robot rate), so a press stops late, the hand bounces on the hard areas, and the slopes of the
+            soft areas are set by push speed x lag rather than by the pad (00-50 and 00-20 invert). Depth
+            pushes (8 mm) into rigid fault the loop (7.6 N on the tip: no tensions in [0.2, 5.5] N hold
+            it). The default stays at the Table 1 fit until the chain renders stiff contacts faithfully;
+            palpation's fixed-depth pokes also assume it.
         ee_damping_ratio: damping ratio of the contact tip on its series spring [-].
         capstan_k: stick stiffness of the capstan transition at reversals [N/m] (teleop.physics
             capstan_friction default, 2e4 N/m).

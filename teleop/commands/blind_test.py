@@ -52,6 +52,9 @@ def add_rig_options(p) -> None:
                    help="participants' mean stylus push depth [mm]")
     p.add_argument("--speed-mm-s", type=float, default=None, metavar="MM_S",
                    help="participants' mean stylus push speed [mm/s]")
+    p.add_argument("--press-force", type=float, default=None, metavar="N",
+                   help="participants press until the stylus force reaches about N newtons (capped by the "
+                        "depth; default: push by depth only)")
 
 
 def register(subparsers) -> None:
@@ -87,6 +90,8 @@ def participant_params(args):
         kw["depth"] = args.depth_mm * 1e-3
     if args.speed_mm_s is not None:
         kw["speed"] = args.speed_mm_s * 1e-3
+    if getattr(args, "press_force", None) is not None:
+        kw["force"] = args.press_force
     return ParticipantParams(**kw)
 
 

@@ -4,6 +4,7 @@ the chain is tested through the real loop in test_blind_rig.py)."""
 import numpy as np
 import pytest
 
+from teleop.errors import InputError
 from teleop.protocols.blind.participants import ParticipantParams, SimulatedParticipant, weber_sigma
 from teleop.protocols.blind.probe import Poke
 from teleop.protocols.blind.protocol import HARDER, SOFTER, UNSURE, Compare, check_ratings
@@ -61,6 +62,18 @@ def test_participants_vary_their_pushes():
     depths = np.array([r.depth for r in rig.requests])
     speeds = np.array([r.speed for r in rig.requests])
     assert depths.std() / depths.mean() > 0.08 and speeds.std() / speeds.mean() > 0.08
+
+
+def test_pressing_participants_ask_for_a_force_near_their_own_and_depth_pushers_for_none():
+    rig = SpringRig(AREAS)
+    run_simulated_study(rig, 5, seed=3, params=ParticipantParams(force=0.5))
+    forces = np.array([r.force for r in rig.requests])
+    assert 0.3 < forces.mean() < 0.8 and forces.std() > 0.02
+    rig = SpringRig(AREAS)
+    run_simulated_study(rig, 2, seed=3, params=ParticipantParams())
+    assert all(r.force is None for r in rig.requests)
+    with pytest.raises(InputError):
+        ParticipantParams(force=-1.0)
 
 
 def test_flat_rendering_gives_chance_rankings():

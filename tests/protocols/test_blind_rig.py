@@ -101,3 +101,14 @@ def test_cli_json_is_reproducible_byte_for_byte(tmp_path):
     p = data["participants"][0]
     assert sorted(p["order"]) == sorted(data["true_order"]) and set(p["ratings"]) == set(data["true_order"])
     assert "Table" not in r.stderr
+
+
+def test_force_limited_press_on_rigid_through_a_stiff_robot_stops_near_the_force():
+    # a cable-stiff robot (3e4 N/m): an 8 mm depth push into rigid PLA overloads the cables; a press that stops
+    # at a comfortable stylus force does not, and travels far less than the depth
+    with SimRig(RigOptions(tip_stiffness=3e4)) as rig:
+        rig.arrange(LAYOUT)
+        rigid = LAYOUT.index("pla")
+        p = rig.poke(rigid, PokeRequest(depth=0.008, speed=0.02, force=0.4))
+    assert 0.4 <= p.f.max() <= 0.88 + 1e-9
+    assert p.x.max() < 0.004

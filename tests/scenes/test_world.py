@@ -47,3 +47,25 @@ def test_one_contact_point_after_sliding_and_deep_poke():
         for i in range(3000):  # slide 3 mm sideways while pressing, then poke 4 mm deeper
             w.step([1e-6 * i, 0.0, PARAMS.surface_z + 0.002 + (1.3e-6 * (i - 1500) if i > 1500 else 0.0)])
         assert w.n_contacts() == 1
+
+
+def test_implicit_force_only_where_the_explicit_spring_would_diverge():
+    from scenes.world import implicit_spring
+
+    m, dt = PARAMS.indenter_mass, PARAMS.dt
+    assert not implicit_spring(np.eye(3) * 382.0, np.eye(3) * 2.7, m, dt)  # the palpation default
+    assert implicit_spring(np.eye(3) * 3e4, np.eye(3) * 24.0, m, dt)
+
+
+def test_stiff_series_spring_on_the_light_tip_stays_stable_and_settles():
+    # 3e4 N/m on 10 g at 1 kHz: sqrt(K/m) dt = 1.7, where an explicit spring-damper diverges
+    k_r = 3e4
+    K, C = np.eye(3) * k_r, np.eye(3) * 2 * 0.7 * np.sqrt(PARAMS.indenter_mass * k_r)
+    pad = z_test_pad()
+    k_p = pad.stiffness_at(np.zeros(2), PARAMS.tip_radius)
+    with PadWorld(pad, PARAMS, stiffness=K, damping=C) as w:
+        for _ in range(500):
+            w.step([0.0, 0.0, PARAMS.surface_z + 2e-4])
+        F = -w.contact_force()[2]
+    k_s = k_r * k_p / (k_r + k_p)
+    assert F == pytest.approx(k_s * 2e-4, rel=0.1)

@@ -52,6 +52,13 @@ class ParticipantParams:
         poke_spread: log-normal std of depth and speed from one poke to the next.
         memory_noise: drift of a remembered log stiffness per palpation of another zone.
         force_threshold: smallest force felt on the stylus [N].
+        force: mean stylus force at which a participant stops pressing [N] (the pressure exploratory
+            procedure of Lederman & Klatzky 1987, Cognitive Psychology 19:342-368: press until the force is
+            comfortable; LaMotte 2000, J Neurophysiol 83:1777, subjects pressing rubber with a stylus).
+            None (default): push by depth only (`depth`). 0.5 N is a device-based choice (within the
+            Geomagic Touch's 0.88 N continuous force, so a press can be held); with the default 382 N/m
+            robot it ranks worse than depth pushes (seed 1: 10 % vs 30 % fully correct), see
+            scenes.sim_robot tip_stiffness for the stiff-robot measurements.
         max_repeats: extra pokes of an unsure pair before answering anyway.
         spacing: weight of even spacing (vs remembered magnitude) when placing the middle ratings.
     """
@@ -65,15 +72,17 @@ class ParticipantParams:
     force_threshold: float = 0.02
     max_repeats: int = 2
     spacing: float = 0.6
+    force: float | None = None
 
     def __post_init__(self):
         checks = {"jnd": self.jnd > 0, "depth": self.depth > 0, "speed": self.speed > 0,
                   "person_spread": self.person_spread >= 0, "poke_spread": self.poke_spread >= 0,
                   "memory_noise": self.memory_noise >= 0, "force_threshold": self.force_threshold >= 0,
-                  "max_repeats": self.max_repeats >= 0, "spacing": 0 <= self.spacing <= 1}
+                  "max_repeats": self.max_repeats >= 0, "spacing": 0 <= self.spacing <= 1,
+                  "force": self.force is None or self.force > 0}
         for name, ok in checks.items():
             value = getattr(self, name)
-            if not ok or not math.isfinite(value):
+            if not ok or (value is not None and not math.isfinite(value)):
                 raise InputError(f"participant parameter {name}={value!r} is out of range")
 
 
@@ -90,6 +99,8 @@ class SimulatedParticipant:
         person = self._rng(_PERSON)
         self.depth = params.depth * math.exp(params.person_spread * person.standard_normal())
         self.speed = params.speed * math.exp(params.person_spread * person.standard_normal())
+        self.force = (None if params.force is None
+                      else params.force * math.exp(params.person_spread * person.standard_normal()))
         self._sigma = weber_sigma(params.jnd)
         self._percepts: dict[int, list] = {}
         self._drift: dict[int, float] = {}
@@ -104,8 +115,10 @@ class SimulatedParticipant:
         n = len(self._percepts.get(zone, []))
         motor = self._rng(_MOTOR, zone, n)
         p = self.params
-        request = PokeRequest(depth=self.depth * math.exp(p.poke_spread * motor.standard_normal()),
-                              speed=self.speed * math.exp(p.poke_spread * motor.standard_normal()))
+        depth = self.depth * math.exp(p.poke_spread * motor.standard_normal())
+        speed = self.speed * math.exp(p.poke_spread * motor.standard_normal())
+        force = None if self.force is None else self.force * math.exp(p.poke_spread * motor.standard_normal())
+        request = PokeRequest(depth=depth, speed=speed, force=force)
         trace: Poke = self._palpate(zone, request)
         k = loading_slope(trace.x, trace.f, p.force_threshold)
         percept = math.log(max(k, K_FLOOR)) + self._sigma * self._rng(_NOISE, zone, n).standard_normal()

@@ -29,10 +29,13 @@ class Poke:
 
 @dataclass(frozen=True)
 class PokeRequest:
-    """How a participant means to push: stylus depth [m] and speed [m/s] along the push direction."""
+    """How a participant means to push along the push direction: the hand moves at `speed` [m/s] until the
+    force felt on the stylus reaches `force` [N] (the pressure exploratory procedure: press to a comfortable
+    force, Lederman & Klatzky 1987), or the hand has travelled `depth` [m]; force None: depth only."""
 
     depth: float
     speed: float
+    force: float | None = None
 
 
 class Prober(Protocol):

@@ -19,6 +19,9 @@ tip (scenes.sim_robot tip_stiffness, 382 N/m fitted to seed 000 Table 1) is in s
 the stylus can show at most force_scale * motion_scale * k_tip k / (k_tip + k) (`expected_stiffness`):
 rigid PLA and Dragon Skin 30 differ there by ~5 %, far below a 23 % JND. A stiffer path is limited by the
 robot itself: at 5 kN/m a participant's push on the rigid area drives a cable past its 6 N tension limit.
+With a cable-stiff robot (--tip-stiffness ~3e4 N/m, derivation in scenes.sim_robot) participants must
+press to a force instead (PokeRequest.force, --press-force); then the rendered force's ~20-30 ms lag
+behind the contact limits what the stylus shows (measurements in scenes.sim_robot).
 """
 
 from __future__ import annotations
@@ -202,7 +205,8 @@ class _Station:
             self.slot = slot
 
     def poke(self, request: PokeRequest) -> Poke:
-        """The participant's hand target goes `depth` along -z at `speed`, holds, and returns to rest."""
+        """The participant's hand target goes along -z at `speed` until the stylus force reaches
+        `request.force` (if given) or the target is `depth` deep, holds there, and returns to rest."""
         from devices.simulated import Script
 
         o = self.options
@@ -212,10 +216,44 @@ class _Station:
         t1 = t0 + request.depth / request.speed
         t2 = t1 + o.hold
         t3 = t2 + request.depth / o.release_speed
-        pts = np.array([[t0, *c], [t1, *down], [t2, *down], [t3, *c]])
-        self.stylus.script = Script(kind="recorded", points=pts)
-        t, z, f = self._run(t3 + o.rest - t0, record=True)
+        self.stylus.script = Script(kind="recorded", points=np.array([[t0, *c], [t1, *down], [t2, *down], [t3, *c]]))
+        if request.force is None:
+            t, z, f = self._run(t3 + o.rest - t0, record=True)
+            return Poke(t=t - t0, x=-(z - z[0]), f=f)
+        # descend until the felt force reaches the comfortable level, then hold and release from there
+        t_a, z_a, f_a = self._run_until(t1 - t0, request.force)
+        tc = self.clock.t
+        if tc < t1 - 0.5 * self.params.dt:
+            d = request.speed * (tc - t0)
+            at = c - np.array([0.0, 0.0, d])
+            t3 = tc + o.hold + d / o.release_speed
+            self.stylus.script = Script(kind="recorded",
+                                        points=np.array([[tc, *at], [tc + o.hold, *at], [t3, *c]]))
+        t_b, z_b, f_b = self._run(t3 + o.rest - tc, record=True)
+        t, z, f = np.concatenate([t_a, t_b]), np.concatenate([z_a, z_b]), np.concatenate([f_a, f_b])
         return Poke(t=t - t0, x=-(z - z[0]), f=f)
+
+    def _run_until(self, seconds: float, force: float):
+        """Like _run(seconds, record=True) but stops after the tick whose stylus force (+z) reaches `force`."""
+        from teleop.loop import State
+
+        dt = self.params.dt
+        n = int(round(seconds / dt))
+        t, z, f = np.empty(n), np.empty(n), np.empty(n)
+        tp, clock, stylus = self.tp, self.clock, self.stylus
+        k = 0
+        while k < n:
+            clock.t += dt
+            x = tp.tick(clock.t)
+            t[k], z[k], f[k] = clock.t, stylus.p[2], x.F[2]
+            k += 1
+            if f[k - 1] >= force:
+                break
+        if tp.state == State.FAULT:
+            from devices.base import DeviceError
+
+            raise DeviceError(f"blind-test rig: the loop faulted ({tp.fault_reason})")
+        return t[:k], z[:k], f[:k]
 
 
 class SimRig:
