@@ -16,6 +16,7 @@ import numpy as np
 
 from devices.base import TOUCH_SPEC, ContextDevice, DeviceError, DeviceSpec, HapticSample, RobotReading, RobotSpec
 from teleop.errors import InputError
+from teleop.recording import TOPIC_ROBOT
 
 
 def _load(path: str):
@@ -142,7 +143,7 @@ class ReplayRobot(_Player):
         self.stops = 0
 
     def open(self) -> None:
-        msgs = self._messages("/robot/measured")
+        msgs = self._messages(TOPIC_ROBOT)
         self.items = [reading_from(m) for m in msgs]
         self.by_tick = {int(m["tick"]): i for i, m in enumerate(msgs)}
         self.spec = _spec_from(self.session.metadata, "robot_spec", RobotSpec, RobotSpec())

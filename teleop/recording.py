@@ -32,6 +32,11 @@ from teleop.errors import InputError
 
 MAGIC = b"\x89MCAP0\r\n"
 PROFILE = "cdpr-teleop"
+# topics of a session recording (CRTK names where one fits); readers and exporters use these names
+TOPIC_SETPOINT = "/teleop/setpoint"
+TOPIC_ROBOT = "/robot/measured"
+TOPIC_FORCE = "/haptic/servo_cf"
+TOPIC_EVENTS = "/teleop/events"
 FLOAT, INT = "f", "i"
 
 
@@ -230,7 +235,7 @@ class SessionWriter:
         self.w = McapWriter(stream)
         self.encoder = RowEncoder(layout)
         self.channels = {}
-        extra = (("/teleop/events", b'{"type": "object"}'), ("/loop/timing", b'{"type": "object"}'))
+        extra = ((TOPIC_EVENTS, b'{"type": "object"}'), ("/loop/timing", b'{"type": "object"}'))
         topics = [(t, json_schema(layout, t)) for t in layout.topics()] + list(extra)
         for i, (topic, schema) in enumerate(topics, start=1):
             self.w.add_schema(i, topic, "jsonschema", schema)
@@ -394,7 +399,7 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
                 except (EOFError, OSError, ValueError):
                     break
                 if kind == "event":
-                    writer.write_json("/teleop/events", float(obj.get("t", 0.0)), obj)
+                    writer.write_json(TOPIC_EVENTS, float(obj.get("t", 0.0)), obj)
                 elif kind == "end":
                     end_meta = obj
             now = time.monotonic()

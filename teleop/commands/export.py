@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 
 from teleop.errors import InputError
+from teleop.recording import TOPIC_ROBOT, TOPIC_SETPOINT
 
 
 def register(subparsers) -> None:
@@ -37,11 +38,11 @@ def export_rows(session, cable: int):
     L_home = pose2lengths(home, geom)
     i = cable - 1
     est = {m["tick"]: m for m in session.messages("/estimation")}
-    sp = {m["tick"]: m for m in session.messages("/teleop/setpoint")}
+    sp = {m["tick"]: m for m in session.messages(TOPIC_SETPOINT)}
     header = ["t_s", "motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "cmd_len_mm"]
     rows = []
     last_seq = None
-    for m in session.messages("/robot/measured"):
+    for m in session.messages(TOPIC_ROBOT):
         k = m["tick"]
         if k not in est or k not in sp or m["seq"] == last_seq:
             continue  # one row per telemetry frame (the loop may see a frame on several ticks)

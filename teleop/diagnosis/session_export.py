@@ -1,7 +1,7 @@
 """Export the project's own session recordings (MCAP, teleop.recording) to the interchange CSV.
 
 A column spec names, for each interchange column, the session topic, field, element and scale:
-{"motor_pos_mm": ("/robot/measured", "commanded_lengths", cable, 1e3), ...}. Every topic carries the
+{"motor_pos_mm": (TOPIC_ROBOT, "commanded_lengths", cable, 1e3), ...}. Every topic carries the
 session time `t`; columns from other topics are interpolated onto the first column's times.
 `cable_columns(i)` is the default for cable i: commanded length at the motor, estimated tension.
 """
@@ -14,13 +14,14 @@ import numpy as np
 
 from teleop.diagnosis.recording_io import Recording, split_column, UNITS, write_interchange
 from teleop.errors import InputError
+from teleop.recording import TOPIC_ROBOT
 
 
 def cable_columns(cable: int) -> dict:
     """Default spec for cable `cable` (0-5): motor-side length [mm] and the estimated tension [N]."""
     if not 0 <= cable < 6:
         raise InputError(f"cable must be 0..5, got {cable}")
-    return {"motor_pos_mm": ("/robot/measured", "commanded_lengths", cable, 1e3),
+    return {"motor_pos_mm": (TOPIC_ROBOT, "commanded_lengths", cable, 1e3),
             "motor_force_N": ("/estimation", "tensions", cable, 1.0)}
 
 

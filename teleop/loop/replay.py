@@ -15,6 +15,7 @@ from teleop.loop.core import Teleop
 from teleop.loop.params import LoopParams
 from teleop.mapping import MappingParams
 from teleop.recording import read_session
+from teleop.recording import TOPIC_FORCE, TOPIC_SETPOINT
 
 
 @dataclass
@@ -80,8 +81,8 @@ def replay_session(path: str, estimator=None, session=None) -> ReplayReport:
     geom = geometry_from(conf.get("geometry"))
     est = estimator if estimator is not None else estimator_from(meta.get("calibration", {}), geom)
     loop_msgs = s.messages("/loop")
-    forces = {m["tick"]: m["servo_cf"] for m in s.messages("/haptic/servo_cf")}
-    commands = {m["tick"]: m["servo_jp"] for m in s.messages("/teleop/setpoint") if m["commanded"]}
+    forces = {m["tick"]: m["servo_cf"] for m in s.messages(TOPIC_FORCE)}
+    commands = {m["tick"]: m["servo_jp"] for m in s.messages(TOPIC_SETPOINT) if m["commanded"]}
     haptic, robot = ReplayStylus(path, s), ReplayRobot(path, s)
     n_f = n_c = n_s = 0
     df = dl = 0.0

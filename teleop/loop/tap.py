@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from teleop.loop.core import STAGES
-from teleop.recording import INT, Layout, Signal
+from teleop.recording import INT, TOPIC_FORCE, TOPIC_ROBOT, TOPIC_SETPOINT, Layout, Signal
 
 
 def numeric_extras(reading) -> dict:
@@ -33,18 +33,18 @@ def session_layout(extras: dict | None = None) -> Layout:
     sig += [Signal("/stylus", "t_device"), Signal("/stylus", "measured_cp", 3), Signal("/stylus", "measured_cv", 3),
             Signal("/stylus", "orientation", 9), Signal("/stylus", "buttons", 1, INT),
             Signal("/stylus", "operator_present", 1, INT)]
-    sig += [Signal("/teleop/setpoint", "commanded", 1, INT), Signal("/teleop/setpoint", "setpoint_cp", 3),
-            Signal("/teleop/setpoint", "servo_jp", 6)]
-    sig += [Signal("/robot/measured", "new", 1, INT), Signal("/robot/measured", "t_robot"),
-            Signal("/robot/measured", "seq", 1, INT), Signal("/robot/measured", "fsr_counts", 6),
-            Signal("/robot/measured", "position_steps", 6), Signal("/robot/measured", "commanded_lengths", 6),
-            Signal("/robot/measured", "status", 1, INT), Signal("/robot/measured", "boot_id", 1, INT),
-            Signal("/robot/measured", "wrench_truth", 6)]
-    sig += [Signal("/robot/measured", f"x_{k}", w) for k, w in (extras or {}).items()]
+    sig += [Signal(TOPIC_SETPOINT, "commanded", 1, INT), Signal(TOPIC_SETPOINT, "setpoint_cp", 3),
+            Signal(TOPIC_SETPOINT, "servo_jp", 6)]
+    sig += [Signal(TOPIC_ROBOT, "new", 1, INT), Signal(TOPIC_ROBOT, "t_robot"),
+            Signal(TOPIC_ROBOT, "seq", 1, INT), Signal(TOPIC_ROBOT, "fsr_counts", 6),
+            Signal(TOPIC_ROBOT, "position_steps", 6), Signal(TOPIC_ROBOT, "commanded_lengths", 6),
+            Signal(TOPIC_ROBOT, "status", 1, INT), Signal(TOPIC_ROBOT, "boot_id", 1, INT),
+            Signal(TOPIC_ROBOT, "wrench_truth", 6)]
+    sig += [Signal(TOPIC_ROBOT, f"x_{k}", w) for k, w in (extras or {}).items()]
     sig += [Signal("/estimation", "tensions", 6), Signal("/estimation", "measured_cf", 6)]
-    sig += [Signal("/haptic/servo_cf", "force_raw", 3), Signal("/haptic/servo_cf", "ramp"),
-            Signal("/haptic/servo_cf", "servo_cf", 3)]
-    return Layout(tuple(sig), {"/robot/measured": "new"})
+    sig += [Signal(TOPIC_FORCE, "force_raw", 3), Signal(TOPIC_FORCE, "ramp"),
+            Signal(TOPIC_FORCE, "servo_cf", 3)]
+    return Layout(tuple(sig), {TOPIC_ROBOT: "new"})
 
 
 class RowTap:
