@@ -47,40 +47,38 @@ class SimRobotParams:
         substeps: physics steps per reading (1: readings at 1 kHz).
         pretension: reference cable tension of the tension distribution [N]; seed 000 Fig 9 pre-tensions
             the cable with 1.96-2.94 N; 2.85 N is the middle of the [0.2, 5.5] N tension range.
-        tip_stiffness: series compliance between the commanded tip and the contact [N/m] (isotropic).
-            Seed 000 Table 1's ground truth (Dragon Skin 30 2.27 N, Ecoflex 00-30 1.43 N, 00-10 1.01 N) is
-            far flatter than the pads' stiffness ratio (22:1.8:1); a series spring of 382 N/m and one
-            commanded depth (6.3 mm) fit all three to 0.03 N (least squares over the two unknowns, three
-            values). The compliance is lumped at the tip so the end effector stays at its commanded pose:
-            moving the end effector instead (cable stretch) shifts A(pose) and, in this geometry, puts
-            ~1.6 N of pretension into the wrench of any estimator that only knows the commanded pose
-            (measured). None = rigid (the tip tracks exactly).
-            The fit assumes the three Table 1 pokes had EQUAL commanded depth, which seed 000 does not
-            state, and 382 N/m is far softer than the cables make the robot. Physical estimate: each cable
-            runs from its NEMA17 through the Bowden tube to the effector (seed 000 §2), k_c = EA / L with
-            a 0.3 mm steel cable (E ~ 200 GPa on the full section: EA ~ 14 kN; a 7x7 strand with its
-            fill factor and rope modulus ~ half that) over L ~ 1 m of cable: k_c ~ 0.7-1.4e4 N/m. CDPR
-            stiffness K = A diag(k_c) A^T + sum t_i / l_i (I - u_i u_i^T) (elastic plus geometric tension
-            term; Behzadipour & Khajepour 2006, "Stiffness of cable-based parallel manipulators with
-            application to stability analysis", J Mech Des 128:303). At the home pose every cable has
-            u_z = +-0.6 over l_i = 25 mm, so along z: K_zz = 6 * 0.36 k_c + 6 * (2.85 N / 0.025 m) * 0.64
-            = 2.16 k_c + 438 N/m ~ 1.6-3.1e4 N/m (the stepper's holding stiffness, ~0.4 N m holding torque x 50
-            rotor teeth = 20 N m/rad over a ~5 mm drum ~ 8e5 N/m, and the FSR stack are far stiffer and drop out of the series). Measured
-            with that stiffness in the blind test (teleop blind-test --participants 10 --seed 1
-            --tip-stiffness 30000 --press-force 0.5: participants press until the stylus shows 0.5 N):
-            40 % fully correct, tau 0.70, W 0.70, rendered rigid / Dragon Skin 30 / Ecoflex 00-50 / 00-20
-            = 1697 / 965 / 78 / 115 N/m (15000 N/m: 30 %, tau 0.67, 1479 / 836 / 113 / 105 N/m; this
-            default with depth pushes: 30 %, tau 0.73, 94 / 90 / 63 / 45 N/m). The stiff robot separates
-            rigid and Dragon Skin 30 better (1.8x instead of 1.05x) but moves the limit to the rendering
-            chain: the stylus force lags the contact force by ~20-30 ms (estimation and Kalman at the
-            robot rate), so a press stops late, the hand bounces on the hard areas, and the slopes of the
-            soft areas are set by push speed x lag rather than by the pad (00-50 and 00-20 invert). Depth
-            pushes (8 mm) into rigid fault the loop (7.6 N on the tip: no tensions in [0.2, 5.5] N hold
-            it). The default stays at the Table 1 fit until the chain renders stiff contacts faithfully;
-            palpation's fixed-depth pokes also assume it.
+        tip_stiffness: series stiffness between the commanded tip and the contact [N/m] (isotropic): the
+            robot's own stiffness, lumped at the tip so the end effector stays at its commanded pose
+            (moving the end effector instead shifts A(pose) and, in this geometry, puts ~1.6 N of
+            pretension into the wrench of any estimator that only knows the commanded pose; measured).
+            Physical estimate: each cable runs from its NEMA17 through the Bowden tube to the effector
+            (seed 000 §2), k_c = EA / L with a 0.3 mm steel cable (E ~ 200 GPa on the full section: EA ~
+            14 kN; a 7x7 strand with its fill factor and rope modulus ~ half that) over L ~ 1 m: k_c ~
+            0.7-1.4e4 N/m. CDPR stiffness K = A diag(k_c) A^T + sum t_i / l_i (I - u_i u_i^T) (elastic
+            plus geometric tension term; Behzadipour & Khajepour 2006, "Stiffness of cable-based parallel
+            manipulators with application to stability analysis", J Mech Des 128:303). At the home pose
+            every cable has u_z = +-0.6 over l_i = 25 mm, so along z: K_zz = 6 * 0.36 k_c + 6 * (2.85 N /
+            0.025 m) * 0.64 = 2.16 k_c + 438 N/m ~ 1.6-3.1e4 N/m. In series with the cables sit the
+            FSR press blocks, each pressing its FSR through a thin silicone film (seed 000 §2), a
+            compliance the seed does not quantify; 1e4 N/m takes the low end of the cable range with
+            that film in series. (The stepper's holding stiffness, ~0.4 N m x 50 rotor teeth = 20 N m/rad
+            over a ~5 mm drum ~ 8e5 N/m, drops out of the series.) Two of the seed's results need a robot
+            this stiff: its participants told rigid PLA from Dragon Skin 30 (6.7 kN/m under our tip),
+            which a compliant robot renders alike (382 N/m, the stiffness that would make Table 1's three
+            forces come from one commanded depth, puts them 5 % apart), and its letter scan separates
+            rigid from silicone. Table 1 does not give its poke depths (its pokes were teleoperated at
+            "an estimated 0.5 mm/s"), so palpation reproduces its loads instead (teleop.protocols.palpation).
+            None = rigid (the tip tracks exactly).
         ee_damping_ratio: damping ratio of the contact tip on its series spring [-].
-        capstan_k: stick stiffness of the capstan transition at reversals [N/m] (teleop.physics
-            capstan_friction default, 2e4 N/m).
+        capstan_k: stick stiffness of the capstan transition at reversals [N/m]: the sensor tension
+            crosses the friction band [t e^-mu Theta, t e^mu Theta] (~1 N at the pretension) over
+            band / k of cable travel, 0.2 mm at 5e3 N/m, i.e. ~0.7 s at the seed's 0.5 mm/s (cable speed
+            ~0.6 x effector speed along z). Seed 000 Fig 13 shows these turn transitions after single
+            compensation as segments (EF, GH) long enough to be fitted by polynomials at that speed, and
+            §6 reports large shifts when the speed changes; a stiff stick (the physics default, 2e4 N/m:
+            0.17 s) reduces them to blips the direction rule alone handles. The compliance in the cable
+            between the FSR and the effector is the FSR press block's silicone film (seed 000 §2)
+            rather than the 30 mm of steel (~2e5 N/m).
         hysteresis_delta: half the force change over which the FSR loading state flips [N]
             (teleop.physics sensor_hysteresis default, 0.2 N).
         noise_counts: RMS ADC noise [counts] (ATmega2560 10-bit ADC, +-2 LSB absolute accuracy).
@@ -90,9 +88,9 @@ class SimRobotParams:
     world: WorldParams = WorldParams()
     substeps: int = 1
     pretension: float = 2.85
-    tip_stiffness: float | None = 382.0
+    tip_stiffness: float | None = 1.0e4
     ee_damping_ratio: float = 0.7
-    capstan_k: float = 2e4
+    capstan_k: float = 5e3
     hysteresis_delta: float = 0.2
     noise_counts: float = 1.0
 

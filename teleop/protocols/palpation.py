@@ -37,7 +37,12 @@ class PalpationParams:
         speed: poke speed [m/s] (seed 000 §5.1 test 1: about 0.5 mm/s).
         travel_speed: speed of the moves between pokes, above the pad [m/s].
         clearance: tip height above the surface where pokes start [m].
-        depth_stiffness, depth_z, depth_scan: commanded depth past the surface [m] (scan: seed's 5 mm).
+        stiffness_loads: ((region, force [N]), ...) the load each stiffness-test poke brings its region to:
+            the mean ground truth of seed 000 Table 1 (black 1.02/1.00, red 2.32/2.21, yellow 1.44/1.41 N).
+            Table 1 gives no depths (its pokes were teleoperated at "an estimated 0.5 mm/s"); each poke's
+            commanded depth is that load over the region's stiffness in series with the robot's
+            (`load_depth`), so the estimators are compared at the seed's loads.
+        depth_z, depth_scan: commanded depth past the surface [m] (scan: seed's 5 mm).
         depth_xy: commanded travel past first wall contact in the hole [m].
         repeats_z: repetitions of the 25-point z test (seed: 5).
         pokes_per_region: stiffness test pokes per region (Table 1: 2).
@@ -60,7 +65,7 @@ class PalpationParams:
     speed: float = 0.5e-3
     travel_speed: float = 2e-3
     clearance: float = 1e-3
-    depth_stiffness: float = 6e-3
+    stiffness_loads: tuple = (("black", 1.01), ("red", 2.265), ("yellow", 1.425))
     depth_z: float = 5e-3
     depth_scan: float = 5e-3
     depth_xy: float = 2.5e-3
@@ -80,12 +85,14 @@ class PalpationParams:
 
 @dataclass(frozen=True)
 class Poke:
-    """One poke: `label` (region, point or cell), `xy` in the pad frame [m], direction "+z", "+x", ..."""
+    """One poke: `label` (region, point or cell), `xy` in the pad frame [m], direction "+z", "+x", ...;
+    `depth` [m] past the surface overrides the session's depth when given."""
 
     label: str
     xy: tuple
     direction: str = "+z"
     repeat: int = 0
+    depth: float | None = None
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -150,7 +157,7 @@ def plan_pokes(pokes, surface_z: float, start_tip, p: PalpationParams, depth: fl
         x, y = scale * pk.xy[0], scale * pk.xy[1]
         if pk.direction == "+z":
             start = np.array([x, y, above])
-            far = np.array([x, y, surface_z + depth])
+            far = np.array([x, y, surface_z + (depth if pk.depth is None else pk.depth)])
         else:
             axis, sign = AXES[pk.direction]
             start = np.array([x, y, hole["z"]])
@@ -258,15 +265,28 @@ class Session:
     fit_axes: tuple
 
 
-def sessions_for(test: str, p: PalpationParams, limit: int | None = None) -> list:
-    """The robot runs of a test (scan: one per letter). `limit` keeps the first pokes of each (short runs)."""
+def load_depth(pad, xy, load: float, tip_stiffness: float | None, tip_radius: float) -> float:
+    """Commanded depth [m] past the surface that loads the pad at xy (2,) [m] with `load` [N]: the pad's
+    target contact stiffness in series with the robot's tip stiffness [N/m] (None: rigid robot)."""
+    k = pad.stiffness_at(np.asarray(xy, dtype=float), tip_radius)
+    if tip_stiffness is not None:
+        k = k * tip_stiffness / (k + tip_stiffness)
+    return float(load / k)
+
+
+def sessions_for(test: str, p: PalpationParams, limit: int | None = None, tip_stiffness: float | None = None,
+                 tip_radius: float = 0.0015) -> list:
+    """The robot runs of a test (scan: one per letter). `limit` keeps the first pokes of each (short runs).
+    `tip_stiffness` [N/m] and `tip_radius` [m] of the simulated robot set the stiffness test's depths."""
     from scenes import pads
 
     if test == "stiffness":
         pad = pads.three_region_pad()
-        pokes = [Poke(lab, pad.points[lab], "+z", r) for lab in ("black", "red", "yellow")
-                 for r in range(p.pokes_per_region)]
-        out = [Session("stiffness3", pad, pokes, p.depth_stiffness, (2,))]
+        loads = dict(p.stiffness_loads)
+        pokes = [Poke(lab, pad.points[lab], "+z", r, load_depth(pad, pad.points[lab], loads[lab], tip_stiffness,
+                                                                 tip_radius))
+                 for lab in ("black", "red", "yellow") for r in range(p.pokes_per_region)]
+        out = [Session("stiffness3", pad, pokes, 0.0, (2,))]
     elif test == "z":
         pad = pads.z_test_pad()
         pokes = [Poke(lab, xy, "+z", r) for r in range(p.repeats_z) for lab, xy in pad.points.items()]
@@ -388,13 +408,13 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
 
     if profile not in PROFILES:
         raise InputError(f"unknown speed profile '{profile}' (expected one of: {', '.join(PROFILES)})")
-    sessions = sessions_for(test, params, limit)
-    t_wall, t_cpu = time.perf_counter(), time.process_time()
-    ss = np.random.SeedSequence(int(seed))
-    seeds = ss.generate_state(2 * len(sessions))
     from scenes.world import WorldParams
 
     sim = SimRobotParams(substeps=params.substeps, world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt))
+    sessions = sessions_for(test, params, limit, sim.tip_stiffness, sim.world.tip_radius)
+    t_wall, t_cpu = time.perf_counter(), time.process_time()
+    ss = np.random.SeedSequence(int(seed))
+    seeds = ss.generate_state(2 * len(sessions))
     geom, dt = sim.geometry, sim.dt
     tool = np.asarray(geom.tip)
     home_tip = home_pose()[:3] + tool
@@ -448,6 +468,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
                 u[axis] = sign
                 row = {"session": s.name, "label": pk.label, "repeat": pk.repeat, "direction": pk.direction,
                        "xy_mm": [_num(pk.xy[0] * 1e3), _num(pk.xy[1] * 1e3)],
+                       "depth_mm": _num((s.depth if pk.depth is None else pk.depth) * 1e3),
                        "ground_truth_N": _num(-(poke_trace.wrench_truth[k, :3] @ u))}
                 for n in ESTIMATORS:
                     row[f"{n}_N"] = _num(-(w[n][k, :3] @ u))
