@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from teleop.cli import main
-from teleop.protocols.palpation import (ESTIMATORS, PalpationParams, Poke, line, plan_pokes, reach_scale, run_test,
-                                        stiffness_extras, stroke, summarise)
+from teleop.protocols.palpation import (ESTIMATORS, PalpationParams, Poke, line, load_depth, plan_pokes, reach_scale,
+                                        run_test, sessions_for, stiffness_extras, stroke, summarise)
 
 # short runs: 2 mm/s pokes and a 3 mm turn-compensation run (the CLI defaults are the seed's 0.5 mm/s)
-QUICK = dataclasses.replace(PalpationParams(), fit_dynamic=False, speed=2e-3, fit_cycles=2, fit_travel=0.003, depth_stiffness=0.003)
+QUICK = dataclasses.replace(PalpationParams(), fit_dynamic=False, speed=2e-3, fit_cycles=2, fit_travel=0.003)
 
 
 def test_line_and_uniform_stroke_speed():
@@ -40,6 +40,22 @@ def test_plan_deepest_points_are_at_depth():
     assert reach_scale(pokes, 0.006) == 1.0 and reach_scale([Poke("c", (0.012, 0.0))], 0.006) == 0.5
 
 
+def test_stiffness_pokes_go_to_table1_loads():
+    from scenes.pads import three_region_pad
+
+    pad = three_region_pad()
+    k_black = pad.stiffness_at(np.array(pad.points["black"]), 0.0015)
+    assert load_depth(pad, pad.points["black"], 1.0, None, 0.0015) == pytest.approx(1.0 / k_black)
+    # the robot's stiffness in series makes the same load need a deeper command
+    assert load_depth(pad, pad.points["black"], 1.0, 1e4, 0.0015) == pytest.approx(1.0 / k_black + 1.0 / 1e4)
+    (s,) = sessions_for("stiffness", PalpationParams(), tip_stiffness=1e4)
+    depth = {pk.label: pk.depth for pk in s.pokes}
+    assert depth["red"] < depth["yellow"] < depth["black"]  # stiffer region: shallower poke for its load
+    plan = plan_pokes(s.pokes[:1], 0.0235, [0, 0, 0.02], PalpationParams(), s.depth, "uniform", 0.01,
+                      np.random.default_rng(0))
+    assert plan.tips[plan.deepest[0], 2] == pytest.approx(0.0235 + depth["black"])
+
+
 def test_summary_and_ranking_logic():
     rows = []
     for lab, gt, nc in (("black", 1.0, 4.8), ("red", 2.2, 4.7), ("yellow", 1.4, 4.5)):
@@ -60,7 +76,7 @@ def test_short_stiffness_run_is_physical_and_deterministic():
     b = run_test("stiffness", "uniform", seed=7, params=QUICK, limit=1)
     assert json.dumps(a.to_json()) == json.dumps(b.to_json())
     (poke,) = a.pokes
-    assert 0.3 < poke["ground_truth_N"] < 3.0  # Ecoflex 00-10 region, 3 mm commanded
+    assert poke["ground_truth_N"] == pytest.approx(1.01, abs=0.1)  # Ecoflex 00-10 region at Table 1's load
     assert poke["non_compensated_N"] > poke["ground_truth_N"] + 0.5  # sheath friction reads high
     assert abs(poke["single_N"] - poke["ground_truth_N"]) < 0.3
     assert set(a.summary) == set(ESTIMATORS)

@@ -53,7 +53,11 @@ def test_implicit_force_only_where_the_explicit_spring_would_diverge():
     from scenes.world import implicit_spring
 
     m, dt = PARAMS.indenter_mass, PARAMS.dt
-    assert not implicit_spring(np.eye(3) * 382.0, np.eye(3) * 2.7, m, dt)  # the palpation default
+    assert not implicit_spring(np.eye(3) * 382.0, np.eye(3) * 2.7, m, dt)  # a compliant robot: explicit
+    from scenes.sim_robot import SimRobotParams
+
+    k = SimRobotParams().tip_stiffness  # the cable-stiff default at palpation's 2 ms step: implicit
+    assert implicit_spring(np.eye(3) * k, np.eye(3) * 2 * 0.7 * np.sqrt(m * k), m, 2e-3)
     assert implicit_spring(np.eye(3) * 3e4, np.eye(3) * 24.0, m, dt)
 
 
