@@ -48,13 +48,17 @@ def add_rig_options(p) -> None:
                    help="stylus force per newton at the tip (default: the rig's; a tiny value degrades the chain)")
     p.add_argument("--tip-stiffness", type=float, default=None, metavar="N_PER_M",
                    help="series compliance of the simulated robot's tip [N/m] (default: the sim robot's)")
+    p.add_argument("--kalman-bandwidth", type=float, default=None, metavar="HZ",
+                   help="-3 dB bandwidth of the estimator's Kalman filter [Hz] (default: the rig's, 20 Hz)")
+    p.add_argument("--robot-substeps", type=int, default=None, metavar="N",
+                   help="physics steps of 1 ms per robot-link exchange (default 1: the link at 1 kHz)")
     p.add_argument("--depth-mm", type=float, default=None, metavar="MM",
                    help="participants' mean stylus push depth [mm]")
     p.add_argument("--speed-mm-s", type=float, default=None, metavar="MM_S",
                    help="participants' mean stylus push speed [mm/s]")
     p.add_argument("--press-force", type=float, default=None, metavar="N",
-                   help="participants press until the stylus force reaches about N newtons (capped by the "
-                        "depth; default: push by depth only)")
+                   help="participants press until the stylus force reaches about N newtons, capped by the "
+                        "depth (default 0.3 N; 0: push by depth only)")
 
 
 def register(subparsers) -> None:
@@ -91,7 +95,7 @@ def participant_params(args):
     if args.speed_mm_s is not None:
         kw["speed"] = args.speed_mm_s * 1e-3
     if getattr(args, "press_force", None) is not None:
-        kw["force"] = args.press_force
+        kw["force"] = None if args.press_force == 0 else args.press_force
     return ParticipantParams(**kw)
 
 
@@ -103,6 +107,10 @@ def rig_options(args):
         kw["force_scale"] = args.force_scale
     if args.tip_stiffness is not None:
         kw["tip_stiffness"] = args.tip_stiffness
+    if getattr(args, "kalman_bandwidth", None) is not None:
+        kw["kalman_bandwidth"] = args.kalman_bandwidth
+    if getattr(args, "robot_substeps", None) is not None:
+        kw["robot_substeps"] = args.robot_substeps
     return RigOptions(**kw)
 
 
@@ -129,8 +137,14 @@ def run_sim(args) -> int:
                          "(--haptic sim:// --robot sim://robot); use --operator human at a real rig")
     params = participant_params(args)
     options = rig_options(args)
+    from devices.base import DeviceError
+
     with SimRig(options) as rig, _progress(args.participants, "blind test") as bar:
-        result = run_simulated_study(rig, args.participants, args.seed, params, progress=bar.update)
+        try:
+            result = run_simulated_study(rig, args.participants, args.seed, params, progress=bar.update)
+        except DeviceError as exc:  # the options asked more of the simulated robot than its cables hold
+            raise InputError(f"{exc}; a participant's push overloaded the simulated robot with these options "
+                             f"(depth pushes into rigid need --press-force > 0)") from None
         config = {"operator": "sim", "participants": args.participants, "seed": args.seed,
                   "participant_params": _asdict(params), "rig": rig.describe()}
         expected = rig.expected_stiffness()

@@ -108,3 +108,18 @@ def test_loading_slope_recovers_a_spring_and_ignores_unloading():
     assert loading_slope(x, f) == pytest.approx(k, rel=0.01)
     assert loading_slope(x, np.zeros_like(x)) == 0.0
     assert loading_slope(x, np.full_like(x, 0.01)) == 0.0  # below the detection threshold
+
+
+def test_loading_slope_ignores_a_force_felt_before_contact_and_a_bounce_back():
+    k = 200.0
+    x = np.linspace(0, 0.003, 300)
+    f = k * np.maximum(x - 0.001, 0)
+    # a stray force before contact (a friction-compensation residue, ~0.06 N for 40 samples)
+    f_stray = f.copy()
+    f_stray[:40] = 0.06
+    assert loading_slope(x, f_stray) == pytest.approx(k, rel=0.05)
+    # pushed back by 0.3 mm at 2 mm, then on again: the way back and the re-approach are not loading
+    back = np.linspace(0.002, 0.0017, 30)
+    x_b = np.r_[x[x <= 0.002], back, back[::-1], x[x > 0.002]]
+    f_b = np.r_[f[x <= 0.002], np.full(30, k * 0.001), np.full(30, 0.6 * k * 0.001), f[x > 0.002]]
+    assert loading_slope(x_b, f_b) == pytest.approx(k, rel=0.02)

@@ -16,7 +16,7 @@ from teleop.protocols.blind.stats import kendall_tau, loading_slope
 from teleop.protocols.blind.study import coordinator_draws, run_participant
 
 LAYOUT = ("ecoflex_00_50", "pla", "ecoflex_00_20", "dragon_skin_30")  # slot -> area
-PUSH = PokeRequest(depth=0.008, speed=0.02)
+PUSH = PokeRequest(depth=0.008, speed=0.02, force=0.3)  # press to 0.3 N on the stylus or 8 mm, as participants do
 
 
 def poke_every_slot(options):
@@ -29,18 +29,21 @@ def poke_every_slot(options):
 
 @pytest.fixture(scope="module")
 def chains():
+    # a stylus that feels nothing pushes to the full depth: a compliant robot (382 N/m) takes that on rigid
+    # PLA, the default 1e4 N/m one faults (test_a_depth_push_into_rigid_faults_the_loop_a_press_does_not)
     return {"full": poke_every_slot(RigOptions()),
-            "tiny_force": poke_every_slot(RigOptions(force_scale=1e-4)),
+            "tiny_force": poke_every_slot(RigOptions(force_scale=1e-4, tip_stiffness=382.0)),
             "no_compensation": poke_every_slot(RigOptions(compensation=False))}
 
 
-def test_full_chain_renders_the_softer_areas_in_order_and_near_what_the_mechanics_allow(chains):
+def test_full_chain_renders_every_area_in_order_and_near_what_the_mechanics_allow(chains):
     traces, expected, _ = chains["full"]
     k = {a: loading_slope(p.x, p.f) for a, p in traces.items()}
-    assert k["ecoflex_00_20"] < k["ecoflex_00_50"] < k["dragon_skin_30"]
-    # the robot's series compliance caps what any estimator can show; the chain gets within 20 % of it
+    assert k["ecoflex_00_20"] < k["ecoflex_00_50"] < k["dragon_skin_30"] < k["pla"]
+    # the pads in series with the robot's own stiffness cap what any estimator can show; one poke gets
+    # within 30 % of it (the study's medians are closer, except rigid: see the rig's module docstring)
     for area, kk in k.items():
-        assert kk == pytest.approx(expected[area], rel=0.2), (area, kk, expected[area])
+        assert kk == pytest.approx(expected[area], rel=0.3), (area, kk, expected[area])
     for p in traces.values():  # the stylus stays within the Touch's continuous force
         assert 0.1 < p.f.max() <= 0.88 + 1e-9
 
@@ -73,13 +76,16 @@ def test_degraded_chains_leave_participants_guessing(chains):
     assert abs(tau_tiny) <= 0.2 and rate_tiny <= 0.1 and tau_tiny <= tau_full - 0.4
 
 
-def test_without_compensation_every_area_pushes_back_at_the_force_limit(chains):
-    # the raw FSR wrench carries the sheath friction (seed 000 Table 1: ~3 N too high): on the stylus it
-    # sits at the Touch's continuous limit on every area, so the force level tells the areas apart no more
-    traces, _, _ = chains["no_compensation"]
-    assert all(p.f.max() == pytest.approx(0.88, abs=1e-3) for p in traces.values())
+def test_without_compensation_the_sheath_friction_softens_the_stiff_areas(chains):
+    # the raw FSR wrench carries the sheath friction (seed 000 Table 1: ~3 N too high): the stylus reaches
+    # the press force before the tip has gone far into the stiff areas, which then feel softer than the
+    # mechanics allow, while the compensated chain renders them near it
+    raw, expected, _ = chains["no_compensation"]
     full, _, _ = chains["full"]
-    assert max(p.f.max() for p in full.values()) - min(p.f.max() for p in full.values()) > 0.1
+    for area in ("pla", "dragon_skin_30"):
+        k_raw, k_full = loading_slope(raw[area].x, raw[area].f), loading_slope(full[area].x, full[area].f)
+        assert k_raw < 0.8 * expected[area] < k_full, (area, k_raw, k_full, expected[area])
+        assert raw[area].x.max() < 0.7 * full[area].x.max()
 
 
 def test_cli_json_is_reproducible_byte_for_byte(tmp_path):
@@ -103,12 +109,19 @@ def test_cli_json_is_reproducible_byte_for_byte(tmp_path):
     assert "Table" not in r.stderr
 
 
-def test_force_limited_press_on_rigid_through_a_stiff_robot_stops_near_the_force():
-    # a cable-stiff robot (3e4 N/m): an 8 mm depth push into rigid PLA overloads the cables; a press that stops
-    # at a comfortable stylus force does not, and travels far less than the depth
-    with SimRig(RigOptions(tip_stiffness=3e4)) as rig:
+def test_a_depth_push_into_rigid_faults_the_loop_a_press_does_not():
+    # the default robot (1e4 N/m): an 8 mm stylus push into rigid PLA asks ~30 N of the tip, beyond what
+    # cable tensions in [0.2, 5.5] N hold; a press to a comfortable stylus force stops near it, and travels
+    # far less than the depth
+    from devices.base import DeviceError
+
+    rigid = LAYOUT.index("pla")
+    with SimRig(RigOptions()) as rig:
         rig.arrange(LAYOUT)
-        rigid = LAYOUT.index("pla")
-        p = rig.poke(rigid, PokeRequest(depth=0.008, speed=0.02, force=0.4))
-    assert 0.4 <= p.f.max() <= 0.88 + 1e-9
-    assert p.x.max() < 0.004
+        with pytest.raises(DeviceError, match="faulted"):
+            rig.poke(rigid, PokeRequest(depth=0.008, speed=0.02))
+    with SimRig(RigOptions()) as rig:
+        rig.arrange(LAYOUT)
+        p = rig.poke(rigid, PokeRequest(depth=0.008, speed=0.02, force=0.3))
+    assert 0.3 <= p.f.max() <= 0.45
+    assert p.x.max() < 0.003

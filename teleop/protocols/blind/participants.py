@@ -1,8 +1,9 @@
 """Simulated participants who judge hardness only from the force the stylus rendered during their pushes.
 
 Perception model:
-- each poke gives a stiffness k = dF/dx of its loading phase (stats.loading_slope), from the rendered
-  force against the participant's own stylus displacement; forces below a detection threshold are not felt;
+- each poke gives a stiffness k = dF/dx of its loading phase (stats.loading_slope, a Theil-Sen fit), from
+  the rendered force against the participant's own stylus displacement; forces below a detection threshold
+  are not felt;
 - the percept is log k plus Gaussian noise (Weber's law: noise constant in log stiffness). The stiffness
   JND is the Weber fraction J at 75 % correct in a two-interval comparison, so one percept has
   sigma = ln(1 + J) / (sqrt(2) z_0.75). Default J = 0.23: Jones & Hunter (1990), "A perceptual analysis of
@@ -11,7 +12,9 @@ Perception model:
   and is refreshed when poked again;
 - a difference below ln(1 + J) leaves the participant unsure: both zones are poked again, up to
   `max_repeats` times, then the participant answers anyway;
-- push depth and speed vary per participant (person level) and per poke (log-normal spreads).
+- a participant presses until the stylus force reaches a comfortable level or the hand has travelled its
+  push depth, whichever comes first; push depth, speed and press force vary per participant (person
+  level) and per poke (log-normal spreads).
 """
 
 from __future__ import annotations
@@ -54,11 +57,13 @@ class ParticipantParams:
         force_threshold: smallest force felt on the stylus [N].
         force: mean stylus force at which a participant stops pressing [N] (the pressure exploratory
             procedure of Lederman & Klatzky 1987, Cognitive Psychology 19:342-368: press until the force is
-            comfortable; LaMotte 2000, J Neurophysiol 83:1777, subjects pressing rubber with a stylus).
-            None (default): push by depth only (`depth`). 0.5 N is a device-based choice (within the
-            Geomagic Touch's 0.88 N continuous force, so a press can be held); with the default 382 N/m
-            robot it ranks worse than depth pushes (seed 1: 10 % vs 30 % fully correct), see
-            scenes.sim_robot tip_stiffness for the stiff-robot measurements.
+            comfortable; LaMotte 2000, J Neurophysiol 83:1777, subjects pressing rubber with a stylus); the
+            depth still caps the press, so soft areas are pressed to `depth` and stiff ones to this force.
+            Default 0.3 N, set by what the robot can take on the rigid area: at the rig's force scale (0.1)
+            it is 3 N on the tip, and at the home pose the cable tensions [0.2, 5.5] N hold ~6 N along z
+            (a 6.0 N press with ~1 N sideways faulted the loop, measured); the person and poke spreads
+            (2 sigma: x1.4) and the stop's overshoot behind the rendering lag stay inside that. Depth
+            pushes (None) drive rigid past it: the loop faults. None: push by depth only.
         max_repeats: extra pokes of an unsure pair before answering anyway.
         spacing: weight of even spacing (vs remembered magnitude) when placing the middle ratings.
     """
@@ -72,7 +77,7 @@ class ParticipantParams:
     force_threshold: float = 0.02
     max_repeats: int = 2
     spacing: float = 0.6
-    force: float | None = None
+    force: float | None = 0.3
 
     def __post_init__(self):
         checks = {"jnd": self.jnd > 0, "depth": self.depth > 0, "speed": self.speed > 0,

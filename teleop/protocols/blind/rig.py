@@ -14,14 +14,16 @@ simulated robot's pad stage (SimRobot.set_pad_offset): the pad slides until the 
 under the effector, whose tip hovers 0.5 mm above the surface at the home pose (the coordinator brought
 the effector just over the pad).
 
-What limits transparency (what the participants can feel): the simulated robot's series compliance at the
-tip (scenes.sim_robot tip_stiffness, 382 N/m fitted to seed 000 Table 1) is in series with every pad, so
-the stylus can show at most force_scale * motion_scale * k_tip k / (k_tip + k) (`expected_stiffness`):
-rigid PLA and Dragon Skin 30 differ there by ~5 %, far below a 23 % JND. A stiffer path is limited by the
-robot itself: at 5 kN/m a participant's push on the rigid area drives a cable past its 6 N tension limit.
-With a cable-stiff robot (--tip-stiffness ~3e4 N/m, derivation in scenes.sim_robot) participants must
-press to a force instead (PokeRequest.force, --press-force); then the rendered force's ~20-30 ms lag
-behind the contact limits what the stylus shows (measurements in scenes.sim_robot).
+What limits transparency (what the participants can feel). A transparent chain shows on the stylus
+force_scale * motion_scale * k_tip k / (k_tip + k) (`expected_stiffness`): the pad k in series with the
+simulated robot's own stiffness k_tip (scenes.sim_robot tip_stiffness, 1e4 N/m). The defaults (RigOptions)
+keep the stiffest area renderable: the rendered force lags the contact force by ~12 ms (6 ms in the FSR
+chain and friction compensation, 6 ms in the 20 Hz Kalman filter; measured against the robot's ground-truth
+contact force on one poke per area), and a spring rendered with a lag tau feeds the hand a negative damping
+K tau, which must stay below the hand's own damping (6 N s/m) or the hand bounces off the stiff areas. On
+top of that, the friction compensation holds its tip-tension estimate while a cable reverses (the capstan's
+stick transition), so a press that stops, bounces or creeps renders a stiff area softer than it is: the
+rigid/Dragon Skin 30 ratio is the one that falls short (measured numbers in RigOptions and the README).
 """
 
 from __future__ import annotations
@@ -51,36 +53,52 @@ class RigOptions:
         compensation: render the friction-compensated, Kalman-filtered wrench (the project's `dynamic`
             estimator); False renders the raw FSR wrench f = -A t (ablation).
         estimator: DESIGN.md estimator name used when compensation is on.
-        force_scale: stylus force per newton of estimated tip force [-]. 0.5: at 1.0 the stylus rendered
-            ~190 N/m against the operator model's 150 N/m hand with the estimator's lag, the hand bounced
-            on the stiff areas, the cables reversed and the friction estimate jumped (measured: loading
-            slope spread ~30 % between pokes at 1.0 against ~3 % at 0.5), and rigid pokes hit the 0.88 N
-            continuous limit of the Touch.
+        force_scale: stylus force per newton of estimated tip force [-]. 0.1 keeps the stiffest area
+            stable in the hand: rigid PLA renders 0.1 * 0.5 * 9.1e3 = 455 N/m, and with the chain's ~12 ms lag
+            (see the module docstring) that feeds the hand a negative damping K tau = 5.5 N s/m, just under
+            the operator model's 6 N s/m (devices.simulated OperatorParams.b; 6.45 N s/m measured for the arm
+            holding a haptic handle, van Beek et al. 2015, "Haptic perception of force magnitude and its
+            relation to postural arm dynamics in 3D", Sci Rep 5:18004, a typical trial). It is also well inside a Geomagic
+            Touch's z stiffness (>= 1.02 N/mm, 3D Systems specifications). At 0.2 (rigid 909 N/m) the hand
+            bounced on rigid and its loading slopes fell below Dragon Skin 30's (`teleop blind-test
+            --participants 10 --seed 1 --force-scale 0.2`, numbers in the README).
         motion_scale: robot displacement per stylus displacement [-].
         gap: pad surface distance ahead of the tip at the home pose [m] (effector brought just over it).
         robot_substeps: physics steps (1 ms) per robot-link exchange: the robot link runs at 1 kHz / this.
+            1: the simulated robot's own reading rate (scenes.sim_robot substeps=1) and the loop's, so the
+            estimator sees every FSR sample (at 4, i.e. 250 Hz, the soft areas rendered 10-28 % above the
+            transparent chain on single pokes, against -2..+15 % at 1 kHz).
         settle: time the chain runs before a participant's first poke (engage + force ramp-in) [s].
         hold: time the participant holds at the deepest point [s].
         release_speed: stylus speed back to rest after a poke [m/s].
         rest: time at rest after a poke [s].
         seed: seeds the stylus tremor and the FSR noise of the chain (mixed with the arrangement number;
             fixed by default, so studies with different --seed share the chain's noise draws).
-        tip_stiffness: series compliance between the commanded tip and the pad [N/m] in the simulated
-            robot; None keeps scenes.sim_robot's default (382 N/m, fitted there to seed 000 Table 1).
+        tip_stiffness: series stiffness between the commanded tip and the pad [N/m] in the simulated
+            robot; None keeps scenes.sim_robot's default (1e4 N/m, derived there from the cables).
+        kalman_bandwidth: -3 dB bandwidth of the estimator's steady-state Kalman filter [Hz] (passed as
+            teleop.estimation.kalman.KalmanNoise.bandwidth_hz). 20 Hz: twice the ~10 Hz upper limit of
+            voluntary, controlled hand movement (Hatzfeld & Kern (eds.), "Engineering Haptic Devices", 3rd
+            ed. 2023, "The User as Mechanical Load"), so the press the participant makes passes with little lag, while the
+            friction compensation's jumps at cable reversals (up to ~2 N at the tip, mostly above 20 Hz)
+            are smoothed. The loop's 8 Hz default lags the contact by 26 ms at 1 kHz (the hand bounces
+            on rigid); 40 Hz passes more of the reversal jumps (lag 8 ms, RMS error against the contact
+            force 0.49 N against 0.56 N at 20 Hz, but rigid pokes then bounce on the jumps).
     """
 
     compensation: bool = True
     estimator: str = "dynamic"
-    force_scale: float = 0.5
+    force_scale: float = 0.1
     motion_scale: float = 0.5
     gap: float = 0.0005
-    robot_substeps: int = 4
+    robot_substeps: int = 1
     settle: float = 0.3
     hold: float = 0.03
     release_speed: float = 0.08
     rest: float = 0.05
     seed: int = 0
     tip_stiffness: float | None = None
+    kalman_bandwidth: float = 20.0
 
     def __post_init__(self):
         from teleop.errors import InputError
@@ -95,6 +113,8 @@ class RigOptions:
                 raise InputError(f"blind-test rig: {name} must be >= 0, got {v!r}")
         if self.tip_stiffness is not None and not (np.isfinite(self.tip_stiffness) and self.tip_stiffness > 0):
             raise InputError(f"blind-test rig: tip_stiffness must be > 0 N/m, got {self.tip_stiffness!r}")
+        if not (np.isfinite(self.kalman_bandwidth) and self.kalman_bandwidth > 0):
+            raise InputError(f"blind-test rig: kalman_bandwidth must be > 0 Hz, got {self.kalman_bandwidth!r}")
         if int(self.robot_substeps) < 1:
             raise InputError(f"blind-test rig: robot_substeps must be >= 1, got {self.robot_substeps}")
 
@@ -144,7 +164,7 @@ class _Station:
         self.params = LoopParams(rate_hz=1000.0, robot_rate_hz=1000.0 / int(o.robot_substeps), render=render,
                                  mapping=mapping)
         if o.compensation:  # the Kalman gain is designed for the period the estimator actually runs at
-            noise = KalmanNoise(dt=self.params.dt * self.params.robot_every)
+            noise = KalmanNoise(dt=self.params.dt * self.params.robot_every, bandwidth_hz=float(o.kalman_bandwidth))
             self.estimator = ReadingEstimator(geom, o.estimator, kalman=noise)
         else:  # the raw FSR wrench: no friction compensation, no Kalman filter
             self.estimator = ReadingEstimator(geom, "non_compensated", kalman=None)
@@ -206,7 +226,13 @@ class _Station:
 
     def poke(self, request: PokeRequest) -> Poke:
         """The participant's hand target goes along -z at `speed` until the stylus force reaches
-        `request.force` (if given) or the target is `depth` deep, holds there, and returns to rest."""
+        `request.force` (if given) or the target is `depth` deep, holds there, and returns to rest.
+
+        A press stopped by the force holds that force: the hand's target is put where the operator model's
+        spring (stiffness k) pushes the stylus with `force` from where the stylus is, force / k beyond it.
+        Holding the target where it had run to instead keeps pressing on by the distance the target ran
+        while the lagging force built up (at 20 mm/s and ~12 ms: ~0.25 mm, ~1 N more on rigid's tip, and
+        a 0.37 N press faulted the loop with 6 N on the tip)."""
         from devices.simulated import Script
 
         o = self.options
@@ -224,9 +250,12 @@ class _Station:
         t_a, z_a, f_a = self._run_until(t1 - t0, request.force)
         tc = self.clock.t
         if tc < t1 - 0.5 * self.params.dt:
-            d = request.speed * (tc - t0)
-            at = c - np.array([0.0, 0.0, d])
-            t3 = tc + o.hold + d / o.release_speed
+            # hold the force aimed at: the hand's target goes to where its spring pushes the stylus with
+            # `force` from where the stylus is now (not where the target had run to by the time the lagging
+            # force was felt: holding that would keep pressing on)
+            at = self.stylus.p - np.array([0.0, 0.0, request.force / self.stylus.operator.k])
+            d = float(c[2] - at[2])
+            t3 = tc + o.hold + max(d, 0.0) / o.release_speed
             self.stylus.script = Script(kind="recorded",
                                         points=np.array([[tc, *at], [tc + o.hold, *at], [t3, *c]]))
         t_b, z_b, f_b = self._run(t3 + o.rest - tc, record=True)
@@ -359,7 +388,7 @@ class RehearsalStation:
 
         if self.rig.layout != tuple(layout):
             self.rig.arrange(layout)
-        p = self.rig.poke(slot, PokeRequest(self.params.depth, self.params.speed))
+        p = self.rig.poke(slot, PokeRequest(self.params.depth, self.params.speed, self.params.force))
         k = loading_slope(p.x, p.f, self.params.force_threshold)
         return (f"pushed {p.x.max() * 1e3:.1f} mm, peak force {p.f.max():.2f} N, "
                 f"loading stiffness {k:.0f} N/m on the stylus")

@@ -171,15 +171,19 @@ class StudyResult:
         return out
 
     def neighbour_ratios(self) -> list:
-        """[(harder, softer, rendered ratio, true ratio, relative error)] for neighbouring areas."""
+        """[(harder, softer, rendered ratio, true ratio, relative error, pad ratio)] for neighbouring areas.
+
+        The true ratio is that of the stiffness a transparent chain renders (`expected`: the pads in series
+        with the robot's own stiffness) when the rig gives it, else that of the pads alone (pad ratio)."""
         rendered = self.rendered_stiffness()
         out = []
         for hi, lo in zip(self.areas, self.areas[1:]):
-            true = hi.stiffness / lo.stiffness
+            pad = hi.stiffness / lo.stiffness
+            true = self.expected[hi.name] / self.expected[lo.name] if self.expected else pad
             kr_hi, kr_lo = rendered[hi.name], rendered[lo.name]
             ratio = kr_hi / kr_lo if kr_hi is not None and kr_lo else None
             err = (ratio / true - 1.0) if ratio is not None else None
-            out.append((hi.name, lo.name, ratio, true, err))
+            out.append((hi.name, lo.name, ratio, true, err, pad))
         return out
 
     def to_dict(self) -> dict:
@@ -204,8 +208,8 @@ class StudyResult:
             "true_stiffness_N_per_m": {a.name: a.stiffness for a in self.areas},
             "rendered_stiffness_N_per_m": rendered,
             "expected_stiffness_N_per_m": dict(self.expected),
-            "neighbour_ratios": [{"harder": h, "softer": s, "rendered": r, "true": t, "relative_error": e}
-                                 for h, s, r, t, e in self.neighbour_ratios()],
+            "neighbour_ratios": [{"harder": h, "softer": s, "rendered": r, "true": t, "relative_error": e,
+                                  "pad": pad} for h, s, r, t, e, pad in self.neighbour_ratios()],
             "seed_table3": {a: {"mean": row["mean"], "std": row["std"]} for a, row in zip(self.truth, SEED_TABLE3)},
             "config": self.config,
         }
@@ -239,13 +243,14 @@ class StudyResult:
                     row += f"   {self.expected[a.name]:23.1f}"
                 lines.append(row)
             lines.append("")
-            lines.append("neighbours".ljust(2 * width) + " rendered ratio   true ratio   error")
+            true_head = "transparent ratio" if self.expected else "       true ratio"
+            lines.append("neighbours".ljust(2 * width) + f" rendered ratio   {true_head}   error   pad ratio")
             labels = {a.name: a.label for a in self.areas}
-            for h, s, r, t, e in self.neighbour_ratios():
+            for h, s, r, t, e, pad in self.neighbour_ratios():
                 pair = f"{labels[h]} / {labels[s]}"
                 rs = "     -" if r is None else f"{r:6.2f}"
                 es = "     -" if e is None else f"{e:+6.0%}"
-                lines.append(pair.ljust(2 * width) + f" {rs:>14}   {t:10.2f}   {es}")
+                lines.append(pair.ljust(2 * width) + f" {rs:>14}   {t:17.2f}   {es}   {pad:9.2f}")
         return "\n".join(lines)
 
     def plot(self, path) -> None:
