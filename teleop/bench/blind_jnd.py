@@ -72,7 +72,7 @@ def jnd_curve(rig, jnds, participants: int, seed: int, base_params, progress=Non
         cache = {}
 
         def palpate(zone, request, _order=order, _cache=cache):
-            key = (zone, request.depth, request.speed)  # the n-th push of a zone is the same at every JND
+            key = (zone, request.depth, request.speed, request.force)  # the n-th push of a zone: same at every JND
             if key not in _cache:
                 _cache[key] = rig.poke(_order[zone], request)
             return _cache[key]

@@ -81,6 +81,10 @@ def register(subparsers) -> None:
                    help=f"--operator human: answers saved here after every step (default {DEFAULT_STATE})")
     p.add_argument("--json", metavar="PATH", help="write the results as JSON")
     p.add_argument("--plot", metavar="PATH", help="write a PNG: ratings per area and rendered vs true stiffness")
+    p.add_argument("--transparency", action="store_true",
+                   help="instead of the study: press each area 3 times at 10, 20 and 30 mm/s and compare the "
+                        "stiffness rendered on the stylus with the unfiltered estimate and the robot's "
+                        "ground-truth contact force (what limits the rendered ratios)")
     p.set_defaults(func=run)
 
 
@@ -117,7 +121,48 @@ def rig_options(args):
 def run(args) -> int:
     if args.operator == "human":
         return run_human(args)
+    if getattr(args, "transparency", False):
+        return run_transparency(args)
     return run_sim(args)
+
+
+TRANSPARENCY_SPEEDS = (0.010, 0.020, 0.030)  # [m/s] stylus press speeds: the participants' 20 mm/s and around
+
+
+def run_transparency(args) -> int:
+    """Each area pressed at TRANSPARENCY_SPEEDS: median loading slopes [N/m] of the rendered force, the
+    unfiltered estimate and the ground-truth contact force (x force scale) against the stylus displacement."""
+    import numpy as np
+
+    from teleop.errors import InputError
+    from teleop.outputs import write_json
+    from teleop.protocols.blind.rig import blind_areas, transparency
+
+    if args.haptic != "sim://" or args.robot != "sim://robot":
+        raise InputError("blind-test --transparency runs on the simulated stylus and robot only")
+    params = participant_params(args)
+    if params.force is None:
+        raise InputError("blind-test --transparency presses to a force: --press-force must be > 0")
+    options = rig_options(args)
+    rows = transparency(options, TRANSPARENCY_SPEEDS, repeats=3, force=params.force, depth=params.depth)
+    labels = {a.name: a.label for a in blind_areas()}
+
+    def med(values):
+        v = [x for x in values if x is not None]
+        return float(np.median(v)) if v else None
+
+    def cell(v):
+        return "        -" if v is None else f"{v:9.1f}"
+
+    print("medians of 3 presses [N/m]; contact = force scale x ground-truth contact force, against the stylus")
+    print(f"{'speed':>9}  {'area':16} {'rendered':>9} {'unfiltered':>10} {'contact':>9} {'transparent':>11}")
+    for r in rows:
+        print(f"{r['speed'] * 1e3:5.0f} mm/s  {labels[r['area']]:16} {cell(med(r['rendered']))} "
+              f"{cell(med(r['unfiltered'])):>10} {cell(med(r['contact']))} {r['expected']:11.1f}")
+    if args.json:
+        write_json(args.json, {"speeds_m_per_s": list(TRANSPARENCY_SPEEDS), "press_force_N": params.force,
+                               "rig": _asdict(options), "rows": rows})
+    return 0
 
 
 def _progress(total: int, desc: str):
@@ -137,12 +182,12 @@ def run_sim(args) -> int:
                          "(--haptic sim:// --robot sim://robot); use --operator human at a real rig")
     params = participant_params(args)
     options = rig_options(args)
-    from devices.base import DeviceError
+    from teleop.protocols.blind.probe import PressAborted
 
     with SimRig(options) as rig, _progress(args.participants, "blind test") as bar:
         try:
             result = run_simulated_study(rig, args.participants, args.seed, params, progress=bar.update)
-        except DeviceError as exc:  # the options asked more of the simulated robot than its cables hold
+        except PressAborted as exc:  # the options asked more of the simulated robot than its cables hold
             raise InputError(f"{exc}; a participant's push overloaded the simulated robot with these options "
                              f"(depth pushes into rigid need --press-force > 0)") from None
         config = {"operator": "sim", "participants": args.participants, "seed": args.seed,

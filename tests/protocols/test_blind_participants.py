@@ -135,3 +135,25 @@ def test_jnd_curve_shares_pushes_across_jnds_and_accuracy_falls_with_jnd():
                    for a, b in zip(lo_j.records, hi_j.records) for x in close)
     assert len(rig.requests) == distinct < sum(r.pokes for c in curve.values() for r in c.records)
     assert lo_j.correct_ranking_rate >= hi_j.correct_ranking_rate + 0.3
+
+
+def test_a_press_the_rig_stops_is_repeated_more_gently_then_given_up():
+    from teleop.protocols.blind.participants import GENTLER
+    from teleop.protocols.blind.probe import PressAborted
+
+    asked = []
+
+    def palpate(zone, request):  # the robot stops every press above 0.2 N
+        asked.append(request)
+        if request.force > 0.2:
+            raise PressAborted("blind-test rig: the loop faulted")
+        x = np.linspace(0, request.depth, 50)
+        return Poke(t=x / request.speed, x=x, f=100.0 * x)
+
+    p = SimulatedParticipant(ParticipantParams(force=0.35, person_spread=0.0, poke_spread=0.0), palpate, (1, 1))
+    p.poke(0)
+    assert [r.force for r in asked] == pytest.approx([0.35, 0.35 * GENTLER, 0.35 * GENTLER ** 2])
+    assert p.aborted == 2 and len(p.pokes) == 1
+    p = SimulatedParticipant(ParticipantParams(force=2.0, max_aborts=1), palpate, (1, 1))
+    with pytest.raises(PressAborted):
+        p.poke(0)

@@ -113,15 +113,29 @@ def test_a_depth_push_into_rigid_faults_the_loop_a_press_does_not():
     # the default robot (1e4 N/m): an 8 mm stylus push into rigid PLA asks ~30 N of the tip, beyond what
     # cable tensions in [0.2, 5.5] N hold; a press to a comfortable stylus force stops near it, and travels
     # far less than the depth
-    from devices.base import DeviceError
+    from teleop.protocols.blind.probe import PressAborted
 
     rigid = LAYOUT.index("pla")
     with SimRig(RigOptions()) as rig:
         rig.arrange(LAYOUT)
-        with pytest.raises(DeviceError, match="faulted"):
+        with pytest.raises(PressAborted, match="faulted"):
             rig.poke(rigid, PokeRequest(depth=0.008, speed=0.02))
+        assert rig.station is None and rig.n_faults == 1  # reset: the next poke starts on a fresh loop
+        assert rig.poke(rigid, PokeRequest(depth=0.008, speed=0.02, force=0.3)).f.max() >= 0.3
     with SimRig(RigOptions()) as rig:
         rig.arrange(LAYOUT)
         p = rig.poke(rigid, PokeRequest(depth=0.008, speed=0.02, force=0.3))
     assert 0.3 <= p.f.max() <= 0.45
     assert p.x.max() < 0.003
+
+
+def test_transparency_the_contact_mechanics_match_the_transparent_chain():
+    # the robot's ground-truth contact force against the stylus displacement (x force scale) is what a
+    # transparent chain would render: what the stylus shows beyond that comes from estimation and filtering
+    from teleop.protocols.blind.rig import transparency
+
+    rows = transparency(RigOptions(), [0.02], repeats=1)
+    assert [r["area"] for r in rows] == ["pla", "dragon_skin_30", "ecoflex_00_50", "ecoflex_00_20"]
+    for r in rows:
+        assert r["contact"][0] == pytest.approx(r["expected"], rel=0.1), r
+        assert r["rendered"][0] > 0 and r["unfiltered"][0] > 0

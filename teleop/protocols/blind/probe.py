@@ -38,6 +38,11 @@ class PokeRequest:
     force: float | None = None
 
 
+class PressAborted(Exception):
+    """The rig stopped during a press: the robot faulted (a cable tension left its range) and the stylus
+    went limp. The rig is reset for the next poke; what was felt is lost."""
+
+
 class Prober(Protocol):
     """A rig that can poke pad slot `slot` (index into the pad layout) as a participant asks."""
 

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.protocols.blind.probe import Poke, PokeRequest
+from teleop.protocols.blind.probe import Poke, PokeRequest, PressAborted
 from teleop.protocols.blind.study import Area
 
 
@@ -54,20 +54,24 @@ class RigOptions:
             estimator); False renders the raw FSR wrench f = -A t (ablation).
         estimator: DESIGN.md estimator name used when compensation is on.
         force_scale: stylus force per newton of estimated tip force [-]. 0.1 keeps the stiffest area
-            stable in the hand: rigid PLA renders 0.1 * 0.5 * 9.1e3 = 455 N/m, and with the chain's ~12 ms lag
-            (see the module docstring) that feeds the hand a negative damping K tau = 5.5 N s/m, just under
-            the operator model's 6 N s/m (devices.simulated OperatorParams.b; 6.45 N s/m measured for the arm
-            holding a haptic handle, van Beek et al. 2015, "Haptic perception of force magnitude and its
-            relation to postural arm dynamics in 3D", Sci Rep 5:18004, a typical trial). It is also well inside a Geomagic
-            Touch's z stiffness (>= 1.02 N/mm, 3D Systems specifications). At 0.2 (rigid 909 N/m) the hand
-            bounced on rigid and its loading slopes fell below Dragon Skin 30's (`teleop blind-test
-            --participants 10 --seed 1 --force-scale 0.2`, numbers in the README).
+            stable in the hand: rigid PLA renders 0.1 * 0.5 * 9.1e3 = 455 N/m, and with the chain's ~12 ms
+            lag (see the module docstring) that feeds the hand a negative damping K tau = 5.5 N s/m, just
+            under the operator model's 6 N s/m (devices.simulated OperatorParams.b; 6.45 N s/m measured
+            for an arm holding a haptic handle in a typical trial of van Beek et al. 2015, "Haptic
+            perception of force magnitude and its relation to postural arm dynamics in 3D", Sci Rep
+            5:18004). It is also well inside a Geomagic Touch's z stiffness (>= 1.02 N/mm, 3D Systems
+            specifications). At 0.2 (rigid 909 N/m, K tau 11 N s/m) the hand bounces on rigid and the
+            slopes spread: `teleop blind-test --participants 10 --seed 1 --force-scale 0.2` ranked 80 %
+            fully correct (W 0.87) against 100 % (W 1.00) at 0.1.
         motion_scale: robot displacement per stylus displacement [-].
         gap: pad surface distance ahead of the tip at the home pose [m] (effector brought just over it).
         robot_substeps: physics steps (1 ms) per robot-link exchange: the robot link runs at 1 kHz / this.
-            1: the simulated robot's own reading rate (scenes.sim_robot substeps=1) and the loop's, so the
-            estimator sees every FSR sample (at 4, i.e. 250 Hz, the soft areas rendered 10-28 % above the
-            transparent chain on single pokes, against -2..+15 % at 1 kHz).
+            1: the loop's own default (LoopParams.robot_rate_hz None: a robot exchange every 1 kHz tick)
+            and the simulated robot's reading rate, so the estimator sees every FSR sample. The rendering
+            lag is not the link's: ~12 ms at 1 kHz and at 250 Hz alike (FSR chain + Kalman, measured
+            against the ground-truth contact force). Measured with --participants 10 at seeds 1/2/3:
+            1 kHz 100/80/80 % fully correct, 250 Hz (--robot-substeps 4) 100/90/90 %, 500 Hz -/80/90 %:
+            no difference at that sample size, for 2.5x the wall time (33 s against 14 s at seed 1).
         settle: time the chain runs before a participant's first poke (engage + force ramp-in) [s].
         hold: time the participant holds at the deepest point [s].
         release_speed: stylus speed back to rest after a poke [m/s].
@@ -78,12 +82,13 @@ class RigOptions:
             robot; None keeps scenes.sim_robot's default (1e4 N/m, derived there from the cables).
         kalman_bandwidth: -3 dB bandwidth of the estimator's steady-state Kalman filter [Hz] (passed as
             teleop.estimation.kalman.KalmanNoise.bandwidth_hz). 20 Hz: twice the ~10 Hz upper limit of
-            voluntary, controlled hand movement (Hatzfeld & Kern (eds.), "Engineering Haptic Devices", 3rd
-            ed. 2023, "The User as Mechanical Load"), so the press the participant makes passes with little lag, while the
-            friction compensation's jumps at cable reversals (up to ~2 N at the tip, mostly above 20 Hz)
-            are smoothed. The loop's 8 Hz default lags the contact by 26 ms at 1 kHz (the hand bounces
-            on rigid); 40 Hz passes more of the reversal jumps (lag 8 ms, RMS error against the contact
-            force 0.49 N against 0.56 N at 20 Hz, but rigid pokes then bounce on the jumps).
+            voluntary, controlled hand movement (Hatzfeld & Kern (eds.), "Engineering Haptic Devices",
+            3rd ed. 2023, "The User as Mechanical Load"), so the participant's press passes with little
+            lag, while the friction compensation's jumps at cable reversals (up to ~2 N at the tip, mostly
+            above 20 Hz) are smoothed. The loop's 8 Hz default lags the contact by 26 ms (rendered Dragon
+            Skin 30 at 350 N/m against 200 N/m for a transparent chain, 90 % fully correct at seed 1:
+            `teleop blind-test --participants 10 --seed 1 --kalman-bandwidth 8`); 40 Hz lags 8 ms and
+            ranks like 20 Hz (seeds 1/2/3: 100/90/80 % against 100/80/80 %).
     """
 
     compensation: bool = True
@@ -172,6 +177,7 @@ class _Station:
         self.tp = None
         self.rest = None
         self.slot = None
+        self.monitor = None  # optional callable(TickData) after every tick (diagnostics, never the participant)
 
     def open(self) -> None:
         from teleop.loop import Teleop
@@ -197,9 +203,12 @@ class _Station:
         z = np.empty(n)
         f = np.empty(n)
         tp, clock, stylus = self.tp, self.clock, self.stylus
+        monitor = self.monitor
         for k in range(n):
             clock.t += dt
             x = tp.tick(clock.t)
+            if monitor is not None:
+                monitor(x)
             if record:
                 t[k] = clock.t
                 z[k] = stylus.p[2]
@@ -247,42 +256,48 @@ class _Station:
             t, z, f = self._run(t3 + o.rest - t0, record=True)
             return Poke(t=t - t0, x=-(z - z[0]), f=f)
         # descend until the felt force reaches the comfortable level, then hold and release from there
-        t_a, z_a, f_a = self._run_until(t1 - t0, request.force)
+        t_a, z_a, f_a, reached = self._run_until(t1 - t0, request.force)
         tc = self.clock.t
-        if tc < t1 - 0.5 * self.params.dt:
+        if reached:
             # hold the force aimed at: the hand's target goes to where its spring pushes the stylus with
             # `force` from where the stylus is now (not where the target had run to by the time the lagging
             # force was felt: holding that would keep pressing on)
             at = self.stylus.p - np.array([0.0, 0.0, request.force / self.stylus.operator.k])
-            d = float(c[2] - at[2])
-            t3 = tc + o.hold + max(d, 0.0) / o.release_speed
-            self.stylus.script = Script(kind="recorded",
-                                        points=np.array([[tc, *at], [tc + o.hold, *at], [t3, *c]]))
+        else:  # the push depth came first: hold there
+            at = c - np.array([0.0, 0.0, request.depth])
+        d = float(c[2] - at[2])
+        t3 = tc + o.hold + max(d, 0.0) / o.release_speed
+        self.stylus.script = Script(kind="recorded", points=np.array([[tc, *at], [tc + o.hold, *at], [t3, *c]]))
         t_b, z_b, f_b = self._run(t3 + o.rest - tc, record=True)
         t, z, f = np.concatenate([t_a, t_b]), np.concatenate([z_a, z_b]), np.concatenate([f_a, f_b])
         return Poke(t=t - t0, x=-(z - z[0]), f=f)
 
     def _run_until(self, seconds: float, force: float):
-        """Like _run(seconds, record=True) but stops after the tick whose stylus force (+z) reaches `force`."""
+        """Like _run(seconds, record=True) but stops after the tick whose stylus force (+z) reaches `force`.
+        Returns (t, z, f, reached)."""
         from teleop.loop import State
 
         dt = self.params.dt
         n = int(round(seconds / dt))
         t, z, f = np.empty(n), np.empty(n), np.empty(n)
         tp, clock, stylus = self.tp, self.clock, self.stylus
-        k = 0
+        k, reached = 0, False
+        monitor = self.monitor
         while k < n:
             clock.t += dt
             x = tp.tick(clock.t)
+            if monitor is not None:
+                monitor(x)
             t[k], z[k], f[k] = clock.t, stylus.p[2], x.F[2]
             k += 1
             if f[k - 1] >= force:
+                reached = True
                 break
         if tp.state == State.FAULT:
             from devices.base import DeviceError
 
             raise DeviceError(f"blind-test rig: the loop faulted ({tp.fault_reason})")
-        return t[:k], z[:k], f[:k]
+        return t[:k], z[:k], f[:k], reached
 
 
 class SimRig:
@@ -298,6 +313,7 @@ class SimRig:
         self.station = None
         self.layout = None
         self.n_arranged = 0
+        self.n_faults = 0  # presses the robot stopped (PressAborted)
 
     def __enter__(self):
         return self
@@ -329,13 +345,63 @@ class SimRig:
             from teleop.errors import InputError
 
             raise InputError("blind-test rig: arrange(layout) before poking")
+        from devices.base import DeviceError
+
+        self._open_station(slot)
+        self.station.move_to(int(slot), blind_area_centres()[int(slot)])
+        try:
+            return self.station.poke(request)
+        except DeviceError as exc:  # the coordinator resets the robot; the next poke starts on a fresh loop
+            self.close()
+            self.n_faults += 1
+            raise PressAborted(str(exc)) from None
+
+    def _open_station(self, slot: int) -> None:
+        """The participant's station, opened over `slot` and settled, on the first poke after `arrange`."""
+        from scenes.pads import blind_area_centres
+
         if self.station is None:
             self.station = _Station(self.pad, self.options, (self.options.seed, self.n_arranged))
             self.station.open()
             self.station.move_to(int(slot), blind_area_centres()[int(slot)])
             self.station.settle()
-        self.station.move_to(int(slot), blind_area_centres()[int(slot)])
-        return self.station.poke(request)
+
+    def poke_traced(self, slot: int, request: PokeRequest) -> tuple:
+        """A poke as `poke`, plus what the chain had to render, for diagnostics (never for a participant):
+        (Poke, contact, unfiltered), both (n,) forces along the push scaled to the stylus [N] at the Poke's
+        samples: force_scale x the robot's ground-truth contact force (what a transparent chain renders),
+        and force_scale x the estimator's wrench without its Kalman filter (same friction compensation;
+        None when the chain renders the raw FSR wrench, which has no filter anyway)."""
+        from teleop.estimation.reading import ReadingEstimator
+
+        if self.layout is None:
+            from teleop.errors import InputError
+
+            raise InputError("blind-test rig: arrange(layout) before poking")
+        self._open_station(slot)
+        st = self.station
+        raw = ReadingEstimator(st.geom, st.estimator.name, kalman=None) if self.options.compensation else None
+        contact, unfiltered, last = [], [], [0.0, 0.0]
+
+        def monitor(x):
+            r = x.reading
+            if r is not None:
+                last[0] = -float(r.wrench_truth[2])
+                if raw is not None:
+                    last[1] = -float(raw.update(r, st.tp.pose, st.params.dt * st.params.robot_every)[1][2])
+            contact.append(last[0])
+            unfiltered.append(last[1])
+
+        if raw is not None:  # bring the unfiltered estimator to the chain's state: it follows the same readings
+            raw.update(st.tp.last_reading, st.tp.pose, st.params.dt * st.params.robot_every)
+        st.monitor = monitor
+        try:
+            p = self.poke(slot, request)
+        finally:
+            st.monitor = None
+        n, g = len(p.t), self.options.force_scale
+        un = g * np.array(unfiltered[-n:]) if raw is not None else None
+        return p, g * np.array(contact[-n:]), un
 
     def describe(self) -> dict:
         """The chain's settings for the results' config."""
@@ -365,6 +431,33 @@ class SimRig:
         from scenes.materials import ATTRIBUTION
 
         return ATTRIBUTION
+
+
+def transparency(options: RigOptions, speeds, repeats: int = 3, force: float = 0.3, depth: float = 0.008) -> list:
+    """What limits the rendered stiffness: each area (laid out hardest first) pressed `repeats` times at
+    each stylus speed [m/s] to `force` [N] or `depth` [m], and the loading slope (stats.loading_slope)
+    [N/m] of, against the stylus displacement: the force rendered on the stylus, the unfiltered estimate
+    and the ground-truth contact force (both x force_scale; see SimRig.poke_traced).
+
+    Returns [{"speed", "area", "rendered", "unfiltered", "contact", "expected"}] with per-poke lists."""
+    from teleop.protocols.blind.stats import loading_slope
+
+    out = []
+    for v in speeds:
+        with SimRig(options) as rig:
+            rig.arrange(tuple(a.name for a in rig.areas))
+            expected = rig.expected_stiffness()
+            rows = {a.name: {"speed": float(v), "area": a.name, "rendered": [], "unfiltered": [], "contact": [],
+                             "expected": expected[a.name]} for a in rig.areas}
+            for _ in range(int(repeats)):
+                for slot, a in enumerate(rig.areas):
+                    p, contact, unfiltered = rig.poke_traced(slot, PokeRequest(depth, float(v), force))
+                    row = rows[a.name]
+                    row["rendered"].append(loading_slope(p.x, p.f))
+                    row["contact"].append(loading_slope(p.x, contact))
+                    row["unfiltered"].append(None if unfiltered is None else loading_slope(p.x, unfiltered))
+            out.extend(rows.values())
+    return out
 
 
 class RehearsalStation:

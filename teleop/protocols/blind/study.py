@@ -53,6 +53,7 @@ class ParticipantRecord:
         ratings: area name -> rating (1-10).
         pokes: number of pokes.
         slopes: area name -> loading slopes dF/dx [N/m] of every poke the participant made there.
+        aborted: presses the rig stopped (robot fault) and the participant repeated more gently.
     """
 
     participant: int
@@ -63,6 +64,7 @@ class ParticipantRecord:
     ratings: dict
     pokes: int = 0
     slopes: dict = field(default_factory=dict)
+    aborted: int = 0
 
 
 def coordinator_draws(seed: int, participant: int, areas) -> tuple:
@@ -102,7 +104,8 @@ def record_from(participant: int, layout, order, answers, ranking, ratings, pers
         answers=tuple((s.new + 1, s.ref + 1, a) for s, a in answers),
         ranking=tuple(zone_area[z] for z in ranking),
         ratings={zone_area[z]: int(r) for z, r in zip(ranking, ratings)},
-        pokes=0 if person is None else len(person.pokes), slopes=slopes)
+        pokes=0 if person is None else len(person.pokes), slopes=slopes,
+        aborted=0 if person is None else person.aborted)
 
 
 def run_simulated_study(rig: Rig, participants: int, seed: int, params: ParticipantParams,
@@ -196,7 +199,7 @@ class StudyResult:
                 {"participant": r.participant, "layout": list(r.layout), "order": list(r.order),
                  "ratings": {a: r.ratings[a] for a in self.truth}, "ranking": list(r.ranking),
                  "correct": r.ranking == self.truth, "kendall_tau": kendall_tau(r.ranking, self.truth),
-                 "pokes": r.pokes, "answers": [list(a) for a in r.answers]}
+                 "pokes": r.pokes, "aborted_presses": r.aborted, "answers": [list(a) for a in r.answers]}
                 for r in self.records],
             "mean": {a: ms[a][0] for a in self.truth},
             "std": {a: ms[a][1] for a in self.truth},
@@ -230,6 +233,10 @@ class StudyResult:
         lines.append("")
         lines.append(f"participants {n}: correct ranking {self.correct_ranking_rate:.0%}, "
                      f"Kendall tau mean {self.kendall_tau_mean:.3f}, Kendall W {self.kendall_w:.3f}")
+        aborted = sum(r.aborted for r in self.records)
+        if aborted:
+            lines.append(f"presses the robot stopped (cable tension out of range) and repeated more gently: {aborted} "
+                         f"of {sum(r.pokes for r in self.records) + aborted}")
         rendered = self.rendered_stiffness()
         if any(v is not None for v in rendered.values()):
             lines.append("")
