@@ -33,7 +33,7 @@ from teleop.kinematics import (bending_angles, check_lengths, pose2cables, poses
 from teleop.physics.capstan import CapstanStep, tip2motor_transitions
 from teleop.physics.sensor_effects import SensorHysteresisStep, hysteresis_offset
 from teleop.sensors import FsrCalibration, default_fsr_calibration
-from teleop.tension import wrench2tensions
+from teleop.tension import TensionSolver, wrench2tensions
 
 
 @dataclass(frozen=True)
@@ -271,6 +271,7 @@ class SimRobot(ContextDevice):
         self.L_home = poses2lengths(HOME_POSE, self.geom)[0]
         self.L_cmd = self.L_home.copy()
         self.pose = HOME_POSE.copy()
+        self._terms = None
         self.t = 0.0
         self.seq = 0
         self.boot_id = (self.seed * 2654435761) % 2 ** 31
@@ -295,7 +296,9 @@ class SimRobot(ContextDevice):
         self._require_open()
         L = check_lengths(lengths, self.geom)
         if not self.stopped:
-            self.pose = lengths2poses(L, self.geom, guess=self.pose)[0]
+            pose = lengths2poses(L, self.geom, guess=self.pose)[0]
+            if not np.array_equal(pose, self.pose):
+                self.pose, self._terms = pose, None
             self.L_cmd = L.copy()
 
     def set_pad_offset(self, xy) -> None:
@@ -308,26 +311,35 @@ class SimRobot(ContextDevice):
         """Hold the current lengths; further commands are ignored until `open` again."""
         self.stopped = True
 
-    def _physics(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Advance `substeps` steps toward the commanded pose; (tip (3,), wrench (6,), A (6, 6))."""
-        w, g = self.world, self.geom
-        R = rotation_zyx(*self.pose[3:])
-        tip_offset = R @ g.tip
-        target = self.pose[:3] + tip_offset
+    def _pose_terms(self) -> tuple:
+        """(tool offset R tip (3,) [m], tip target (3,) [m], TensionSolver at the pose, capstan wrap (6,) [rad])
+        of the commanded pose, computed once per pose."""
+        if self._terms is None:
+            g = self.geom
+            tip_offset = rotation_zyx(*self.pose[3:]) @ g.tip
+            solver = TensionSolver(structure_matrix(self.pose, g), g.t_min, g.t_max, self.params.pretension)
+            theta = bending_angles(pose2cables(self.pose, g), g) + g.theta0
+            self._terms = (tip_offset, self.pose[:3] + tip_offset, solver, theta)
+        return self._terms
+
+    def _physics(self) -> tuple[np.ndarray, np.ndarray]:
+        """Advance `substeps` steps toward the commanded pose; (tip (3,), wrench (6,))."""
+        w = self.world
+        tip_offset, target, _, _ = self._pose_terms()
         for _ in range(self.params.substeps):
             w.step(target)
         F = w.contact_force()
-        tip = w.tip()
-        f = np.concatenate([F, np.cross(tip_offset, F)])  # force at the tool tip, moments about p
-        return tip, f, structure_matrix(self.pose, g)
+        o = tip_offset
+        moment = [o[1] * F[2] - o[2] * F[1], o[2] * F[0] - o[0] * F[2], o[0] * F[1] - o[1] * F[0]]
+        return w.tip(), np.concatenate([F, moment])  # force at the tool tip, moments about p
 
     def read(self) -> RobotReading:
         """Advance one reading period and return the raw reading."""
         self._require_open()
-        p, g = self.params, self.geom
-        tip, f, A = self._physics()
-        t_tip = wrench2tensions(f, A, g.t_min, g.t_max, p.pretension)
-        theta = bending_angles(pose2cables(self.pose, g), g) + g.theta0
+        p = self.params
+        tip, f = self._physics()
+        _, _, solver, theta = self._pose_terms()
+        t_tip = solver.solve(f)
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
         t_fsr = np.array([cs.step(x=x[i], load=t_tip[i], theta=theta[i]) for i, cs in enumerate(self._capstan)])
         s = np.array([h.step(t_fsr[i]) - t_fsr[i] for i, h in enumerate(self._hyst)])
@@ -391,7 +403,7 @@ class SimRobot(ContextDevice):
         self.t = float(t[-1])
         self.seq += n
         self.L_cmd = L[-1].copy()
-        self.pose = poses[-1].copy()
+        self.pose, self._terms = poses[-1].copy(), None
         return SimTrace(t=t, lengths=L, poses=poses, tip=tips, wrench_truth=f, t_tip=t_tip, t_fsr=t_fsr,
                         counts=counts, theta=theta)
 

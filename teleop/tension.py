@@ -13,58 +13,73 @@ import numpy as np
 from teleop.errors import InfeasibleError
 
 
+class TensionSolver:
+    """The tension distribution for one structure matrix A (6, 6): its SVD done once, then `solve(f)` per
+    wrench (the simulated robot holds a pose for several readings). Same numbers as `wrench2tensions`."""
+
+    def __init__(self, A: np.ndarray, t_min: float, t_max: float, t_ref: float | None = None, tol: float = 1e-9):
+        self.A = np.asarray(A, dtype=float)
+        self.t_min, self.t_max = float(t_min), float(t_max)
+        self.t_ref = 0.5 * (t_min + t_max) if t_ref is None else float(t_ref)
+        U, s, Vt = np.linalg.svd(self.A)
+        self.rank = int((s > tol * max(1.0, s[0])).sum())
+        self.Ur, self.sr, self.Vr = U[:, :self.rank].T, s[:self.rank], Vt[:self.rank].T
+        self.N = Vt[self.rank:].T
+
+    def solve(self, f) -> np.ndarray:
+        """(6,) cable tensions [N] that balance the external wrench f (6,) [N, N m]: A t + f = 0.
+
+        Raises InfeasibleError when f is outside the wrench-feasible set: either no tension vector produces
+        it (e.g. a moment about the shaft axis) or every one that does violates [t_min, t_max].
+        """
+        f = np.asarray(f, dtype=float)
+        if f.shape != (6,) or not np.isfinite(f).all():
+            raise InfeasibleError(f"wrench must be 6 finite numbers, got {np.asarray(f).tolist()}")
+        t_min, t_max, t_ref, N = self.t_min, self.t_max, self.t_ref, self.N
+        # t_p = -A^+ f (minimum norm), N = null-space basis (6 x k)
+        t_p = -(self.Vr @ ((self.Ur @ f) / self.sr))
+        resid = self.A @ t_p + f
+        scale = max(1.0, float(np.abs(f).max()))
+        if np.abs(resid).max() > 1e-7 * scale:
+            raise InfeasibleError(
+                f"wrench {np.round(f, 6).tolist()} has a component no cable tensions can produce "
+                f"(residual {np.abs(resid).max():.3g}); for this robot that is a moment about the shaft axis")
+        k = N.shape[1]
+        if k == 0:
+            t = t_p
+        elif k == 1:
+            n = N[:, 0] * np.sign(N[:, 0].sum() or 1.0)
+            lo, hi = -np.inf, np.inf
+            for ti, ni in zip(t_p, n):
+                if abs(ni) < 1e-12:
+                    if not (t_min - 1e-9 <= ti <= t_max + 1e-9):
+                        lo, hi = np.inf, -np.inf
+                    continue
+                a, b = (t_min - ti) / ni, (t_max - ti) / ni
+                lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
+            if lo > hi + 1e-12:
+                raise InfeasibleError(
+                    f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set for tensions in "
+                    f"[{t_min:g}, {t_max:g}] N")
+            lam = float(np.clip(n @ (t_ref - t_p) / (n @ n), lo, hi))  # closest to t_ref, clipped
+            t = t_p + lam * n
+        else:
+            from scipy.optimize import minimize
+
+            res = minimize(lambda z: np.sum((t_p + N @ z - t_ref) ** 2), np.zeros(k), method="SLSQP",
+                           constraints=[{"type": "ineq", "fun": lambda z: t_p + N @ z - t_min},
+                                        {"type": "ineq", "fun": lambda z: t_max - (t_p + N @ z)}])
+            t = t_p + N @ res.x
+            if not res.success or (t < t_min - 1e-6).any() or (t > t_max + 1e-6).any():
+                raise InfeasibleError(f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set")
+        return np.clip(t, t_min, t_max)
+
+
 def wrench2tensions(f, A: np.ndarray, t_min: float, t_max: float, t_ref: float | None = None,
                     tol: float = 1e-9) -> np.ndarray:
-    """(6,) cable tensions [N] that balance the external wrench f (6,) [N, N m]: A t + f = 0.
-
-    Raises InfeasibleError when f is outside the wrench-feasible set: either no tension vector produces it
-    (e.g. a moment about the shaft axis) or every one that does violates [t_min, t_max].
-    """
-    f = np.asarray(f, dtype=float)
-    if f.shape != (6,) or not np.isfinite(f).all():
-        raise InfeasibleError(f"wrench must be 6 finite numbers, got {np.asarray(f).tolist()}")
-    if t_ref is None:
-        t_ref = 0.5 * (t_min + t_max)
-    U, s, Vt = np.linalg.svd(A)
-    rank = int((s > tol * max(1.0, s[0])).sum())
-    # t_p = -A^+ f (minimum norm), N = null-space basis (6 x k)
-    t_p = -(Vt[:rank].T @ ((U[:, :rank].T @ f) / s[:rank]))
-    resid = A @ t_p + f
-    scale = max(1.0, float(np.abs(f).max()))
-    if np.abs(resid).max() > 1e-7 * scale:
-        raise InfeasibleError(
-            f"wrench {np.round(f, 6).tolist()} has a component no cable tensions can produce "
-            f"(residual {np.abs(resid).max():.3g}); for this robot that is a moment about the shaft axis")
-    N = Vt[rank:].T
-    k = N.shape[1]
-    if k == 0:
-        t = t_p
-    elif k == 1:
-        n = N[:, 0] * np.sign(N[:, 0].sum() or 1.0)
-        lo, hi = -np.inf, np.inf
-        for ti, ni in zip(t_p, n):
-            if abs(ni) < 1e-12:
-                if not (t_min - 1e-9 <= ti <= t_max + 1e-9):
-                    lo, hi = np.inf, -np.inf
-                continue
-            a, b = (t_min - ti) / ni, (t_max - ti) / ni
-            lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
-        if lo > hi + 1e-12:
-            raise InfeasibleError(
-                f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set for tensions in "
-                f"[{t_min:g}, {t_max:g}] N")
-        lam = float(np.clip(n @ (t_ref - t_p) / (n @ n), lo, hi))  # closest to t_ref, clipped
-        t = t_p + lam * n
-    else:
-        from scipy.optimize import minimize
-
-        res = minimize(lambda z: np.sum((t_p + N @ z - t_ref) ** 2), np.zeros(k), method="SLSQP",
-                       constraints=[{"type": "ineq", "fun": lambda z: t_p + N @ z - t_min},
-                                    {"type": "ineq", "fun": lambda z: t_max - (t_p + N @ z)}])
-        t = t_p + N @ res.x
-        if not res.success or (t < t_min - 1e-6).any() or (t > t_max + 1e-6).any():
-            raise InfeasibleError(f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set")
-    return np.clip(t, t_min, t_max)
+    """(6,) cable tensions [N] that balance the external wrench f (6,) [N, N m]: A t + f = 0 (see
+    `TensionSolver.solve`; raises InfeasibleError outside the wrench-feasible set)."""
+    return TensionSolver(A, t_min, t_max, t_ref, tol).solve(f)
 
 
 def tensions2wrench(t, A: np.ndarray) -> np.ndarray:
