@@ -49,7 +49,7 @@ def add_rig_options(p) -> None:
     p.add_argument("--tip-stiffness", type=float, default=None, metavar="N_PER_M",
                    help="series compliance of the simulated robot's tip [N/m] (default: the sim robot's)")
     p.add_argument("--kalman-bandwidth", type=float, default=None, metavar="HZ",
-                   help="-3 dB bandwidth of the estimator's Kalman filter [Hz] (default: the rig's, 20 Hz)")
+                   help="-3 dB bandwidth of the estimator's Kalman filter [Hz] (default: the rig's, 80 Hz)")
     p.add_argument("--robot-substeps", type=int, default=None, metavar="N",
                    help="physics steps of 1 ms per robot-link exchange (default 1: the link at 1 kHz)")
     p.add_argument("--depth-mm", type=float, default=None, metavar="MM",
@@ -58,7 +58,7 @@ def add_rig_options(p) -> None:
                    help="participants' mean stylus push speed [mm/s]")
     p.add_argument("--press-force", type=float, default=None, metavar="N",
                    help="participants press until the stylus force reaches about N newtons, capped by the "
-                        "depth (default 0.3 N; 0: push by depth only)")
+                        "depth (default 0.2 N; 0: push by depth only)")
 
 
 def register(subparsers) -> None:

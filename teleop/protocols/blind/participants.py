@@ -60,16 +60,14 @@ class ParticipantParams:
             procedure of Lederman & Klatzky 1987, Cognitive Psychology 19:342-368: press until the force is
             comfortable; LaMotte 2000, J Neurophysiol 83:1777, subjects pressing rubber with a stylus); the
             depth still caps the press, so soft areas are pressed to `depth` and stiff ones to this force.
-            Default 0.3 N, set by what the robot can take on the rigid area: at the rig's force scale (0.1)
-            it asks 3 N of the tip, and the force felt on the stylus lags the contact (~12 ms, see the
-            rig), so the press stops late by up to ~1.2 N more on rigid (9.1 kN/m x 10 mm/s at the tip x
-            12 ms); the cable tensions [0.2, 5.5] N hold ~6 N along z at the home pose (a 5.7 N press
-            with 1.4 N sideways faulted the loop, measured). The heaviest pressers (person and poke
-            spreads) go past it now and then; those presses are repeated more gently (max_aborts). Lighter
-            presses are over before the lagging force has built up on the stiff areas: `teleop
-            blind-test --participants 10 --seed 1 --press-force 0.2` ranked 70 % fully correct (Dragon
-            Skin 30 rendered at 252 N/m against 200 N/m transparent) against 100 % at 0.3 N. Depth
-            pushes (None; --press-force 0) drive rigid past the cables' limit every time.
+            Default 0.2 N, set by what the robot can take on the rigid area: at the rig's force scale (0.1)
+            it asks 2 N of the tip, and the stylus force lags the contact (~7 ms, see the rig), so a press
+            stops late by ~0.6 N more on rigid (9.1 kN/m x 10 mm/s at the tip x 7 ms). The heaviest
+            pressers (2.5 sigma of the person and poke spreads: x1.57) then put ~3.9 N on the tip, under
+            the ~5.5 N along z that cable tensions in [0.2, 5.5] N hold at the home pose (a 5.7 N press
+            with 1.4 N sideways faulted the loop, measured); at 0.3 N they reach it, and presses the robot
+            stops are repeated more gently (max_aborts). Depth pushes (None; --press-force 0) drive rigid
+            past the cables' limit every time.
         max_repeats: extra pokes of an unsure pair before answering anyway.
         max_aborts: presses the rig may stop in a row (the robot faulted, the stylus went limp) before the
             participant gives up; each one is repeated at GENTLER times its force (or depth, for depth
@@ -87,7 +85,7 @@ class ParticipantParams:
     max_repeats: int = 2
     max_aborts: int = 3
     spacing: float = 0.6
-    force: float | None = 0.3
+    force: float | None = 0.2
 
     def __post_init__(self):
         checks = {"jnd": self.jnd > 0, "depth": self.depth > 0, "speed": self.speed > 0,
