@@ -47,7 +47,7 @@ def add_rig_options(p) -> None:
     p.add_argument("--force-scale", type=float, default=None, metavar="G",
                    help="stylus force per newton at the tip (default: the rig's; a tiny value degrades the chain)")
     p.add_argument("--tip-stiffness", type=float, default=None, metavar="N_PER_M",
-                   help="series compliance of the simulated robot's tip [N/m] (default: the sim robot's)")
+                   help="series stiffness of the simulated robot at its tip [N/m] (default: the sim robot's, 1e4)")
     p.add_argument("--kalman-bandwidth", type=float, default=None, metavar="HZ",
                    help="-3 dB bandwidth of the estimator's Kalman filter [Hz] (default: the rig's, 80 Hz)")
     p.add_argument("--robot-substeps", type=int, default=None, metavar="N",
@@ -196,7 +196,7 @@ def run_sim(args) -> int:
     result = type(result)(areas=result.areas, records=result.records, config=config, expected=expected)
     print(result.table())
     print("\n(seed 000 Table 3 beside the simulated ratings; 'transparent chain': force scale x motion scale x the pad"
-          " in series with the simulated robot's tip compliance)")
+          " in series with the simulated robot's own stiffness, scenes.sim_robot tip_stiffness)")
     print(rig.attribution)
     if args.json:
         write_json(args.json, result.to_dict())
