@@ -70,7 +70,7 @@ def test_tension_distribution_then_minus_A_t_returns_the_wrench(x, y, z, b, c, F
 
 
 def test_dynamic_inverts_the_capstan_with_stick_transitions():
-    """The play-form compensation recovers the tip tension through reversals (physics capstan_friction):
+    """The friction-state compensation recovers the tip tension through reversals (physics capstan_friction):
     each cable pulls a spring (tip tension follows the motor position), k = 2e4 N/m stick stiffness."""
     n, dt = 3000, 1e-3
     tt = np.arange(n) * dt
@@ -83,7 +83,7 @@ def test_dynamic_inverts_the_capstan_with_stick_transitions():
     t_tip = 2.5 + 300.0 * x
     fsr = np.column_stack([tip2motor_transitions(x[:, i], t_tip[:, i], G.mu, theta[:, i], 2e4) for i in range(6)])
     single = make_estimator("single", G, kalman=None)
-    dynamic = make_estimator("dynamic", G, kalman=None)
+    dynamic = make_estimator("dynamic", G, kalman=None, dynamic=DynamicParams(capstan_k=2e4))
     err = {}
     for est in (single, dynamic):
         out = []
@@ -91,8 +91,9 @@ def test_dynamic_inverts_the_capstan_with_stick_transitions():
             est.cables.update(L[k])
             out.append(est.compensate(fsr[k], L[k], theta[k], dt))
         err[est.name] = np.abs(np.array(out) - t_tip)[100:].max()
-    # the tip tension moves by 300 N/m x the ~40 um of a transition: 0.012 N; single jumps at every reversal
-    assert err["dynamic"] < 0.02
+    # the tip tension moves by 300 N/m x the ~40 um of a transition: 0.012 N, which the physics keeps out of
+    # the sticking sensor tension and the friction state lets through (<= 2 x 0.012 N); single jumps
+    assert err["dynamic"] < 0.03
     assert err["single"] > 0.3
 
 
@@ -149,7 +150,7 @@ def test_steady_state_step_equals_filterpy_recursion():
 
 # -------------------------------------------------------------------------------- plant and comparisons
 PLANT = dict(k=2e3, b=5.0, sigma=2e4, Fc=0.05)
-DYN = DynamicParams(b=PLANT["b"], dahl_sigma=PLANT["sigma"], dahl_Fc=PLANT["Fc"])
+DYN = DynamicParams(b=PLANT["b"], dahl_sigma=PLANT["sigma"], dahl_Fc=PLANT["Fc"], capstan_k=PLANT["k"])
 
 
 def plant(poses, wrench, dt, seed, noise=0.01):

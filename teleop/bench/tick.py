@@ -55,7 +55,7 @@ class ReferenceTick:
         self.d = np.zeros(6)
         self.vel = np.zeros(6)
         self.F_dahl = np.zeros(6)
-        self.t_tip = None
+        self.phi = np.zeros(6)
         if self.turn is not None:
             self.turn.reset()
         self.kf.reset()
@@ -65,7 +65,8 @@ class ReferenceTick:
         """(lengths (6,), wrench (6,), force (3,)) like TickComputer.compute."""
         from scipy.spatial.transform import Rotation
 
-        from teleop.physics.capstan import capstan_band, motor2tip
+        from teleop.estimation.estimators import capstan_state
+        from teleop.physics.capstan import motor2tip
         from teleop.physics.friction import viscous
 
         g, p = self.geom, self.dyn
@@ -89,9 +90,8 @@ class ReferenceTick:
                 a = np.exp(-p.dahl_sigma * np.abs(dx) / p.dahl_Fc)
                 self.F_dahl = a * self.F_dahl + np.sign(dx) * p.dahl_Fc * (1 - a)
                 t = t - self.F_dahl
-            lo, hi = capstan_band(t, g.mu, theta)
-            self.t_tip = np.clip(t if self.t_tip is None else self.t_tip, lo, hi)
-            t = self.t_tip
+            self.phi = capstan_state(self.phi, dx, t, g.mu * theta, p.capstan_k)
+            t = t * np.exp(-self.phi * g.mu * theta)
         self.L_prev = L
         A = np.vstack([-u.T, -np.cross(Rr, u).T])
         f = -A @ t                                           # f = -A t

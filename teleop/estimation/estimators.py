@@ -11,9 +11,12 @@ tensions: (6,) calibrated FSR tensions [N] (sensor side of the scaffold bend); l
 - double: single + the turn compensation of step 3 (`turn.py`), the seed's strategy.
 - dynamic: velocity- and reversal-aware. Per cable, the sheath friction the physics library models is
   removed in order: viscous b v and the Dahl pre-sliding state (both along the cable's own motion), then
-  the capstan with stick transitions is inverted by its play form (physics.capstan.motor2tip_transitions:
-  the tip tension stays flat while the sensor tension crosses the band [t e^-mu Theta, t e^mu Theta]), so
-  nothing jumps at a reversal and the estimate does not depend on how fast the cable moves.
+  the capstan with stick transitions (physics.capstan tip2motor_transitions, stick stiffness k) is
+  inverted through its friction state phi in [-1, 1], the sensor tension being t e^(phi mu Theta): phi
+  follows the cable's own travel, d phi = k dx / (mu Theta t_sensor) (the sensor tension moves by k dx
+  while the cable sticks), clipped at +-1 where it slips (phi = +1 hauling, -1 paying out: the seed's
+  direction rule). So nothing jumps at a reversal, the transition lasts the cable travel the physics says,
+  and a paid-out cable whose tension rises is still followed (the direction-free play form held it flat).
 Every estimator ends with the same Kalman filter (kalman.py) unless built with kalman=None; its gain is the
 steady state for the noise model's nominal dt, whatever dt is passed.
 
@@ -34,7 +37,7 @@ from teleop.estimation.kalman import KalmanNoise, SteadyWrenchKalman, WrenchKalm
 from teleop.estimation.turn import TurnCompensation, TurnCompensator
 from teleop.geometry import Geometry
 from teleop.kinematics import bending_angles, pose2cables, structure_matrix
-from teleop.physics.capstan import capstan_band, motor2tip
+from teleop.physics.capstan import motor2tip
 from teleop.physics.friction import DahlStep, viscous
 from teleop.tension import tensions2wrench
 
@@ -54,12 +57,15 @@ class DynamicParams:
         b: viscous coefficient [N s/m] (viscous_friction).
         dahl_sigma: Dahl rest stiffness [N/m]; dahl_Fc: Dahl sliding force [N] (dahl_hysteresis; 0 = off).
         v_smooth: time constant of the cable-velocity estimate [s].
+        capstan_k: stick stiffness of the capstan transitions [N/m] (physics.capstan `k`; the simulated
+            robot's 5e3 N/m, scenes.sim_robot, derived there from the seed's Fig 13 turn segments).
     """
 
     b: float = 0.0
     dahl_sigma: float = 1e4
     dahl_Fc: float = 0.0
     v_smooth: float = 0.0
+    capstan_k: float = 5e3
 
 
 class Estimator:
@@ -151,7 +157,7 @@ class Dynamic(Estimator):
         self.v = np.zeros(6)
         self.dahl = [DahlStep({"sigma": self.params.dahl_sigma, "Fc": self.params.dahl_Fc})
                      for _ in range(6)] if self.params.dahl_Fc > 0 else None
-        self.t_tip = None
+        self.phi = np.zeros(6)
 
     def compensate(self, t, lengths, theta, dt):
         p = self.params
@@ -163,10 +169,17 @@ class Dynamic(Estimator):
         t_c = t - viscous(self.v, p.b)
         if self.dahl is not None:  # Dahl friction along the motor position x = -length
             t_c = t_c - np.array([d.step(x=-Li, load=0.0) for d, Li in zip(self.dahl, lengths)])
-        lo, hi = capstan_band(t_c, self.geom.mu, theta)
-        prev = t_c if self.t_tip is None else self.t_tip
-        self.t_tip = np.minimum(np.maximum(prev, lo), hi)
-        return self.t_tip
+        mT = self.geom.mu * np.asarray(theta, dtype=float)
+        self.phi = capstan_state(self.phi, dx, t_c, mT, p.capstan_k)
+        return t_c * np.exp(-self.phi * mT)
+
+
+def capstan_state(phi, dx, t_sensor, mu_theta, k: float):
+    """Friction state(s) phi in [-1, 1] after a motor travel dx [m] (+ hauling): the sensor tension
+    t_sensor [N] = t_tip e^(phi mu_theta) moves by k dx [N] while the cable sticks (d phi = k dx / (mu_theta
+    t_sensor)) and phi stays at +-1 while it slips. A slack cable (t_sensor <= 1e-6 N) slips at once."""
+    dphi = k * np.asarray(dx, dtype=float) / np.maximum(mu_theta * np.maximum(t_sensor, 1e-6), 1e-12)
+    return np.clip(phi + dphi, -1.0, 1.0)
 
 
 def make_estimator(name: str, geom: Geometry, *, turn: TurnCompensation | None = None,

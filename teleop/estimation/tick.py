@@ -64,7 +64,7 @@ class TickComputer:
         self.L_prev = None
         self.vel = [0.0] * 6
         self.F_dahl = [0.0] * 6
-        self.t_tip = None
+        self.phi = [0.0] * 6
         self.turn_state = [[0.0, math.nan, math.inf] for _ in self.turn_axes]  # direction, extreme, tau
         if self.kalman is not None:
             self.kalman.reset()
@@ -99,9 +99,8 @@ class TickComputer:
             dyn = self.dyn
             b_visc, Fc, sig = dyn.b, dyn.dahl_Fc, dyn.dahl_sigma
             a_v = dt / (dyn.v_smooth + dt) if dt > 0 else 0.0
-            vel, F_dahl = self.vel, self.F_dahl
-            t_tip_prev = self.t_tip
-            t_tip_new = [0.0] * 6
+            vel, F_dahl, phi = self.vel, self.F_dahl, self.phi
+            k_st = dyn.capstan_k
         for i, (rx, ry, rz, Bx, By, Bz) in enumerate(self.cables):
             # R r_i, cable vector l_i = p + R r_i - B_i (eq 4-5), length, unit vector
             qx = R00 * rx + R01 * ry + R02 * rz
@@ -151,14 +150,12 @@ class TickComputer:
                         Fd = ad * F_dahl[i] + (1.0 if dx > 0 else (-1.0 if dx < 0 else 0.0)) * Fc * (1.0 - ad)
                         F_dahl[i] = Fd
                         t -= Fd
-                    # physics.capstan.capstan_band, then the play step of motor2tip_transitions
-                    e = exp(Th)
-                    lo, hi = t / e, t * e
-                    if lo > hi:
-                        lo, hi = hi, lo
-                    prev = t if first or t_tip_prev is None else t_tip_prev[i]
-                    t = hi if prev > hi else (lo if prev < lo else prev)
-                    t_tip_new[i] = t
+                    # friction state of the capstan transition (estimators.capstan_state), then t e^-phi mu Theta
+                    den = Th * (t if t > 1e-6 else 1e-6)
+                    ph = phi[i] + k_st * dx / (den if den > 1e-12 else 1e-12)
+                    ph = 1.0 if ph > 1.0 else (-1.0 if ph < -1.0 else ph)
+                    phi[i] = ph
+                    t = t * exp(-ph * Th)
             # f = -A t (eq 8): column i of A is [-u; -(R r_i) x u]
             fx += t * ux
             fy += t * uy
@@ -167,8 +164,6 @@ class TickComputer:
             my += t * (qz * ux - qx * uz)
             mz += t * (qx * uy - qy * ux)
         self.L_prev = lengths
-        if mode == 3:
-            self.t_tip = t_tip_new
         w = [fx, fy, fz, mx, my, mz]
         if self.turn_axes:
             self._turn(w, (x, y, z), dt)
