@@ -123,3 +123,20 @@ def test_loading_slope_ignores_a_force_felt_before_contact_and_a_bounce_back():
     x_b = np.r_[x[x <= 0.002], back, back[::-1], x[x > 0.002]]
     f_b = np.r_[f[x <= 0.002], np.full(30, k * 0.001), np.full(30, 0.6 * k * 0.001), f[x > 0.002]]
     assert loading_slope(x_b, f_b) == pytest.approx(k, rel=0.02)
+
+
+def test_loading_slope_counts_only_the_last_contact_before_the_peak():
+    # a stiff contact (500 N/m from 1.3 mm) after a blip in free travel: 0.1 N for 0.3 mm, then nothing
+    # (the FSR's loading state crossing over at the press's reversal); the blip is not the pad
+    k = 500.0
+    x = np.linspace(0, 0.0019, 400)
+    f = k * np.maximum(x - 0.0013, 0)
+    blip = (x > 0.0004) & (x < 0.0008)
+    f_blip = f.copy()
+    f_blip[blip] = 0.1
+    assert loading_slope(x, f_blip) == pytest.approx(k, rel=0.05)
+    # a noisy soft press whose force only dips towards the threshold is one contact, not several
+    rng = np.random.default_rng(0)
+    x2 = np.linspace(0, 0.005, 500)
+    f2 = 20.0 * np.maximum(x2 - 0.001, 0) + rng.normal(0, 0.004, x2.size)
+    assert loading_slope(x2, f2) == pytest.approx(20.0, rel=0.15)

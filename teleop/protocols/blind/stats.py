@@ -84,6 +84,11 @@ def loading_slope(x: np.ndarray, f: np.ndarray, f_min: float = 0.02) -> float:
     up to ~29 % of stray samples, which a least-squares line does not: a force felt before the contact
     (friction-compensation residue, up to ~0.06 N on the stylus after a previous poke; least squares read
     66 N/m on a 200 N/m area there).
+    Only the last contact before the peak counts: a force felt and lost again on the way in (a blip in free
+    travel: the FSR's loading state crossing over at the press's reversal, ~0.1 N on the stylus for a few
+    tens of ms; it read rigid PLA as 113-118 N/m instead of ~500 in 2 of 10 rigid presses with seed 3)
+    is not the pad; the loading phase starts after the last sample before the peak where the force was
+    gone (at or below f_min / 4: the rendered force back to ~nothing, not a noisy dip near the threshold).
     Returns 0 when no force was felt.
     """
     x = np.asarray(x, dtype=float)
@@ -92,6 +97,11 @@ def loading_slope(x: np.ndarray, f: np.ndarray, f_min: float = 0.02) -> float:
         return 0.0
     end = int(np.argmax(x)) + 1
     xl, fl = x[:end], f[:end]
+    lost = np.nonzero(fl[:int(np.argmax(fl))] <= 0.25 * f_min)[0]  # the last contact starts after the last of these
+    if lost.size:
+        xl, fl = xl[lost[-1] + 1:], fl[lost[-1] + 1:]
+    if xl.size < 2:
+        return 0.0
     front = xl >= np.maximum.accumulate(xl)  # the stylus at its deepest so far (a bounce back is skipped)
     below_peak = fl < _PLATEAU * fl.max()    # a force held flat at its peak (a device clamp) has no slope
     sel = np.nonzero(front & below_peak & (fl > f_min))[0]
