@@ -37,6 +37,7 @@ TOPIC_SETPOINT = "/teleop/setpoint"
 TOPIC_ROBOT = "/robot/measured"
 TOPIC_FORCE = "/haptic/servo_cf"
 TOPIC_EVENTS = "/teleop/events"
+TOPIC_TIMING = "/loop/timing"
 FLOAT, INT = "f", "i"
 
 
@@ -235,7 +236,7 @@ class SessionWriter:
         self.w = McapWriter(stream)
         self.encoder = RowEncoder(layout)
         self.channels = {}
-        extra = ((TOPIC_EVENTS, b'{"type": "object"}'), ("/loop/timing", b'{"type": "object"}'))
+        extra = ((TOPIC_EVENTS, b'{"type": "object"}'), (TOPIC_TIMING, b'{"type": "object"}'))
         topics = [(t, json_schema(layout, t)) for t in layout.topics()] + list(extra)
         for i, (topic, schema) in enumerate(topics, start=1):
             self.w.add_schema(i, topic, "jsonschema", schema)
@@ -391,7 +392,7 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
                 writer.write_row(row)
                 s = stats.add(row)
                 if s is not None:
-                    writer.write_json("/loop/timing", float(s["second"]), s)
+                    writer.write_json(TOPIC_TIMING, float(s["second"]), s)
             ctrl[WRITTEN] += len(rows)
             while conn.poll():
                 try:
@@ -413,7 +414,7 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
                 time.sleep(0.005)
         if stats.rows:
             s = stats.summary()
-            writer.write_json("/loop/timing", float(s["second"]), s)
+            writer.write_json(TOPIC_TIMING, float(s["second"]), s)
         end_meta.setdefault("drops", int(ctrl[DROPS]))
         end_meta.setdefault("rows_written", int(ctrl[WRITTEN]))
         writer.finish(end_meta)
