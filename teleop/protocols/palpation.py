@@ -27,6 +27,11 @@ PROFILES = ("uniform", "variable")
 ESTIMATORS = ("non_compensated", "single", "double", "dynamic")
 FIT_PAD_AWAY = 0.2  # [m] where the pad stage parks the pad during the no-load runs
 AXES = {"+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0), "+z": (2, 1.0)}
+# seed 000 Table 1 [N], pokes 1-6 (regions black, black, red, red, yellow, yellow)
+SEED_TABLE1 = {"region": ("black", "black", "red", "red", "yellow", "yellow"),
+               "non_compensated": (4.72, 4.92, 4.61, 5.05, 4.40, 4.48),
+               "double": (1.18, 1.21, 2.79, 2.74, 1.59, 1.50),
+               "ground_truth": (1.02, 1.00, 2.32, 2.21, 1.44, 1.41)}
 
 
 @dataclass(frozen=True)
@@ -384,6 +389,12 @@ class PalpationResult:
         for key in ("ranks_correctly", "contrast"):
             if key in self.extra:
                 lines.append(f"{key}: {self.extra[key]}")
+        if "load_response" in self.extra:
+            lr, sd = self.extra["load_response"], self.extra["seed_table1_load_response"]
+            lines.append("load response (estimate = offset + gain x truth): "
+                         + ", ".join(f"{n} {v['offset_N']:.2f} + {v['gain']:.2f} F" for n, v in lr.items()))
+            lines.append("seed 000 Table 1, same fit: "
+                         + ", ".join(f"{n} {v['offset_N']:.2f} + {v['gain']:.2f} F" for n, v in sd.items()))
         rt = self.simulated_s / self.wall_s if self.wall_s > 0 else float("inf")
         rc = self.simulated_s / self.cpu_s if self.cpu_s > 0 else float("inf")
         lines.append(f"simulated {self.simulated_s:.1f} s in {self.wall_s:.1f} s wall ({rt:.1f}x real time), "
@@ -563,9 +574,25 @@ def stiffness_extras(rows) -> dict:
             ok &= min(a) > max(b)
         per_poke[n] = bool(ok)
     within = {n: bool(all(abs(r[f"{n}_N"] - r["ground_truth_N"]) <= 0.3 for r in rows)) for n in ESTIMATORS}
+    gt = [r["ground_truth_N"] for r in rows]
+    response = {n: load_response(gt, [r[f"{n}_N"] for r in rows]) for n in ESTIMATORS}
+    seed = {n: load_response(SEED_TABLE1["ground_truth"], SEED_TABLE1[n]) for n in ("non_compensated", "double")}
     return {"regions": regions, "truth_ranking": truth, "ranking": ranking,
             "ranks_correctly": {n: ranking[n] == truth for n in ESTIMATORS},
-            "ranks_every_poke": per_poke, "within_0_3_N": within}
+            "ranks_every_poke": per_poke, "within_0_3_N": within,
+            "load_response": response, "seed_table1_load_response": seed}
+
+
+def load_response(truth, estimate) -> dict:
+    """Least-squares line estimate = offset + gain * truth over the pokes: {"offset_N", "gain"}.
+
+    What separates an estimator that ranks stiffness regions from one that cannot: a gain near 1 with a
+    constant offset still ranks (the offset cancels between regions); a gain near 0 does not. Under the
+    capstan law with each cable's friction direction fixed during a poke, the non-compensated gain lies
+    between exp(-mu Theta) and exp(+mu Theta) of the load-bearing cables (0.83-1.20 for the default robot: Theta = theta0 + 28-44 deg).
+    """
+    gain, offset = np.polyfit(np.asarray(truth, dtype=float), np.asarray(estimate, dtype=float), 1)
+    return {"offset_N": _num(offset), "gain": _num(gain)}
 
 
 def _grid(session: Session, rows) -> dict:

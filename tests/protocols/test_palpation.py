@@ -8,7 +8,7 @@ import pytest
 
 from teleop.cli import main
 from teleop.protocols.palpation import (ESTIMATORS, PalpationParams, Poke, line, load_depth, plan_pokes, reach_scale,
-                                        run_test, sessions_for, stiffness_extras, stroke, summarise)
+                                        run_test, sessions_for, stiffness_extras, stroke, summarise, load_response, SEED_TABLE1)
 
 # short runs: 2 mm/s pokes and a 3 mm turn-compensation run (the CLI defaults are the seed's 0.5 mm/s)
 QUICK = dataclasses.replace(PalpationParams(), fit_dynamic=False, speed=2e-3, fit_cycles=2, fit_travel=0.003)
@@ -69,6 +69,15 @@ def test_summary_and_ranking_logic():
     assert ex["truth_ranking"] == ["red", "yellow", "black"]
     assert not ex["ranks_correctly"]["non_compensated"] and ex["ranks_correctly"]["double"]
     assert ex["within_0_3_N"]["double"] and not ex["within_0_3_N"]["non_compensated"]
+    assert ex["load_response"]["double"] == {"offset_N": pytest.approx(-0.02), "gain": pytest.approx(1.0)}
+
+
+def test_load_response_line_and_the_seeds_flat_non_compensated_values():
+    r = load_response([1.0, 2.0, 3.0], [2.5, 4.0, 5.5])
+    assert r["offset_N"] == pytest.approx(1.0) and r["gain"] == pytest.approx(1.5)
+    seed = {n: load_response(SEED_TABLE1["ground_truth"], SEED_TABLE1[n]) for n in ("non_compensated", "double")}
+    assert abs(seed["non_compensated"]["gain"]) < 0.2  # flat: cannot rank (Table 1)
+    assert seed["double"]["gain"] == pytest.approx(1.2, abs=0.1)
 
 
 def test_short_stiffness_run_is_physical_and_deterministic():
