@@ -1,0 +1,89 @@
+"""`teleop bench sim`: JSON keys and the consistency of its numbers, seeded determinism of the simulated
+trajectory, bad flags. No wall-clock assertions (the factors' values depend on the machine)."""
+
+import json
+
+import pytest
+
+from teleop.bench.sim import BUDGET_FACTOR, STAGES, _Meter, bench_sim
+from teleop.cli import main
+
+KEYS = ["seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wall_s", "cpu_s", "realtime_factor",
+        "realtime_factor_cpu", "budget_factor", "pass", "ticks", "readings", "physics_steps", "stages_timed",
+        "stages", "trajectory", "batch"]
+
+
+def _factor_ok(factor, simulated, spent):
+    return factor == pytest.approx(simulated / spent, rel=1e-3, abs=2e-3)
+
+
+def test_cli_json_keys_and_consistent_values(tmp_path, capsys):
+    path = tmp_path / "sim.json"
+    assert main(["bench", "sim", "--seconds", "2", "--seed", "3", "--json", str(path)]) == 0
+    out = json.loads(path.read_text())
+    assert list(out) == KEYS
+    assert out["simulated_s"] == 2.0 and out["ticks"] == 2000 and out["readings"] == 2000
+    assert out["physics_steps"] == 2000 and out["seed"] == 3 and out["budget_factor"] == BUDGET_FACTOR
+    assert _factor_ok(out["realtime_factor"], out["simulated_s"], out["wall_s"])
+    assert _factor_ok(out["realtime_factor_cpu"], out["simulated_s"], out["cpu_s"])
+    assert out["pass"] == (out["realtime_factor"] >= BUDGET_FACTOR)
+    # the stages partition the wall time
+    assert list(out["stages"]) == list(STAGES)
+    assert sum(s["wall_s"] for s in out["stages"].values()) == pytest.approx(out["wall_s"], abs=1e-4)
+    assert sum(s["fraction"] for s in out["stages"].values()) == pytest.approx(1.0, abs=1e-3)
+    for name in ("kinematics", "physics", "sensors", "estimate", "stylus"):
+        st = out["stages"][name]
+        assert st["wall_s"] > 0 and 0 < st["per_tick_us"]["p50"] <= st["per_tick_us"]["p99"]
+    # the loop ran engaged and poked the pad
+    tr = out["trajectory"]
+    assert tr["final_state"] == "ENABLED" and tr["fault_reason"] == ""
+    assert tr["contacts"] >= 1 and tr["peak_contact_force_N"] > 0.1 and tr["enabled_s"] > 1.9
+    # the batched path replays the same commanded lengths: same time, same counts up to a rounding flip
+    b = out["batch"]
+    assert b["simulated_s"] == 2.0 and b["readings"] == 2000
+    assert _factor_ok(b["realtime_factor"], b["simulated_s"], b["wall_s"])
+    assert _factor_ok(b["realtime_factor_cpu"], b["simulated_s"], b["cpu_s"])
+    assert sum(s["wall_s"] for s in b["stages"].values()) == pytest.approx(b["wall_s"], abs=1e-5)
+    assert b["counts_max_abs_diff_vs_loop"] <= 1
+    text = capsys.readouterr().out
+    assert "loop" in text and "batch" in text and ("PASS" in text or "FAIL" in text)
+
+
+def test_same_seed_same_trajectory_other_seed_differs():
+    a = bench_sim(1.0, seed=5, batch=False)
+    b = bench_sim(1.0, seed=5, batch=False)
+    c = bench_sim(1.0, seed=6, batch=False)
+    assert a["trajectory"] == b["trajectory"]
+    assert a["trajectory"]["sha256"] != c["trajectory"]["sha256"]
+
+
+def test_substeps_and_untimed_robot():
+    out = bench_sim(0.5, seed=0, substeps=2, batch=False, stages=False)
+    assert out["simulated_s"] == 0.5 and out["ticks"] == 500
+    assert out["readings"] == 250 and out["physics_steps"] == 500 and out["robot_rate_hz"] == 500.0
+    st = out["stages"]
+    assert not out["stages_timed"]
+    assert st["kinematics"]["wall_s"] == st["physics"]["wall_s"] == st["sensors"]["wall_s"] == 0
+    assert st["robot_io"]["wall_s"] > 0  # the whole robot stage
+    assert sum(s["wall_s"] for s in st.values()) == pytest.approx(out["wall_s"], abs=1e-4)
+
+
+def test_meter_counts_nested_calls_once():
+    m = _Meter()
+    inner = m.wrap(lambda: 1)
+    outer = m.wrap(lambda: inner() + 1)
+    assert outer() == 2 and inner() == 1
+    assert m.calls == 2 and m.ns > 0
+
+
+@pytest.mark.parametrize("argv", [
+    ["--seconds", "0"], ["--seconds", "-1"], ["--seconds", "nan"], ["--seconds", "0.0005"],
+    ["--seconds", "0.003", "--substeps", "2"], ["--substeps", "0"], ["--pad", "moon"], ["--depth-mm", "0"],
+    ["--period-s", "-2"], ["--seed", "-1"],
+])
+def test_bad_flags_exit_2(argv, tmp_path, capsys):
+    path = tmp_path / "sim.json"
+    assert main(["bench", "sim", *argv, "--json", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("teleop: error: --")
+    assert not path.exists()
