@@ -1,10 +1,15 @@
 """The command line: bad input is one line on stderr and exit code 2; nothing half-written."""
 
+import argparse
 import json
 import subprocess
 import sys
 
 import numpy as np
+import pytest
+
+from teleop import cli
+from teleop.cli import main
 
 
 def run(*args, cwd=None):
@@ -39,3 +44,80 @@ def test_nan_and_unreachable_pose_exit_2():
 
 def test_unknown_argument_exit_2():
     assert run("geometry", "--bogus").returncode == 2
+
+
+# Every argparse error, in every subcommand: exactly one stderr line
+# "teleop <sub>: error: <what; expected> (see teleop <sub> --help)", exit code 2, nothing on stdout.
+ARGPARSE_ERRORS = [
+    # (argv, prog that must report it, words the line must contain)
+    (["geometry", "--bogus"], "teleop geometry", ["--bogus", "unrecognized"]),
+    (["geometry", "stray"], "teleop geometry", ["stray", "unrecognized"]),
+    (["blind-test", "--participants", "abc"], "teleop blind-test", ["--participants", "'abc'", "expected"]),
+    (["blind-test", "--participants", "-3"], "teleop blind-test", ["--participants", "-3", ">= 1"]),
+    (["palpate"], "teleop palpate", ["--test", "required", "expected --test {stiffness,z,xy,scan}"]),
+    (["palpate", "--test", "nope"], "teleop palpate", ["--test", "'nope'", "choose from"]),
+    (["palpate", "--test", "z", "--repeats", "x"], "teleop palpate", ["--repeats", "expected an integer", "'x'"]),
+    (["palpate", "--test", "z", "--seed", "-1"], "teleop palpate", ["--seed", "-1", ">= 0"]),
+    (["session", "--seconds", "soon"], "teleop session", ["--seconds", "expected a number", "'soon'"]),
+    (["geometry", "--pose-mm-deg", "1", "2"], "teleop geometry", ["--pose-mm-deg", "6 arguments"]),
+    (["export", "rec.mcap"], "teleop export", ["--csv", "required", "expected --csv OUT"]),
+    (["diagnose"], "teleop diagnose", ["REC", "required"]),
+    (["bench", "--bogus"], "teleop bench", ["--bogus"]),
+    (["bench", "tick", "--bogus"], "teleop bench tick", ["--bogus"]),
+    (["bench", "tick", "--clock", "sundial"], "teleop bench tick", ["--clock", "'sundial'", "choose from"]),
+    (["bench", "blind-jnd", "--participants", "0"], "teleop bench blind-jnd", ["--participants", "0", ">= 1"]),
+    (["bench", "diagnose", "--seed", "-7"], "teleop bench diagnose", ["--seed", "-7", ">= 0"]),
+    (["nosuch"], "teleop", ["'nosuch'", "choose from"]),
+    (["--bogus"], "teleop", ["--bogus"]),
+]
+
+
+@pytest.mark.parametrize("argv,prog,words", ARGPARSE_ERRORS, ids=[" ".join(a) for a, _, _ in ARGPARSE_ERRORS])
+def test_argparse_errors_are_one_line_exit_2(capsys, argv, prog, words):
+    rc = main(argv)
+    out, err = capsys.readouterr()
+    assert rc == 2
+    assert out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].strip(), err
+    line = lines[0]
+    assert line.startswith(f"{prog}: error: ") and line.endswith(f"(see {prog} --help)"), line
+    for word in words:
+        assert word in line, (word, line)
+
+
+def test_argparse_error_one_line_through_the_entry_point():
+    r = run("blind-test", "--participants", "abc")
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.splitlines() == [
+        "teleop blind-test: error: argument --participants: expected a whole number, got 'abc' "
+        "(see teleop blind-test --help)"]
+
+
+def _help_texts(parser) -> dict:
+    """--help of the top-level parser and of every (nested) subcommand parser, keyed by prog."""
+    texts, todo = {}, [parser]
+    while todo:
+        p = todo.pop()
+        texts[p.prog] = p.format_help()
+        for action in p._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                todo.extend(action.choices.values())
+    return texts
+
+
+def test_help_is_what_plain_argparse_prints(monkeypatch):
+    ours = _help_texts(cli.build_parser())
+    monkeypatch.setattr(cli, "TeleopArgumentParser", argparse.ArgumentParser)
+    plain = _help_texts(cli.build_parser())
+    assert "teleop bench tick" in ours and "teleop palpate" in ours
+    assert ours == plain
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["palpate", "--help"], ["bench", "tick", "--help"], ["--version"]])
+def test_help_and_version_exit_0_on_stdout(capsys, argv):
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    assert err == "" and out.strip()
+    if argv[-1] == "--help":
+        assert out.startswith(f"usage: teleop {' '.join(argv[:-1])}".rstrip())
