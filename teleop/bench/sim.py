@@ -11,20 +11,29 @@ reading every `--substeps` ticks. Garbage collection is paused during the run, a
 
 Reported: simulated, wall and CPU seconds [s], the real-time factors simulated / wall and simulated / CPU,
 pass/fail against the 20x budget, and where the wall time goes, stage by stage (total [s], fraction, and
-per tick [us] p50/p99): stylus (the loop's READ stage: operator model + state machine), map, kinematics
-(SimRobot.command_lengths: forward kinematics), physics (pybullet steps and contact queries), sensors
-(SimRobot.read minus physics: tensions, capstan friction, FSR), robot_io (rest of the loop's ROBOT stage),
-estimate, render, write, record, loop_other (the tick outside its stages) and harness (clock and the
-trajectory log, outside the tick). The stages sum to the wall time. `--no-stages` runs without the
-kinematics/physics/sensors timers (they cost ~1-2 us per tick) to check the factor they leave.
+per tick [us] p50/p99), in the order of the data flow:
+  stylus        the loop's READ stage: simulated operator (hand model) + state machine
+  map           the loop's MAP stage: stylus -> target -> cable lengths
+  kinematics    SimRobot.command_lengths: forward kinematics (lengths -> pose)
+  pybullet      the pybullet C API calls inside PadWorld (stepSimulation, contact and state queries)
+  physics_py    the rest of PadWorld.step / contact_force / tip (the series spring, Python glue)
+  cable_sensor  SimRobot.read minus PadWorld: per-pose terms (structure matrix, tension solver, wrap
+                angles), tension distribution, capstan friction, FSR hysteresis and ADC
+  robot_io      the rest of the loop's ROBOT stage
+  estimate      the loop's ESTIMATE stage: FSR calibration, friction compensation, Kalman, safety monitors
+  render, write, record   the loop's stages of those names
+  loop_other    the tick outside its stages;  harness: clock and trajectory log, outside the tick.
+The stages sum to the wall time. `--no-stages` runs without the timers inside the robot (a few us per
+tick) to check the factor they leave; the kinematics to cable_sensor stages then read 0 and robot_io holds
+the whole ROBOT stage.
 
 With the batch path (default; `--no-batch` skips it) the same commanded lengths, one row per reading, are
-replayed through a fresh SimRobot's batched `run()` (the palpation path), timed the same way (physics: the
-pybullet pass; arrays: the rest), and its FSR counts compared with the loop's.
+replayed through a fresh SimRobot's batched `run()` (the palpation path), timed the same way (pybullet,
+physics_py; arrays: the rest), and its FSR counts compared with the loop's.
 
 JSON: {"seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wall_s", "cpu_s",
 "realtime_factor", "realtime_factor_cpu", "budget_factor", "pass", "ticks", "readings", "physics_steps",
-"stages": {stage: {"wall_s", "fraction", "per_tick_us": {"p50", "p99"}}}, "trajectory": {...},
+"stages_timed", "pybullet_timed", "stages": {stage: {"wall_s", "fraction", "per_tick_us": {"p50", "p99"}}}, "trajectory": {...},
 "batch": {"simulated_s", "wall_s", "cpu_s", "realtime_factor", "realtime_factor_cpu", "pass", "readings",
 "stages": {stage: {"wall_s", "fraction"}}, "counts_max_abs_diff_vs_loop"}}. Wall-clock numbers depend on
 the machine's load; tests check only their consistency.
@@ -43,8 +52,9 @@ from teleop.errors import InputError
 BUDGET_FACTOR = 20.0  # DESIGN.md performance budget: simulation >= 20x real time when not paced
 RATE_HZ = 1000.0  # loop rate [Hz] (the physics step is 1 ms too)
 LOOP_STAGES = ("stylus", "map", "robot", "estimate", "render", "write", "record")  # teleop.loop.core.STAGES
-STAGES = ("stylus", "map", "kinematics", "physics", "sensors", "robot_io", "estimate", "render", "write",
-          "record", "loop_other", "harness")
+STAGES = ("stylus", "map", "kinematics", "pybullet", "physics_py", "cable_sensor", "robot_io", "estimate", "render",
+          "write", "record", "loop_other", "harness")
+_PYBULLET_CALLS = ("_step", "_contacts", "_get_pos", "_get_vel", "_apply_force", "_change_constraint")
 
 
 def register(subparsers) -> None:
@@ -59,7 +69,7 @@ def register(subparsers) -> None:
     p.add_argument("--period-s", type=float, default=2.0, help="poke period [s] (default 2)")
     p.add_argument("--no-batch", action="store_true", help="skip the batched SimRobot.run path")
     p.add_argument("--no-stages", action="store_true",
-                   help="no kinematics/physics/sensors timers inside the robot (the loop's own stages stay)")
+                   help="no timers inside the robot (kinematics .. cable_sensor; the loop's own stages stay)")
     p.add_argument("--json", metavar="F", help="write the result JSON here")
     p.set_defaults(func=run)
 
@@ -91,10 +101,16 @@ class _Meter:
         return timed
 
 
-def _meter_world(world, meter: _Meter) -> None:
-    """Time the pybullet world's public calls (instance attributes shadow the methods)."""
+def _meter_world(world, meter: _Meter, api: _Meter) -> bool:
+    """Time the pybullet world's public calls with `meter` (instance attributes shadow the methods) and,
+    inside them, the pybullet C API calls PadWorld keeps as attributes with `api`; False when PadWorld no
+    longer has those attributes (then `api` stays at 0 and all physics time counts as physics_py)."""
     for name in ("step", "contact_force", "tip"):
         setattr(world, name, meter.wrap(getattr(world, name)))
+    found = [name for name in _PYBULLET_CALLS if callable(getattr(world, name, None))]
+    for name in found:
+        setattr(world, name, api.wrap(getattr(world, name)))
+    return "_step" in found and "_contacts" in found
 
 
 def _make_robot(pad: str, seed: int, substeps: int):
@@ -149,7 +165,8 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=None if substeps == 1 else RATE_HZ / substeps,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     estimator = default_estimator(frame_period(params, None))
-    kin, phys, rd = _Meter(), _Meter(), _Meter()
+    kin, phys, api, rd = _Meter(), _Meter(), _Meter(), _Meter()
+    api_timed = False
     n_read = -(-n // params.robot_every)
     L_log = np.zeros((n_read, 6))
     counts_log = np.zeros((n_read, 6), dtype=np.int64)
@@ -158,13 +175,13 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     F_log = np.zeros((n, 3))
     enabled = 0
     stage_ns = np.zeros((n, len(LOOP_STAGES)), dtype=np.int64)
-    sub_ns = np.zeros((n, 3), dtype=np.int64)  # cumulative kinematics, physics, read [ns]
+    sub_ns = np.zeros((n, 4), dtype=np.int64)  # cumulative kinematics, physics, pybullet API, read [ns]
     tick_ns = np.zeros(n, dtype=np.int64)
     with robot, stylus:
         if stages:
             robot.command_lengths = kin.wrap(robot.command_lengths)
             robot.read = rd.wrap(robot.read)
-            _meter_world(robot.world, phys)
+            api_timed = _meter_world(robot.world, phys, api)
         tp = Teleop(stylus, robot, params, estimator=estimator)
         tp.start(0.0)
         dt = params.dt
@@ -180,7 +197,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                 x = tp.tick(clock_t[0])
                 tick_ns[k] = pc() - t0
                 stage_ns[k] = tp.stage_ns
-                sub_ns[k] = (kin.ns, phys.ns, rd.ns)
+                sub_ns[k] = (kin.ns, phys.ns, api.ns, rd.ns)
                 r = x.reading
                 if r is not None:
                     L_log[j] = r.commanded_lengths
@@ -196,11 +213,11 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
         final_state, fault_reason = tp.state.name, tp.fault_reason
     simulated = n / RATE_HZ
     wall = wall_ns / 1e9
-    sub = np.diff(np.vstack([np.zeros((1, 3), dtype=np.int64), sub_ns]), axis=0)
-    kin_t, phys_t, read_t = sub[:, 0], sub[:, 1], sub[:, 2]
+    sub = np.diff(np.vstack([np.zeros((1, 4), dtype=np.int64), sub_ns]), axis=0)
+    kin_t, phys_t, api_t, read_t = sub[:, 0], sub[:, 1], sub[:, 2], sub[:, 3]
     per_tick = {
-        "stylus": stage_ns[:, 0], "map": stage_ns[:, 1], "kinematics": kin_t, "physics": phys_t,
-        "sensors": read_t - phys_t, "robot_io": stage_ns[:, 2] - kin_t - read_t, "estimate": stage_ns[:, 3],
+        "stylus": stage_ns[:, 0], "map": stage_ns[:, 1], "kinematics": kin_t, "pybullet": api_t,
+        "physics_py": phys_t - api_t, "cable_sensor": read_t - phys_t, "robot_io": stage_ns[:, 2] - kin_t - read_t, "estimate": stage_ns[:, 3],
         "render": stage_ns[:, 4], "write": stage_ns[:, 5], "record": stage_ns[:, 6],
         "loop_other": tick_ns - stage_ns.sum(axis=1),
     }
@@ -221,7 +238,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
         "realtime_factor": factor, "realtime_factor_cpu": _factor(simulated, cpu), "budget_factor": BUDGET_FACTOR,
         "pass": bool(factor >= BUDGET_FACTOR and final_state != "FAULT"),
         "ticks": n, "readings": j, "physics_steps": j * substeps,
-        "stages_timed": bool(stages), "stages": table,
+        "stages_timed": bool(stages), "pybullet_timed": bool(api_timed), "stages": table,
         "trajectory": {
             "sha256": _digest(L_log[:j], counts_log[:j], f_truth[:j], p_log, F_log),
             "final_state": final_state, "fault_reason": fault_reason, "enabled_s": enabled / RATE_HZ,
@@ -240,9 +257,9 @@ def bench_batch(lengths: np.ndarray, counts: np.ndarray, pad: str, robot_seed: i
     import gc
 
     robot = _make_robot(pad, robot_seed, substeps)
-    phys = _Meter()
+    phys, api = _Meter(), _Meter()
     with robot:
-        _meter_world(robot.world, phys)
+        _meter_world(robot.world, phys, api)
         gc.collect()
         gc.disable()
         try:
@@ -255,7 +272,7 @@ def bench_batch(lengths: np.ndarray, counts: np.ndarray, pad: str, robot_seed: i
     wall = wall_ns / 1e9
     factor = _factor(simulated, wall)
     table = {name: {"wall_s": round(ns / 1e9, 6), "fraction": round(ns / wall_ns, 4)}
-             for name, ns in (("physics", phys.ns), ("arrays", wall_ns - phys.ns))}
+             for name, ns in (("pybullet", api.ns), ("physics_py", phys.ns - api.ns), ("arrays", wall_ns - phys.ns))}
     diff = int(np.abs(trace.counts - counts).max(initial=0))
     return {"simulated_s": simulated, "wall_s": round(wall, 6), "cpu_s": round(cpu, 6), "realtime_factor": factor,
             "realtime_factor_cpu": _factor(simulated, cpu), "pass": bool(factor >= BUDGET_FACTOR),
@@ -296,11 +313,11 @@ def format_table(out: dict) -> str:
         lines.append(f"{name:8s} {r['simulated_s']:8.3f} {r['wall_s']:8.3f} {r['cpu_s']:8.3f} "
                      f"{r['realtime_factor']:8.2f} {r['realtime_factor_cpu']:8.2f}  {'PASS' if r['pass'] else 'FAIL'}")
     lines.append(f"loop wall time by stage{'' if out['stages_timed'] else ' (robot not split: --no-stages)'}:")
-    lines.append(f"  {'stage':11s} {'wall s':>8s} {'share':>7s} {'p50 us':>9s} {'p99 us':>9s}")
+    lines.append(f"  {'stage':12s} {'wall s':>8s} {'share':>7s} {'p50 us':>9s} {'p99 us':>9s}")
     for name, st in out["stages"].items():
         pt = st["per_tick_us"]
         p50, p99 = (f"{pt['p50']:9.1f}", f"{pt['p99']:9.1f}") if pt else (f"{'':9s}", f"{'':9s}")
-        lines.append(f"  {name:11s} {st['wall_s']:8.3f} {100 * st['fraction']:6.1f}% {p50} {p99}")
+        lines.append(f"  {name:12s} {st['wall_s']:8.3f} {100 * st['fraction']:6.1f}% {p50} {p99}")
     if "batch" in out:
         b = out["batch"]
         lines.append("batch (SimRobot.run, same commanded lengths): "

@@ -10,7 +10,7 @@ from teleop.cli import main
 
 KEYS = ["seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wall_s", "cpu_s", "realtime_factor",
         "realtime_factor_cpu", "budget_factor", "pass", "ticks", "readings", "physics_steps", "stages_timed",
-        "stages", "trajectory", "batch"]
+        "pybullet_timed", "stages", "trajectory", "batch"]
 
 
 def _factor_ok(factor, simulated, spent):
@@ -31,7 +31,8 @@ def test_cli_json_keys_and_consistent_values(tmp_path, capsys):
     assert list(out["stages"]) == list(STAGES)
     assert sum(s["wall_s"] for s in out["stages"].values()) == pytest.approx(out["wall_s"], abs=1e-4)
     assert sum(s["fraction"] for s in out["stages"].values()) == pytest.approx(1.0, abs=1e-3)
-    for name in ("kinematics", "physics", "sensors", "estimate", "stylus"):
+    assert out["stages_timed"] and out["pybullet_timed"]
+    for name in ("kinematics", "pybullet", "physics_py", "cable_sensor", "estimate", "stylus"):
         st = out["stages"][name]
         assert st["wall_s"] > 0 and 0 < st["per_tick_us"]["p50"] <= st["per_tick_us"]["p99"]
     # the loop ran engaged and poked the pad
@@ -44,6 +45,7 @@ def test_cli_json_keys_and_consistent_values(tmp_path, capsys):
     assert _factor_ok(b["realtime_factor"], b["simulated_s"], b["wall_s"])
     assert _factor_ok(b["realtime_factor_cpu"], b["simulated_s"], b["cpu_s"])
     assert sum(s["wall_s"] for s in b["stages"].values()) == pytest.approx(b["wall_s"], abs=1e-5)
+    assert list(b["stages"]) == ["pybullet", "physics_py", "arrays"] and b["stages"]["pybullet"]["wall_s"] > 0
     assert b["counts_max_abs_diff_vs_loop"] <= 1
     text = capsys.readouterr().out
     assert "loop" in text and "batch" in text and ("PASS" in text or "FAIL" in text)
@@ -63,7 +65,8 @@ def test_substeps_and_untimed_robot():
     assert out["readings"] == 250 and out["physics_steps"] == 500 and out["robot_rate_hz"] == 500.0
     st = out["stages"]
     assert not out["stages_timed"]
-    assert st["kinematics"]["wall_s"] == st["physics"]["wall_s"] == st["sensors"]["wall_s"] == 0
+    for name in ("kinematics", "pybullet", "physics_py", "cable_sensor"):
+        assert st[name]["wall_s"] == 0
     assert st["robot_io"]["wall_s"] > 0  # the whole robot stage
     assert sum(s["wall_s"] for s in st.values()) == pytest.approx(out["wall_s"], abs=1e-4)
 
@@ -76,14 +79,20 @@ def test_meter_counts_nested_calls_once():
     assert m.calls == 2 and m.ns > 0
 
 
-@pytest.mark.parametrize("argv", [
-    ["--seconds", "0"], ["--seconds", "-1"], ["--seconds", "nan"], ["--seconds", "0.0005"],
-    ["--seconds", "0.003", "--substeps", "2"], ["--substeps", "0"], ["--pad", "moon"], ["--depth-mm", "0"],
-    ["--period-s", "-2"], ["--seed", "-1"],
+@pytest.mark.parametrize("argv, flag", [
+    (["--seconds", "0"], "--seconds"), (["--seconds", "-1"], "--seconds"), (["--seconds", "nan"], "--seconds"),
+    (["--seconds", "0.0005"], "--seconds"), (["--seconds", "0.003", "--substeps", "2"], "--seconds"),
+    (["--substeps", "0"], "--substeps"), (["--pad", "moon"], "--pad"), (["--depth-mm", "0"], "--depth-mm"),
+    (["--period-s", "-2"], "--period-s"), (["--seed", "-1"], "--seed"), (["--seconds", "x"], "--seconds"),
 ])
-def test_bad_flags_exit_2(argv, tmp_path, capsys):
+def test_bad_flags_exit_2(argv, flag, tmp_path, capsys):
+    """Our own checks return 2 through teleop.cli (InputError); argparse's type errors exit 2 (SystemExit)."""
     path = tmp_path / "sim.json"
-    assert main(["bench", "sim", *argv, "--json", str(path)]) == 2
+    try:
+        code = main(["bench", "sim", *argv, "--json", str(path)])
+    except SystemExit as exc:
+        code = exc.code
+    assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("teleop: error: --")
+    assert len(err) == 1 and "error" in err[0] and flag in err[0]
     assert not path.exists()
