@@ -12,6 +12,7 @@ are then limited so that no cable leaves [l_min, l_max] and no cable moves more 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -119,3 +120,61 @@ def is_aligned(orientation, params: MappingParams) -> bool:
     if R.shape != (3, 3) or not np.isfinite(R).all():
         return False
     return tilt_angle(R) <= params.align_tol
+
+
+class Follower:
+    """The per-tick mapping on plain floats (the loop's hot path; at six cables numpy's per-call overhead
+    would dominate). Same numbers as `stylus2target`, `position2lengths` and `limit_lengths`:
+
+        pos, L = Follower(params, geom, dt).step(p_stylus, anchor_stylus, anchor_robot, pos_prev, L_prev)
+
+    The target anchor_robot + s R_reg (p_stylus - anchor_stylus) is clamped to the workspace box; if some cable
+    would move more than v_max dt, the target moves along the straight line from pos_prev only as far as
+    that allows; lengths are clipped to [l_min, l_max] and, if the line step left a (second-order) residue
+    above v_max dt, hard-limited by `limit_lengths`. Positions [m] are 3 floats, lengths [m] 6 floats; the
+    orientation is held at the home orientation. dt: command period [s].
+    """
+
+    def __init__(self, params: MappingParams, geom: Geometry, dt: float):
+        sR = (params.motion_scale * params.R_reg).tolist()
+        self.sR = tuple(v for row in sR for v in row)
+        self.lo = tuple(params.workspace_min.tolist())
+        self.hi = tuple(params.workspace_max.tolist())
+        self.offsets = tuple(tuple(row) for row in platform_offsets(geom, params.home[3:]).tolist())
+        self.dmax = float(geom.v_max * dt)
+        self.dmax_hard = float(geom.v_max * (self.dmax / geom.v_max))  # limit_lengths(..., dt=dmax / v_max)
+        self.l_min, self.l_max = float(geom.l_min), float(geom.l_max)
+
+    def lengths(self, x: float, y: float, z: float) -> list:
+        """Cable lengths [m] at position (x, y, z) [m] (`position2lengths` with the held orientation)."""
+        sqrt = math.sqrt
+        return [sqrt((ox + x) ** 2 + (oy + y) ** 2 + (oz + z) ** 2) for ox, oy, oz in self.offsets]
+
+    def step(self, p_stylus, anchor_stylus, anchor_robot, pos_prev, L_prev) -> tuple[list, list]:
+        """(target position [x, y, z] [m], commanded lengths [6] [m]) for this tick (see the class docstring)."""
+        s00, s01, s02, s10, s11, s12, s20, s21, s22 = self.sR
+        dx = p_stylus[0] - anchor_stylus[0]
+        dy = p_stylus[1] - anchor_stylus[1]
+        dz = p_stylus[2] - anchor_stylus[2]
+        lo, hi = self.lo, self.hi
+        x = anchor_robot[0] + (s00 * dx + s01 * dy + s02 * dz)
+        y = anchor_robot[1] + (s10 * dx + s11 * dy + s12 * dz)
+        z = anchor_robot[2] + (s20 * dx + s21 * dy + s22 * dz)
+        x = hi[0] if x > hi[0] else (lo[0] if x < lo[0] else x)  # np.minimum(np.maximum(p, lo), hi)
+        y = hi[1] if y > hi[1] else (lo[1] if y < lo[1] else y)
+        z = hi[2] if z > hi[2] else (lo[2] if z < lo[2] else z)
+        L = self.lengths(x, y, z)
+        dmax, l_min, l_max = self.dmax, self.l_min, self.l_max
+        step = max([abs(a - b) for a, b in zip(L, L_prev)])
+        if step > dmax:  # move along the straight line as far as the cable speed allows this tick
+            f = dmax / step
+            x0, y0, z0 = pos_prev[0], pos_prev[1], pos_prev[2]
+            x, y, z = x0 + (x - x0) * f, y0 + (y - y0) * f, z0 + (z - z0) * f
+            L = self.lengths(x, y, z)
+        L = [l_max if v > l_max else (l_min if v < l_min else v) for v in L]
+        step = max([abs(a - b) for a, b in zip(L, L_prev)])
+        if step > dmax:  # second-order residue of the line step: limit_lengths' hard limit
+            f = self.dmax_hard / step if step > self.dmax_hard else 1.0
+            L = [b + (a - b) * f for a, b in zip(L, L_prev)]
+            L = [l_max if v > l_max else (l_min if v < l_min else v) for v in L]
+        return [x, y, z], L

@@ -320,3 +320,24 @@ def test_reading_estimator_follows_the_loop_protocol_and_round_trips_its_descrip
         assert t1.shape == (6,) and f1.shape == (6,) and np.isfinite(f1).all()
         np.testing.assert_array_equal(f1, f2)
     assert np.abs(t1 - 2.85).max() < 0.3
+
+
+def test_reading_estimator_tensions_equal_the_fsr_converter():
+    """The loop's float FSR path (branch trigger + tables) against teleop.sensors.FsrConverter."""
+    from teleop.estimation.reading import ReadingEstimator
+    from teleop.sensors import LOADING, FsrConverter, default_fsr_calibration, synthesize_fsr_counts
+
+    cal = default_fsr_calibration()
+    est = ReadingEstimator(G, "dynamic", cal=cal, deadband_counts=4.0)
+    conv = FsrConverter(cal, deadband_counts=4.0)
+    rng = np.random.default_rng(5)
+    tt = np.arange(600) * 1e-3
+    tension = 3.0 + 2.5 * np.sin(2 * np.pi * 3.0 * tt[:, None] + np.arange(6))  # rises and falls per cable
+    flips = 0
+    for k in range(tt.size):
+        counts = synthesize_fsr_counts(tension[k], LOADING, cal, rng=rng, noise_counts=2.0)
+        counts[k % 6] = [-3, 2000][k % 2] if k % 97 == 0 else counts[k % 6]  # out of the ADC range: clipped
+        fast = est.tensions(np.asarray(counts, dtype=float).tolist())
+        np.testing.assert_array_equal(fast, conv.update(counts))
+        flips += int(conv.tracker.flipped.sum())
+    assert flips > 20

@@ -1,4 +1,5 @@
-"""teleop.mapping: scale, registration, workspace clamp, length limits and the per-tick step limit."""
+"""teleop.mapping: scale, registration, workspace clamp, length limits, the per-tick step limit, and the float
+Follower the loop runs against the numpy functions."""
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ from hypothesis import strategies as st
 from teleop.errors import InputError
 from teleop.geometry import default_geometry
 from teleop.kinematics import pose2lengths, rotation_zyx
-from teleop.mapping import (MappingParams, is_aligned, limit_lengths, platform_offsets, position2lengths,
+from teleop.mapping import (Follower, MappingParams, is_aligned, limit_lengths, platform_offsets, position2lengths,
                             stylus2target)
 
 G = default_geometry()
@@ -58,3 +59,48 @@ def test_bad_params():
         MappingParams(R_reg=np.ones((3, 3)))
     with pytest.raises(InputError):
         MappingParams(workspace_min=[0, 0, 0], workspace_max=[0, 1, 1])
+
+
+def numpy_follow(p_stylus, anchor_s, anchor_r, pos, L_prev, m, offsets, dmax):
+    """The per-tick mapping written with the module's numpy functions (what Follower.step computes)."""
+    p_t = stylus2target(p_stylus, anchor_s, anchor_r, m)
+    L = position2lengths(p_t, offsets)
+    step = np.abs(L - L_prev).max()
+    if step > dmax:
+        p_t = pos + (p_t - pos) * (dmax / step)
+        L = position2lengths(p_t, offsets)
+    L = np.clip(L, G.l_min, G.l_max)
+    if np.abs(L - L_prev).max() > dmax:
+        L = limit_lengths(L, L_prev, G, dmax / G.v_max)
+    return p_t, L
+
+
+small = st.lists(st.floats(-0.004, 0.004), min_size=3, max_size=3).map(np.array)
+
+
+@settings(max_examples=150)
+@given(vec, small, small, st.lists(st.floats(-2e-4, 2e-4), min_size=6, max_size=6).map(np.array),
+       st.sampled_from([0.25, 1.0, 3.0]), st.floats(-0.3, 0.3))
+def test_follower_step_equals_the_numpy_mapping(p_stylus, anchor_r, pos, L_jitter, scale, gamma):
+    """Workspace clip, straight-line step limit and the hard length limit, against the numpy functions."""
+    m = MappingParams(motion_scale=scale, home=[0.0, 0.0, 0.0, 0.0, 0.0, gamma])
+    dt = 1e-3
+    fol = Follower(m, G, dt)
+    offsets = platform_offsets(G, m.home[3:])
+    L_prev = np.clip(position2lengths(pos, offsets) + L_jitter, G.l_min, G.l_max)
+    anchor_s = np.zeros(3)
+    p_ref, L_ref = numpy_follow(p_stylus, anchor_s, anchor_r, pos, L_prev, m, offsets, G.v_max * dt)
+    p_fast, L_fast = fol.step(p_stylus.tolist(), anchor_s.tolist(), anchor_r.tolist(), pos.tolist(),
+                              L_prev.tolist())
+    np.testing.assert_allclose(p_fast, p_ref, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(L_fast, L_ref, rtol=0, atol=1e-15)
+    assert np.abs(np.array(L_fast) - L_prev).max() <= G.v_max * dt * (1 + 1e-12)
+
+
+def test_follower_step_limit_moves_along_the_line():
+    fol = Follower(MappingParams(), G, 1e-3)
+    L0 = fol.lengths(0.0, 0.0, 0.0)
+    p, L = fol.step([0.0, 0.0, -0.02], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], L0)
+    assert p[0] == 0.0 and p[1] == 0.0 and 0.0 < p[2] < 0.005  # +z (the registration flips z), cut short
+    step = np.abs(np.array(L) - L0).max()  # the line step is exact to first order in the target distance
+    assert 0.8 * G.v_max * 1e-3 < step <= G.v_max * 1e-3

@@ -1,10 +1,15 @@
-"""`teleop bench tick --json F [--ticks N]`: time the compute of one loop tick without devices.
+"""`teleop bench tick --json F [--ticks N]`: time one full loop tick without devices.
 
-Project tick: `teleop.estimation.tick.TickComputer.compute` (plain floats, steady-state Kalman).
-Reference tick: `ReferenceTick.compute`, the same computation written the obvious way: numpy on (6,)
-arrays, scipy.spatial.transform.Rotation for R, the physics library's array functions, f = -A t with numpy,
-filterpy KalmanFilter predict/update, the renderer. Both see the same inputs (a moving pose, noisy tensions
-as numpy arrays), interleaved tick by tick (alternating which goes first) so machine noise hits both alike;
+Project tick: `teleop.estimation.tick.LoopTick.compute`, the code the loop (teleop.loop.core.Teleop) runs at
+its MAP, ESTIMATE and RENDER stages: stylus position -> mapping (motion scale, workspace clip, v_max step
+limit; teleop.mapping.Follower) -> cable lengths -> FSR counts -> tensions (ReadingEstimator) -> estimation
+with the steady-state Kalman filter (TickComputer.estimate) -> rendered stylus force (Renderer.render_xyz).
+Reference tick: `ReferenceLoopTick.compute`, the same path written the obvious way: teleop.mapping's numpy
+functions and teleop.kinematics.pose2lengths, the FSR branch trigger and calibration tables on numpy arrays,
+then `ReferenceTick` (numpy on (6,) arrays, scipy.spatial.transform.Rotation for R, the physics library's
+array functions, f = -A t with numpy, filterpy KalmanFilter predict/update, the renderer). Both see the
+same inputs (a stylus trajectory that hits the workspace box and the cable speed limit, FSR counts with
+1 count RMS noise), interleaved tick by tick (alternating which goes first) so machine noise hits both alike;
 garbage collection is off while timing.
 On a machine shared with other processes the wall-clock p99 measures the scheduler more than the tick:
 `--clock cpu` times this thread's CPU time instead, and `--realtime 50` runs under SCHED_FIFO like the loop
@@ -19,7 +24,8 @@ import numpy as np
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("tick", help="time one loop tick's compute (project vs plain numpy/scipy/filterpy)")
+    p = subparsers.add_parser("tick", help="time one full loop tick, devices excluded "
+                                           "(project vs plain numpy/scipy/filterpy)")
     p.add_argument("--json", metavar="F", help="write the DESIGN.md tick JSON here")
     p.add_argument("--ticks", type=int, default=20000, help="timed ticks of each kind (>= 1000; default 20000)")
     p.add_argument("--estimator", default="dynamic", help="estimator name (default: dynamic)")
@@ -101,18 +107,99 @@ class ReferenceTick:
         return L, w, self.renderer.render(w, dt, velocity)
 
 
-def _trajectory(n: int, dt: float, seed: int):
-    """Moving poses (n, 6) and noisy tensions (n, 6) [N] for the benchmark (seeded)."""
+class ReferenceLoopTick:
+    """The full tick written the obvious way (numpy arrays throughout); same numbers as
+    teleop.estimation.tick.LoopTick (tested). Mapping: stylus2target, kinematics.pose2lengths, the straight-line
+    step limit and limit_lengths; FSR: a numpy Schmitt trigger on the counts and FsrCalibration.tension on
+    arrays; then ReferenceTick at the commanded pose."""
+
+    def __init__(self, geom, mapping, estimator: str = "dynamic", *, cal=None, deadband_counts: float = 8.0,
+                 turn=None, dynamic=None, kalman=None, renderer=None, cmd_dt: float = 1e-3):
+        from teleop.sensors import default_fsr_calibration
+
+        self.geom, self.mapping = geom, mapping
+        self.cal = cal if cal is not None else default_fsr_calibration()
+        self.db = float(deadband_counts)
+        self.dmax = geom.v_max * cmd_dt
+        self.tick = ReferenceTick(geom, estimator, turn=turn, dynamic=dynamic, kalman=kalman, renderer=renderer)
+        self.renderer = self.tick.renderer
+        self.reset()
+
+    def reset(self) -> None:
+        from teleop.kinematics import pose2lengths
+
+        self.pose = np.array(self.mapping.home, dtype=float)
+        self.anchor_stylus = np.zeros(3)
+        self.anchor_robot = self.pose[:3].copy()
+        self.L_last = None
+        self.branch_dir = np.zeros(6)
+        self.branch_ext = np.full(6, np.nan)
+        self.tick.reset()
+        self._lengths = lambda q: pose2lengths(q, self.geom)
+
+    def engage(self, p_stylus) -> None:
+        self.anchor_stylus = np.array(p_stylus, dtype=float)
+        self.anchor_robot = self.pose[:3].copy()
+        if self.L_last is None:
+            self.L_last = self._lengths(self.pose)
+
+    def compute(self, p_stylus, v_stylus, counts, dt: float):
+        """(L (6,), tensions (6,), wrench (6,), force (3,)) like LoopTick.compute."""
+        from teleop.mapping import limit_lengths, stylus2target
+        from teleop.sensors import LOADING, UNLOADING
+
+        g, m = self.geom, self.mapping
+        q = self.pose.copy()
+        q[:3] = stylus2target(p_stylus, self.anchor_stylus, self.anchor_robot, m)
+        L = self._lengths(q)
+        step = np.max(np.abs(L - self.L_last))
+        if step > self.dmax:  # along the line from the last target, as far as v_max dt allows
+            q[:3] = self.pose[:3] + (q[:3] - self.pose[:3]) * (self.dmax / step)
+            L = self._lengths(q)
+        L = np.clip(L, g.l_min, g.l_max)
+        if np.max(np.abs(L - self.L_last)) > self.dmax:
+            L = limit_lengths(L, self.L_last, g, self.dmax / g.v_max)
+        self.pose, self.L_last = q, L
+        # FSR branch: Schmitt trigger on the counts (estimation.direction), then the calibration tables
+        c = np.asarray(counts, dtype=float)
+        d, e = self.branch_dir, np.where(np.isnan(self.branch_ext), c, self.branch_ext)
+        up = (d <= 0) & (c > e + self.db)
+        down = ~up & (d >= 0) & (c < e - self.db)
+        e = np.where(up | down, c, np.where(d > 0, np.maximum(e, c), np.where(d < 0, np.minimum(e, c), e)))
+        self.branch_dir = d = np.where(up, 1.0, np.where(down, -1.0, d))
+        self.branch_ext = e
+        t = self.cal.tension(self.cal.counts2conductance(c), np.where(d < 0, UNLOADING, LOADING))
+        _, w, F = self.tick.compute(q, t, dt, v_stylus)
+        return L, t, w, F
+
+
+def _trajectory(n: int, dt: float, seed: int, mapping=None, cal=None):
+    """Stylus positions (n, 3) [m] and velocities (n, 3) [m/s] in the device frame, raw FSR counts (n, 6),
+    seeded. The robot target the stylus asks for runs past the workspace box in x and faster than the cable
+    speed limit around x = 0, so the clip and the step limit both act; tensions rise and fall per cable
+    (both FSR branches) with 1 count RMS ADC noise."""
+    from teleop.mapping import MappingParams
+    from teleop.sensors import LOADING, UNLOADING, default_fsr_calibration, synthesize_fsr_counts
+
+    m = mapping if mapping is not None else MappingParams()
+    cal = cal if cal is not None else default_fsr_calibration()
     rng = np.random.default_rng(seed)
     t = np.arange(n) * dt
-    poses = np.zeros((n, 6))
-    poses[:, 0] = 0.002 * np.sin(2 * np.pi * 0.7 * t)
-    poses[:, 1] = 0.002 * np.cos(2 * np.pi * 0.5 * t)
-    poses[:, 2] = 0.004 * np.sin(2 * np.pi * 0.3 * t)
-    poses[:, 4] = 0.05 * np.sin(2 * np.pi * 0.2 * t)
-    poses[:, 5] = 0.05 * np.cos(2 * np.pi * 0.25 * t)
-    tensions = 2.85 + 0.3 * np.sin(2 * np.pi * 0.4 * t)[:, None] + rng.normal(0.0, 0.02, (n, 6))
-    return poses, tensions
+    w = 2 * np.pi * np.array([0.7, 0.5, 0.3])
+    amp = np.array([0.006, 0.002, 0.004])  # robot target [m]
+    target = amp * np.sin(w * t[:, None])
+    target_v = amp * w * np.cos(w * t[:, None])
+    back = m.R_reg.T / m.motion_scale  # robot displacement -> stylus displacement
+    p_stylus, v_stylus = target @ back.T, target_v @ back.T
+    phase = 2 * np.pi * 0.4 * t[:, None] + np.arange(6) * np.pi / 3
+    tension = 2.85 + 0.3 * np.sin(2 * np.pi * 0.4 * t[:, None]) + 0.02 * np.sin(phase)  # [N]
+    rate = 0.3 * np.cos(2 * np.pi * 0.4 * t[:, None]) + 0.02 * np.cos(phase)
+    branch = np.where(rate < 0, UNLOADING, LOADING)
+    counts = np.empty((n, 6))
+    for b in (LOADING, UNLOADING):
+        sel = branch == b
+        counts[sel] = synthesize_fsr_counts(tension[sel], b, cal, rng=rng, noise_counts=1.0)
+    return p_stylus, v_stylus, counts
 
 
 def _stats(ns: np.ndarray) -> dict:
@@ -121,9 +208,40 @@ def _stats(ns: np.ndarray) -> dict:
             "max": round(float(us.max()), 3)}
 
 
+def make_ticks(estimator: str = "dynamic", dt: float = 1e-3):
+    """(LoopTick, ReferenceLoopTick) with the loop's default mapping and FSR calibration, realistic friction
+    states (viscous, Dahl) and a turn fit so every stage does its work, renderers enabled (ramping in at once,
+    as in the loop) and the mapping engaged at the stylus origin."""
+    from teleop.estimation.estimators import DynamicParams
+    from teleop.estimation.kalman import KalmanNoise
+    from teleop.estimation.reading import ReadingEstimator
+    from teleop.estimation.tick import LoopTick
+    from teleop.estimation.turn import AxisTurnFit, TurnCompensation
+    from teleop.geometry import default_geometry
+    from teleop.mapping import MappingParams
+    from teleop.rendering import Renderer, RenderParams
+    from teleop.sensors import default_fsr_calibration
+
+    geom, mapping, cal = default_geometry(), MappingParams(), default_fsr_calibration()
+    dyn = DynamicParams(b=5.0, dahl_sigma=2e4, dahl_Fc=0.05, v_smooth=0.005)
+    poly = tuple((0.05, -0.1, 0.05, 0.0, 0.0) for _ in range(6))
+    turn = TurnCompensation((AxisTurnFit(axis=2, duration=0.3, forward=poly, backward=poly),))
+    noise = KalmanNoise(dt=dt)
+    rp = RenderParams(max_force=0.88, ramp_s=0.05, engage_ticks=0)  # as the loop: ramps in at once
+    est = ReadingEstimator(geom, estimator, cal=cal, turn=turn if estimator == "double" else None, dynamic=dyn,
+                           kalman=noise)
+    fast = LoopTick(geom, mapping, est, Renderer(rp), cmd_dt=dt)
+    ref = ReferenceLoopTick(geom, mapping, estimator, cal=cal, turn=turn if estimator == "double" else None,
+                            dynamic=dyn, kalman=noise, renderer=Renderer(rp), cmd_dt=dt)
+    for tk in (fast, ref):
+        tk.renderer.enable()
+        tk.engage(np.zeros(3))
+    return fast, ref
+
+
 def bench_tick(ticks: int = 20000, estimator: str = "dynamic", seed: int = 0, warmup: int = 1000,
                clock: str = "wall") -> dict:
-    """Interleaved timing of the project and reference ticks; the DESIGN.md JSON object.
+    """Interleaved timing of the project and reference full ticks; the DESIGN.md JSON object.
 
     clock: "wall" (time.perf_counter_ns) or "cpu" (time.thread_time_ns: CPU time of this thread, so a tick
     preempted by another process is not charged for the wait).
@@ -131,26 +249,10 @@ def bench_tick(ticks: int = 20000, estimator: str = "dynamic", seed: int = 0, wa
     import gc
     import time
 
-    from teleop.estimation.estimators import DynamicParams
-    from teleop.estimation.tick import TickComputer
-    from teleop.estimation.turn import AxisTurnFit, TurnCompensation
-    from teleop.geometry import default_geometry
-    from teleop.rendering import Renderer, RenderParams
-
-    geom = default_geometry()
     dt = 1e-3
-    # realistic friction states (viscous, Dahl) and a turn fit so every stage does its work
-    dyn = DynamicParams(b=5.0, dahl_sigma=2e4, dahl_Fc=0.05, v_smooth=0.005)
-    poly = tuple((0.05, -0.1, 0.05, 0.0, 0.0) for _ in range(6))
-    turn = TurnCompensation((AxisTurnFit(axis=2, duration=0.3, forward=poly, backward=poly),))
-    rp = RenderParams(max_force=0.88, ramp_s=0.05)
-    fast = TickComputer(geom, estimator, turn=turn, dynamic=dyn, renderer=Renderer(rp))
-    ref = ReferenceTick(geom, estimator, turn=turn, dynamic=dyn, renderer=Renderer(rp))
-    fast.renderer.enable()
-    ref.renderer.enable()
+    fast, ref = make_ticks(estimator, dt)
     n = warmup + ticks
-    poses, tensions = _trajectory(n, dt, seed)
-    vel = np.zeros(3)
+    p_s, v_s, counts = _trajectory(n, dt, seed)
     t_fast = np.empty(n, dtype=np.int64)
     t_ref = np.empty(n, dtype=np.int64)
     clock = time.thread_time_ns if clock == "cpu" else time.perf_counter_ns
@@ -158,19 +260,19 @@ def bench_tick(ticks: int = 20000, estimator: str = "dynamic", seed: int = 0, wa
     gc.disable()
     try:
         for k in range(n):
-            q, t = poses[k], tensions[k]
+            p, v, c = p_s[k], v_s[k], counts[k]
             if k & 1:
                 t0 = clock()
-                ref.compute(q, t, dt, vel)
+                ref.compute(p, v, c, dt)
                 t1 = clock()
-                fast.compute(q, t, dt, vel)
+                fast.compute(p, v, c, dt)
                 t2 = clock()
                 t_ref[k], t_fast[k] = t1 - t0, t2 - t1
             else:
                 t0 = clock()
-                fast.compute(q, t, dt, vel)
+                fast.compute(p, v, c, dt)
                 t1 = clock()
-                ref.compute(q, t, dt, vel)
+                ref.compute(p, v, c, dt)
                 t2 = clock()
                 t_fast[k], t_ref[k] = t1 - t0, t2 - t1
     finally:

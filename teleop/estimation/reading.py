@@ -4,10 +4,11 @@
     t, f = est.update(reading, pose, dt)             # reading: devices.base.RobotReading
     desc = est.describe(); est2 = ReadingEstimator.rebuild(desc, geom)   # stored with sessions, for replay
 
-FSR counts -> tensions with the branch from the reading's direction (teleop.sensors.FsrConverter), then the
-fast per-tick estimate of `TickComputer.estimate` (capstan / turn / friction compensation, f = -A t,
-steady-state Kalman) at the commanded pose. Cable lengths come from the pose (inverse kinematics), i.e.
-the lengths the loop commands.
+FSR counts -> tensions with the branch from the reading's direction (the numbers of
+teleop.sensors.FsrConverter, computed here on plain floats), then the fast per-tick estimate of
+`TickComputer.estimate` (capstan / turn / friction compensation, f = -A t, steady-state Kalman) at the
+commanded pose. Cable lengths come from the pose (inverse kinematics), i.e. the lengths the loop commands.
+`update_floats` is the loop's hot path (lists in, lists out); `update` wraps it in numpy for the protocol.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from teleop.estimation.kalman import KalmanNoise
 from teleop.estimation.tick import TickComputer
 from teleop.estimation.turn import AxisTurnFit, TurnCompensation
 from teleop.geometry import Geometry
-from teleop.sensors import FsrCalibration, FsrConverter, default_fsr_calibration
+from teleop.sensors import LOADING, UNLOADING, FsrCalibration, default_fsr_calibration
 
 
 class ReadingEstimator:
@@ -35,18 +36,54 @@ class ReadingEstimator:
         self.cal = cal if cal is not None else default_fsr_calibration()
         self.turn, self.dynamic, self.kalman_noise = turn, dynamic, kalman
         self.deadband_counts = float(deadband_counts)
-        self.converter = FsrConverter(self.cal, n=len(geom.B), deadband_counts=deadband_counts)
+        self.n = len(geom.B)
         self.tick = TickComputer(geom, name, turn=turn, dynamic=dynamic, kalman=kalman)
+        self.reset()
 
     def reset(self) -> None:
-        self.converter.reset()
+        self._dir = [0.0] * self.n  # FSR reading direction per cable (+1 rising, -1 falling, 0 not yet moved)
+        self._ext = [float("nan")] * self.n  # extreme reading since the last flip [counts]
         self.tick.reset()
+
+    def tensions(self, counts: list) -> list:
+        """Tensions [N] (list) from raw FSR counts (list of floats); updates the branch state.
+
+        The numbers of teleop.sensors.FsrConverter.update (a Schmitt trigger on the counts picks the loading
+        or unloading branch, as estimation.direction.DirectionTracker; counts -> conductance through the
+        divider; FsrCalibration.tension1) without its numpy arrays.
+        """
+        cal, d, e, db = self.cal, self._dir, self._ext, self.deadband_counts
+        amax = float(cal.adc_max)
+        top, R, tension1 = amax - 0.5, cal.r_divider, cal.tension1
+        out = [0.0] * self.n
+        for i in range(self.n):
+            v = counts[i]
+            di, ei = d[i], e[i]
+            if ei != ei:  # first value: the reference
+                ei = v
+            if di <= 0.0 and v > ei + db:  # rising past the dead band
+                di, ei = 1.0, v
+            elif di >= 0.0 and v < ei - db:  # falling past the dead band
+                di, ei = -1.0, v
+            elif di > 0.0 and v > ei:  # the extreme follows the motion
+                ei = v
+            elif di < 0.0 and v < ei:
+                ei = v
+            d[i], e[i] = di, ei
+            c = 0.0 if v < 0.0 else (top if v > top else v)  # counts2conductance
+            out[i] = tension1(c / ((amax - c) * R), UNLOADING if di < 0.0 else LOADING)
+        return out
+
+    def update_floats(self, counts: list, pose: list, dt: float) -> tuple[list, list]:
+        """(tensions [N], wrench [N, N m] in {B}) as lists of 6 floats from counts and pose (lists of floats)."""
+        t = self.tensions(counts)
+        return t, self.tick.estimate(pose, t, dt)[1]
 
     def update(self, reading, pose, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """(tensions (6,) [N] at the FSRs, wrench (6,) [N, N m] in {B})."""
-        t = self.converter.update(reading.fsr_counts)
-        _, w = self.tick.estimate(pose, t, dt)
-        return t, np.array(w)
+        t, w = self.update_floats(np.asarray(reading.fsr_counts, dtype=float).tolist(),
+                                  np.asarray(pose, dtype=float).tolist(), dt)
+        return np.array(t), np.array(w)
 
     def describe(self) -> dict:
         """JSON-able settings (calibration, estimator, noise model, fits) for the session metadata."""

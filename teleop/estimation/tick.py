@@ -14,7 +14,11 @@ size numpy's per-call overhead (~1 us) dominates, while a float operation costs 
 the same formulas as teleop.kinematics (eqs 4-6, 8), teleop.physics.capstan (motor2tip, capstan_band),
 teleop.physics.friction (viscous, DahlStep), estimation.turn and estimation.direction; the Kalman step is
 `SteadyWrenchKalman.update` inlined on that object's state, and the renderer is `Renderer.render_xyz`.
-A non-finite input propagates to a renderer fault (zero force); call `reset()` after a fault.
+The rotated platform anchors R r_i are cached per orientation (the loop holds the orientation, so R is
+built once). A non-finite input propagates to a renderer fault (zero force); call `reset()` after a fault.
+
+`LoopTick` is the whole device-excluded tick the loop runs: stylus position -> mapping -> lengths -> FSR
+counts -> tensions -> this estimate -> rendered force (`teleop bench tick` times `LoopTick.compute`).
 """
 
 from __future__ import annotations
@@ -66,6 +70,7 @@ class TickComputer:
         self.F_dahl = [0.0] * 6
         self.phi = [0.0] * 6
         self.turn_state = [[0.0, math.nan, math.inf] for _ in self.turn_axes]  # direction, extreme, tau
+        self._orient_key, self._orient_cache = None, None
         if self.kalman is not None:
             self.kalman.reset()
         self.renderer.reset()
@@ -75,6 +80,26 @@ class TickComputer:
         lengths, w = self.estimate(pose, tensions, dt)
         return lengths, w, self.renderer.render_xyz(w[0], w[1], w[2], dt, *velocity)
 
+    def _orient(self, a: float, b: float, g: float) -> list:
+        """Per cable (R r_i - B_i, R r_i) as 6 floats for orientation (a, b, g) [rad], cached (the loop holds
+        the orientation, so R is built once, not every tick)."""
+        if self._orient_key == (a, b, g):
+            return self._orient_cache
+        sin, cos = math.sin, math.cos
+        # R = Rz(a) Ry(b) Rx(g) (eq 5)
+        ca, sa, cb, sb, cg, sg = cos(a), sin(a), cos(b), sin(b), cos(g), sin(g)
+        R00, R01, R02 = ca * cb, ca * sb * sg - sa * cg, ca * sb * cg + sa * sg
+        R10, R11, R12 = sa * cb, sa * sb * sg + ca * cg, sa * sb * cg - ca * sg
+        R20, R21, R22 = -sb, cb * sg, cb * cg
+        out = []
+        for rx, ry, rz, Bx, By, Bz in self.cables:
+            qx = R00 * rx + R01 * ry + R02 * rz
+            qy = R10 * rx + R11 * ry + R12 * rz
+            qz = R20 * rx + R21 * ry + R22 * rz
+            out.append((qx - Bx, qy - By, qz - Bz, qx, qy, qz))
+        self._orient_key, self._orient_cache = (a, b, g), out
+        return out
+
     def estimate(self, pose, tensions, dt: float):
         """(lengths [6], wrench [6]): the tick without the renderer."""
         if isinstance(pose, np.ndarray):
@@ -82,12 +107,8 @@ class TickComputer:
         if isinstance(tensions, np.ndarray):
             tensions = tensions.tolist()
         x, y, z, a, b, g = pose
-        sin, cos, sqrt, exp, asin = math.sin, math.cos, math.sqrt, math.exp, math.asin
-        # R = Rz(a) Ry(b) Rx(g) (eq 5)
-        ca, sa, cb, sb, cg, sg = cos(a), sin(a), cos(b), sin(b), cos(g), sin(g)
-        R00, R01, R02 = ca * cb, ca * sb * sg - sa * cg, ca * sb * cg + sa * sg
-        R10, R11, R12 = sa * cb, sa * sb * sg + ca * cg, sa * sb * cg - ca * sg
-        R20, R21, R22 = -sb, cb * sg, cb * cg
+        cab = self._orient(a, b, g)
+        sqrt, exp, asin = math.sqrt, math.exp, math.asin
         vx, vy, vz = self.v
         mu, th0, db, mode = self.mu, self.theta0, self.db, self.mode
         dirs, ext = self.dir, self.ext
@@ -98,17 +119,17 @@ class TickComputer:
         if mode == 3:
             dyn = self.dyn
             b_visc, Fc, sig = dyn.b, dyn.dahl_Fc, dyn.dahl_sigma
+            dahl = Fc > 0.0 and not first
             a_v = dt / (dyn.v_smooth + dt) if dt > 0 else 0.0
+            inv_dt = 1.0 / dt if dt > 0 else 0.0
             vel, F_dahl, phi = self.vel, self.F_dahl, self.phi
             k_st = dyn.capstan_k
-        for i, (rx, ry, rz, Bx, By, Bz) in enumerate(self.cables):
-            # R r_i, cable vector l_i = p + R r_i - B_i (eq 4-5), length, unit vector
-            qx = R00 * rx + R01 * ry + R02 * rz
-            qy = R10 * rx + R11 * ry + R12 * rz
-            qz = R20 * rx + R21 * ry + R22 * rz
-            lx = x + qx - Bx
-            ly = y + qy - By
-            lz = z + qz - Bz
+        for i in range(6):
+            # cable vector l_i = p + R r_i - B_i (eq 4-5), length, unit vector
+            cx, cy, cz, qx, qy, qz = cab[i]
+            lx = x + cx
+            ly = y + cy
+            lz = z + cz
             L = sqrt(lx * lx + ly * ly + lz * lz)
             lengths[i] = L
             ux, uy, uz = lx / L, ly / L, lz / L
@@ -140,14 +161,14 @@ class TickComputer:
                     # physics.capstan.motor2tip: pulling (shortening or unmoved) t e^-mu Theta, else t e^mu Theta
                     t = t * exp(-Th) if d <= 0.0 else t * exp(Th)
                 else:
-                    dx = 0.0 if first else -(L - L_prev[i])  # motor travel, + while pulling
+                    dx = 0.0 if first else L_prev[i] - L  # motor travel, + while pulling
                     vi = vel[i]
-                    vi += a_v * ((dx / dt if dt > 0 else 0.0) - vi)
+                    vi += a_v * (dx * inv_dt - vi)
                     vel[i] = vi
                     t -= b_visc * vi  # physics.friction.viscous
-                    if Fc > 0.0 and not first:  # physics.friction.DahlStep
+                    if dahl:  # physics.friction.DahlStep
                         ad = exp(-sig * abs(dx) / Fc)
-                        Fd = ad * F_dahl[i] + (1.0 if dx > 0 else (-1.0 if dx < 0 else 0.0)) * Fc * (1.0 - ad)
+                        Fd = ad * F_dahl[i] + (Fc if dx > 0 else (-Fc if dx < 0 else 0.0)) * (1.0 - ad)
                         F_dahl[i] = Fd
                         t -= Fd
                     # friction state of the capstan transition (estimators.capstan_state), then t e^-phi mu Theta
@@ -167,17 +188,16 @@ class TickComputer:
         w = [fx, fy, fz, mx, my, mz]
         if self.turn_axes:
             self._turn(w, (x, y, z), dt)
-        dt_k = self.kalman.dt if self.kalman is not None else 0.0
         kf = self.kalman
         if kf is not None:
             if kf.started:  # SteadyWrenchKalman.update, inlined: predict, innovation, steady-gain update
-                kw, kwd, K0, K1 = kf.w, kf.w_dot, kf.K0, kf.K1
+                dt_k, kw, kwd, K0, K1 = kf.dt, kf.w, kf.w_dot, kf.K0, kf.K1
                 for j in range(6):
                     wp = kw[j] + dt_k * kwd[j]
                     yj = w[j] - wp
                     kw[j] = wp + K0[j] * yj
                     kwd[j] += K1[j] * yj
-                w = list(kw)
+                w = kw[:]
             else:
                 w = kf.update(w)
         return lengths, w
@@ -208,3 +228,71 @@ class TickComputer:
                     for cj in c[-2::-1]:
                         acc = cj + acc * s
                     w[j] -= acc
+
+
+class LoopTick:
+    """The whole device-excluded tick the loop runs, on plain floats: stylus position -> mapping (motion
+    scale, workspace clip, v_max step limit; teleop.mapping.Follower) -> cable lengths (inverse kinematics)
+    -> FSR counts -> tensions -> estimation with the Kalman filter (ReadingEstimator.update_floats) ->
+    rendered stylus force (Renderer.render_xyz).
+
+    teleop.loop.core.Teleop calls `map`, `estimate` and `render` at its MAP, ESTIMATE and RENDER stages
+    (the robot I/O sits between them); `compute` runs the three back to back for `teleop bench tick`, so the
+    benchmark times the code the loop runs.
+
+        lt = LoopTick(geom, MappingParams(), ReadingEstimator(geom, "dynamic"), Renderer(rp), cmd_dt=1e-3)
+        lt.engage(p_stylus)                                  # anchors (the loop's ENABLED entry)
+        L, t, w, F = lt.compute(p_stylus, v_stylus, counts, dt)
+
+    Inputs are what the devices give: stylus position (3,) [m] and velocity (3,) [m/s] in the device frame,
+    raw FSR counts (6,). Outputs: commanded lengths L (6,) ndarray [m] (the robot command), tensions [N] and
+    wrench [N, N m] in {B} as lists of 6 floats, force (3,) tuple [N] in the device frame.
+    """
+
+    def __init__(self, geom: Geometry, mapping, estimator, renderer: Renderer | None = None, cmd_dt: float = 1e-3):
+        from teleop.mapping import Follower
+
+        self.follower = Follower(mapping, geom, cmd_dt)
+        self.home = [float(v) for v in mapping.home]
+        self.estimator = estimator
+        self.renderer = renderer if renderer is not None else Renderer()
+        self.reset()
+
+    def reset(self) -> None:
+        """Back at home, not engaged; estimator and renderer reset."""
+        self.pos = self.home[:3]
+        self.anchor_stylus = [0.0, 0.0, 0.0]
+        self.anchor_robot = self.home[:3]
+        self.L_last = None
+        self.estimator.reset()
+        self.renderer.reset()
+
+    def engage(self, p_stylus) -> None:
+        """Anchor the incremental mapping at the stylus position (3,) [m] and the current robot target."""
+        self.anchor_stylus = [float(v) for v in p_stylus]
+        self.anchor_robot = list(self.pos)
+        if self.L_last is None:
+            self.L_last = self.follower.lengths(*self.pos)
+
+    def map(self, p_stylus, anchor_stylus, anchor_robot, pos, L_prev) -> tuple[list, list]:
+        """(target position [3] [m], lengths [6] [m]): `Follower.step` (all arguments lists of floats)."""
+        return self.follower.step(p_stylus, anchor_stylus, anchor_robot, pos, L_prev)
+
+    def estimate(self, counts: list, pose: list, dt: float) -> tuple[list, list]:
+        """(tensions [6] [N], wrench [6] [N, N m]) from raw FSR counts at the commanded pose [6] (lists)."""
+        return self.estimator.update_floats(counts, pose, dt)
+
+    def render(self, fx: float, fy: float, fz: float, dt: float, vx: float, vy: float, vz: float) -> tuple:
+        """Stylus force (3,) [N] from the force part of the wrench and the stylus velocity (Renderer.render_xyz)."""
+        return self.renderer.render_xyz(fx, fy, fz, dt, vx, vy, vz)
+
+    def compute(self, p_stylus, v_stylus, counts, dt: float):
+        """One full tick (see the class docstring): (L ndarray (6,), tensions [6], wrench [6], force (3,))."""
+        pos, L = self.follower.step(p_stylus.tolist(), self.anchor_stylus, self.anchor_robot, self.pos,
+                                    self.L_last)
+        self.pos, self.L_last = pos, L
+        L_cmd = np.array(L)  # the robot command
+        h = self.home
+        t, w = self.estimator.update_floats(counts.tolist(), [pos[0], pos[1], pos[2], h[3], h[4], h[5]], dt)
+        vx, vy, vz = v_stylus.tolist()
+        return L_cmd, t, w, self.renderer.render_xyz(w[0], w[1], w[2], dt, vx, vy, vz)

@@ -1,5 +1,8 @@
 """The master-slave tick: READ -> MAP -> ROBOT I/O -> ESTIMATE -> RENDER -> WRITE -> RECORD.
 
+The compute of MAP, ESTIMATE and RENDER is teleop.estimation.tick.LoopTick's `map`, `estimate` and `render`
+on plain floats: the code `teleop bench tick` times as one full tick (`LoopTick.compute`); this module adds
+the device I/O, the state machine, the safety monitors and the numpy arrays the devices and the recorder take.
 A robot's read() may return None while no telemetry frame has arrived yet (counted as missing telemetry).
 `Teleop.tick(now)` runs one tick at host time `now` [s]; it never sleeps and never reads a clock for its
 computation (the runner paces it; a replay feeds recorded times), so a session replays bit for bit. Any
@@ -9,6 +12,7 @@ same tick.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field, replace
 
@@ -19,7 +23,7 @@ from teleop.kinematics import lengths2pose
 from teleop.loop.params import LoopParams
 from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
 from teleop.loop.states import BEHAVIOURS, State
-from teleop.mapping import limit_lengths, platform_offsets, position2lengths
+from teleop.mapping import platform_offsets, position2lengths
 from teleop.rendering import DISABLED, Renderer, is_small
 
 STAGES = ("read", "map", "robot", "estimate", "render", "write", "record")
@@ -86,6 +90,12 @@ class Teleop:
         self.renderer = Renderer(replace(p.render, max_force=float(haptic.spec.max_force_continuous),
                                          engage_ticks=0))
         self.offsets = platform_offsets(self.geom, m.home[3:])
+        from teleop.estimation.tick import LoopTick
+
+        # the fused float path (mapping, FSR counts -> tensions -> estimate with Kalman, render); estimators
+        # without `update_floats` (e.g. test fakes) go through their numpy `update`
+        self.fast = LoopTick(self.geom, m, estimator, self.renderer, cmd_dt=p.dt * p.robot_every)
+        self.fast_estimate = callable(getattr(estimator, "update_floats", None))
         self.stylus_fresh = Freshness("stylus", p.stale_limit, p.startup_timeout)
         self.robot_fresh = Freshness("robot", p.stale_limit, p.startup_timeout)
         self.range = TensionRange(p.tension_max, p.tension_slack, p.tension_window, len(self.geom.B))
@@ -110,7 +120,6 @@ class Teleop:
         self.anchor_robot = self.pose[:3].copy()
         self.tap = None
         self.last_reading = None
-        self._follow_consts = None
         self._est_seq = None  # sequence number and robot time of the last frame the estimator saw
         self._est_t = 0.0
         self.lateness_ns = 0  # set by the runner before each tick (recorded)
@@ -161,27 +170,14 @@ class Teleop:
     def follow(self, x) -> np.ndarray:
         """ENABLED: stylus -> target -> lengths, step-limited to v_max dt and clipped to the length limits.
 
-        Same math as teleop.mapping.stylus2target / position2lengths / limit_lengths, with the constant
-        parts precomputed (this runs every tick).
+        teleop.mapping.Follower.step (through LoopTick.map): the math of teleop.mapping.stylus2target /
+        position2lengths / limit_lengths on plain floats (this runs every tick).
         """
-        c = self._follow_consts
-        if c is None:
-            m, g = self.params.mapping, self.geom
-            c = self._follow_consts = (m.motion_scale * m.R_reg, m.workspace_min, m.workspace_max,
-                                       g.v_max * self.params.dt * self.params.robot_every, g.l_min, g.l_max)
-        sR, lo, hi, dmax, l_min, l_max = c
-        p_t = np.minimum(np.maximum(self.anchor_robot + sR @ (x.sample.measured_cp - self.anchor_stylus), lo), hi)
-        v = self.offsets + p_t
-        L_t = np.sqrt(np.einsum("ij,ij->i", v, v))
-        step = float(np.abs(L_t - self.L_last).max())
-        if step > dmax:  # move along the straight line as far as the cable speed allows this tick
-            p_t = self.pose[:3] + (p_t - self.pose[:3]) * (dmax / step)
-            L_t = position2lengths(p_t, self.offsets)
-        L = np.minimum(np.maximum(L_t, l_min), l_max)
-        if float(np.abs(L - self.L_last).max()) > dmax:  # second-order residue of the line step: hard limit
-            L = limit_lengths(L, self.L_last, self.geom, dmax / self.geom.v_max)
-        self.pose[:3] = p_t
-        return L
+        pos, L = self.fast.map(np.asarray(x.sample.measured_cp, dtype=float).tolist(), self.anchor_stylus.tolist(),
+                               self.anchor_robot.tolist(), self.pose[:3].tolist(),
+                               np.asarray(self.L_last, dtype=float).tolist())
+        self.pose[:3] = pos
+        return np.array(L)
 
     def stop_robot(self) -> None:
         try:
@@ -304,9 +300,16 @@ class Teleop:
                     dt = r.t - self._est_t if self._est_seq is not None and r.t > self._est_t else \
                         p.dt * p.robot_every
                     self._est_seq, self._est_t = r.seq, r.t
-                    t, f = self.estimator.update(r, self.pose, dt)
-                    if not (np.isfinite(t).all() and np.isfinite(f).all()):
-                        raise ValueError("estimated tensions/wrench not finite")
+                    if self.fast_estimate:
+                        t, f = self.fast.estimate(np.asarray(r.fsr_counts, dtype=float).tolist(),
+                                                  self.pose.tolist(), dt)
+                        if not math.isfinite(sum(t) + sum(f)):  # any nan/inf (or an absurd > 1e308 sum)
+                            raise ValueError("estimated tensions/wrench not finite")
+                        t, f = np.array(t), np.array(f)
+                    else:
+                        t, f = self.estimator.update(r, self.pose, dt)
+                        if not (np.isfinite(t).all() and np.isfinite(f).all()):
+                            raise ValueError("estimated tensions/wrench not finite")
                     self.tensions, self.wrench = t, f
                     if self.state != State.FAULT:
                         reason = self.range.update(now, t) if self.state != State.DISABLED else None
@@ -325,7 +328,7 @@ class Teleop:
             rd = self.renderer
             fx, fy, fz = self.wrench[:3].tolist()
             vx, vy, vz = x.sample.measured_cv.tolist() if x.sample is not None else (0.0, 0.0, 0.0)
-            F = rd.render_xyz(fx, fy, fz, p.dt, vx, vy, vz)  # zero force unless ENABLED
+            F = self.fast.render(fx, fy, fz, p.dt, vx, vy, vz)  # Renderer.render_xyz: zero force unless ENABLED
             if rd.fault:
                 self.fault(f"render: {rd.fault_reason}")
             x.F_raw = rd.mapped  # device frame, scaled, -z zeroed: the force that would be rendered
