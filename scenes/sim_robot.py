@@ -9,8 +9,8 @@ One reading = `substeps` physics steps of dt. Per reading:
   -> sheath friction between the FSR and the end effector: teleop.physics capstan_friction with
      Theta_i = theta_i (eq 6) + theta0, motor position x = -length (shortening = pulling), stick
      transitions of stiffness k at reversals
-  -> FSR: teleop.physics sensor_hysteresis loading state s in [-1, 1] blends the calibration's loading
-     and unloading conductance branches (teleop.sensors), divider -> ADC counts + Gaussian noise, rounded.
+  -> FSR: hysteresis as friction lag between the calibration's loading and unloading branches
+     (teleop.sensors.FsrBranchLag), divider -> ADC counts + Gaussian noise, rounded.
 The batch path `run(lengths)` does the same with the array forms of those models (fast); `read()` uses
 their per-sample Step forms; both give the same counts for the same seed (tested).
 """
@@ -31,8 +31,7 @@ from teleop.geometry import Geometry, default_geometry
 from teleop.kinematics import (bending_angles, check_lengths, pose2cables, poses2lengths, rotation_zyx,
                                structure_matrix)
 from teleop.physics.capstan import CapstanStep, tip2motor_transitions
-from teleop.physics.sensor_effects import SensorHysteresisStep, hysteresis_offset
-from teleop.sensors import FsrCalibration, default_fsr_calibration
+from teleop.sensors import FsrBranchLag, FsrCalibration, default_fsr_calibration
 from teleop.tension import TensionSolver, wrench2tensions
 
 
@@ -79,8 +78,6 @@ class SimRobotParams:
             0.17 s) reduces them to blips the direction rule alone handles. The compliance in the cable
             between the FSR and the effector is the FSR press block's silicone film (seed 000 §2)
             rather than the 30 mm of steel (~2e5 N/m).
-        hysteresis_delta: half the force change over which the FSR loading state flips [N]
-            (teleop.physics sensor_hysteresis default, 0.2 N).
         noise_counts: RMS ADC noise [counts] (ATmega2560 10-bit ADC, +-2 LSB absolute accuracy).
     """
 
@@ -91,7 +88,6 @@ class SimRobotParams:
     tip_stiffness: float | None = 1.0e4
     ee_damping_ratio: float = 0.7
     capstan_k: float = 5e3
-    hysteresis_delta: float = 0.2
     noise_counts: float = 1.0
 
     def __post_init__(self):
@@ -194,14 +190,10 @@ def wrenches2tensions(f, A, t_min: float, t_max: float, t_ref: float) -> np.ndar
     return t
 
 
-def fsr_conductance(t, s, cal: FsrCalibration) -> np.ndarray:
-    """Conductance [S] of FSRs at tension t [N] in loading state s in [-1, 1] (+1 loading, -1 unloading):
-    the calibration's two branches (FsrCalibration.reading) blended linearly in s."""
-    w = 0.5 * (1.0 + np.asarray(s, dtype=float))
-    t = np.asarray(t, dtype=float)
-    gl = np.maximum(polyval(t, cal.loading), 0.0)  # = cal.reading(t, LOADING), without building Polynomials
-    gu = np.maximum(polyval(t, cal.unloading), 0.0)
-    return w * gl + (1.0 - w) * gu
+def fsr_conductance(u, cal: FsrCalibration) -> np.ndarray:
+    """Conductance [S] of FSRs at equivalent tension u [N] (teleop.sensors.FsrBranchLag): the calibration's
+    loading branch (= cal.reading(u, LOADING), without building Polynomials)."""
+    return np.maximum(polyval(np.asarray(u, dtype=float), cal.loading), 0.0)
 
 
 def counts_from(g, cal: FsrCalibration, noise) -> np.ndarray:
@@ -278,7 +270,7 @@ class SimRobot(ContextDevice):
         self.stopped = False
         self._capstan = [CapstanStep({"mu": self.geom.mu, "theta": self.geom.theta0, "k": p.capstan_k})
                          for _ in range(6)]
-        self._hyst = [SensorHysteresisStep({"h": 1.0, "delta": p.hysteresis_delta}) for _ in range(6)]
+        self._lag = FsrBranchLag(self.cal)
         self.is_open = True
 
     def close(self) -> None:
@@ -342,9 +334,9 @@ class SimRobot(ContextDevice):
         t_tip = solver.solve(f)
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
         t_fsr = np.array([cs.step(x=x[i], load=t_tip[i], theta=theta[i]) for i, cs in enumerate(self._capstan)])
-        s = np.array([h.step(t_fsr[i]) - t_fsr[i] for i, h in enumerate(self._hyst)])
+        u = self._lag.step(t_fsr)
         noise = self.rng.normal(0.0, p.noise_counts, 6) if p.noise_counts > 0 else np.zeros(6)
-        counts = counts_from(fsr_conductance(t_fsr, s, self.cal), self.cal, noise)
+        counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
         self.t += p.dt
         self.seq += 1
         steps = np.rint((self.L_home - self.L_cmd) * self.spec.steps_per_m).astype(np.int64)
@@ -383,9 +375,8 @@ class SimRobot(ContextDevice):
         theta = capstan_angles_batch(poses, g)
         x = -L  # motor positions: hauling in (shortening) is +
         t_fsr = np.empty((n, 6))
-        s = np.empty((n, 6))
         for i in range(6):
-            cs, hs = self._capstan[i], self._hyst[i]
+            cs = self._capstan[i]
             if cs.x_prev is None:  # fresh: starts on the tip tension, like CapstanStep
                 t_fsr[:, i] = tip2motor_transitions(x[:, i], t_tip[:, i], g.mu, theta[:, i], p.capstan_k)
             else:  # continue from the stored state: a leading sample at (x_prev, F) inside its own band
@@ -393,12 +384,9 @@ class SimRobot(ContextDevice):
                                           np.r_[theta[0, i], theta[:, i]], p.capstan_k, F0=cs.F)
                 t_fsr[:, i] = y[1:]
             cs.x_prev, cs.F = float(x[-1, i]), float(t_fsr[-1, i])
-            u = t_fsr[:, i] if hs.z is None else np.r_[hs.z, t_fsr[:, i]]
-            s_i = hysteresis_offset(u, 1.0, p.hysteresis_delta)  # loading state (h = 1)
-            s[:, i] = s_i if hs.z is None else s_i[1:]
-            hs.z = float(t_fsr[-1, i] - p.hysteresis_delta * s[-1, i])
+        u = self._lag.run(t_fsr)
         noise = self.rng.normal(0.0, p.noise_counts, (n, 6)) if p.noise_counts > 0 else np.zeros((n, 6))
-        counts = counts_from(fsr_conductance(t_fsr, s, self.cal), self.cal, noise)
+        counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
         t = self.t + p.dt * np.arange(1, n + 1)
         self.t = float(t[-1])
         self.seq += n

@@ -207,6 +207,71 @@ class FsrCalibration:
         return self.adc_max * gr / (1.0 + gr)
 
 
+class FsrBranchLag:
+    """The FSR's hysteresis as a lag between its two calibration branches: what an FSR reads for a tension
+    history t [N] (per cable), as the loading-branch reading of an equivalent tension u [N].
+
+    Seed 000 §2.2 puts the hysteresis down to friction: the unloading branch reads as if the tension were
+    higher by the branch gap G(t) [N] (g_L(t + G(t)) = g_U(t); 0.13-0.87 N over 0.2-5.9 N for the default
+    calibration). Friction holds the reading when the tension turns, so u follows t with play:
+
+        u = clip(u_prev, t, t + G(t))
+
+    rising t: u = t (loading branch); falling: u = t + G(t) (unloading branch); right after a reversal the
+    reading holds until t has crossed the gap. More tension never lowers the reading (a blend of the branches
+    over a fixed force width narrower than the gap would: at the pretension it would read backwards over
+    the crossover). It agrees with the seed's calibration protocol (Fig 7): at 600 g the gap is 0.44 N, so
+    its one 50 g (0.49 N) step back from 650 g reads on the unloading branch.
+
+    The gap is tabulated once on [0, cal.t_max] (constant beyond); t + G(t) is made non-decreasing there
+    so u stays monotone in t for any calibration. Starts on the loading branch (u = t).
+    """
+
+    def __init__(self, cal: FsrCalibration, n: int = 6, points: int = 1024):
+        t = np.linspace(0.0, cal.t_max, points)
+        gap = np.maximum(cal.tension(cal.reading(t, UNLOADING), LOADING) - t, 0.0)
+        self.cal = cal
+        self._t = t
+        self._gap = np.maximum.accumulate(t + gap) - t
+        self.n = n
+        self.u = None
+
+    def gap(self, t) -> np.ndarray:
+        """Branch gap G(t) [N] (array-broadcast)."""
+        return np.interp(t, self._t, self._gap)
+
+    def reset(self) -> None:
+        self.u = None
+
+    def step(self, t) -> np.ndarray:
+        """(n,) equivalent tensions u [N] after tensions t (n,) [N]."""
+        t = np.asarray(t, dtype=float)
+        u = t.copy() if self.u is None else np.clip(self.u, t, t + self.gap(t))
+        self.u = u
+        return u.copy()
+
+    def run(self, T) -> np.ndarray:
+        """(m, n) equivalent tensions for (m, n) tensions, continuing from the state (same numbers as `step`
+        row by row)."""
+        T = np.asarray(T, dtype=float)
+        hi = T + self.gap(T)
+        U = np.empty_like(T)
+        u0 = T[0] if self.u is None else self.u
+        for i in range(T.shape[1]):
+            lo_i, hi_i, u = T[:, i].tolist(), hi[:, i].tolist(), float(u0[i])
+            out = []
+            for a, b in zip(lo_i, hi_i):
+                u = a if u < a else (b if u > b else u)
+                out.append(u)
+            U[:, i] = out
+        self.u = U[-1].copy()
+        return U
+
+    def conductance(self, u) -> np.ndarray:
+        """Conductance [S] the FSR reads at equivalent tension u [N]: the loading branch."""
+        return self.cal.reading(u, LOADING)
+
+
 def fit_fsr_calibration(data: FsrCalibrationData, degree: int = 5, **kwargs) -> FsrCalibration:
     """Least-squares quintic per branch of reading vs tension (numpy.polynomial), seed 000 eq 2."""
     coefs = {}

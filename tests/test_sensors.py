@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from teleop.errors import InputError
 from teleop.geometry import default_geometry
 from teleop.physics.capstan import tip2motor_transitions
-from teleop.sensors import (LOADING, UNLOADING, FbgParams, FsrConverter, default_fsr_calibration,
+from teleop.sensors import (LOADING, UNLOADING, FbgParams, FsrBranchLag, FsrConverter, default_fsr_calibration,
                             default_fsr_calibration_data, eq2_roots, fbg2force, fbg2force_uncompensated,
                             fit_fsr_calibration, fit_proximal_distal, load_fsr_calibration_csv, lowpass2,
                             synthesize_fbg, synthesize_fsr_counts, write_fsr_calibration_csv)
@@ -71,6 +71,41 @@ def test_converter_picks_the_branch_from_the_direction_and_ignores_noise():
     # using the wrong branch would be off by the hysteresis
     wrong = CAL.tension(CAL.counts2conductance(counts[430:780]), LOADING)
     assert np.sqrt(np.mean((wrong - t[430:780]) ** 2)) > 3 * np.sqrt(np.mean(err ** 2))
+
+
+def test_branch_lag_reads_each_branch_and_holds_across_the_gap():
+    lag = FsrBranchLag(CAL, n=1)
+    up = np.linspace(0.2, 5.0, 200)
+    down = np.linspace(5.0, 0.5, 200)
+    U = lag.run(np.r_[up, down][:, None])[:, 0]
+    assert np.allclose(U[:200], up)  # rising: the loading branch
+    g = lag.conductance(U)
+    tail = np.r_[up, down][-100:]
+    assert np.allclose(g[-100:], CAL.reading(tail, UNLOADING), rtol=1e-3)  # falling: the unloading branch
+    # right after the turn the reading holds: flat until the tension has crossed the gap at 5 N
+    gap5 = float(lag.gap(5.0))
+    held = down[down > 5.0 - 0.9 * gap5]
+    assert 0.4 < gap5 < 1.0 and np.allclose(U[200:200 + len(held)], 5.0)
+    # seed 000 Fig 7: its 600 g unloading point is read one 50 g step back from 650 g: gap < 0.49 N there
+    assert float(lag.gap(CAL.t_max)) < 9.80665 * 0.05
+    # a step back larger than the gap lands on the unloading branch
+    w = np.array([2.0, 4.0, 3.0])
+    lag.reset()
+    u = lag.run(w[:, None])[-1, 0]
+    assert lag.conductance(u) == pytest.approx(CAL.reading(w[-1], UNLOADING), rel=1e-3)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(0.0, 6.0), min_size=2, max_size=60))
+def test_branch_lag_is_monotone_and_step_equals_run(ts):
+    """More tension never lowers the reading, on any history; the per-sample and batch forms agree."""
+    T = np.array(ts)[:, None]
+    a, b = FsrBranchLag(CAL, n=1), FsrBranchLag(CAL, n=1)
+    U = a.run(T)
+    assert np.allclose(U[:, 0], [b.step(t)[0] for t in T], atol=0)
+    dT, dU = np.diff(T[:, 0]), np.diff(U[:, 0])
+    assert np.all(dU * dT >= -1e-12)  # the reading never moves against the tension
+    assert np.all((U[:, 0] >= T[:, 0] - 1e-12) & (U[:, 0] <= T[:, 0] + a.gap(T[:, 0]) + 1e-12))
 
 
 def test_fsr_csv_round_trip_and_missing_column(tmp_path):
