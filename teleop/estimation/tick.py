@@ -139,25 +139,26 @@ class TickComputer:
                 s = ux * vx + uy * vy + uz * vz
                 s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
                 Th = mu * (abs(asin(s)) + th0)
-                # cable direction: Schmitt trigger on the length (estimation.direction)
-                d, e = dirs[i], ext[i]
-                if e != e:
-                    e = L
-                if d <= 0.0 and L > e + db:
-                    d = 1.0
-                    e = L
-                elif d >= 0.0 and L < e - db:
-                    d = -1.0
-                    e = L
-                elif d > 0.0:
-                    if L > e:
-                        e = L
-                elif d < 0.0:
-                    if L < e:
-                        e = L
-                dirs[i] = d
-                ext[i] = e
                 if mode < 3:
+                    # cable direction: Schmitt trigger on the length (estimation.direction); `dynamic` has no
+                    # direction rule (its capstan state follows the travel), so it skips this
+                    d, e = dirs[i], ext[i]
+                    if e != e:
+                        e = L
+                    if d <= 0.0 and L > e + db:
+                        d = 1.0
+                        e = L
+                    elif d >= 0.0 and L < e - db:
+                        d = -1.0
+                        e = L
+                    elif d > 0.0:
+                        if L > e:
+                            e = L
+                    elif d < 0.0:
+                        if L < e:
+                            e = L
+                    dirs[i] = d
+                    ext[i] = e
                     # physics.capstan.motor2tip: pulling (shortening or unmoved) t e^-mu Theta, else t e^mu Theta
                     t = t * exp(-Th) if d <= 0.0 else t * exp(Th)
                 else:
