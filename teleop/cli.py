@@ -14,6 +14,7 @@ import re
 import sys
 
 from teleop import __version__
+from teleop.argtypes import seed_int
 from teleop.errors import InputError
 
 
@@ -33,17 +34,6 @@ def _expected_form(action: argparse.Action) -> str:
     if action.nargs == 0:
         return action.option_strings[0]
     return f"{action.option_strings[0]} {metavar}"
-
-
-def seed_int(text: str) -> int:
-    """argparse type of every ``--seed``: a whole number >= 0 (what numpy's random generators accept)."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got '{text}'") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0 (a random generator seed), got {v}")
-    return v
 
 
 class TeleopArgumentParser(argparse.ArgumentParser):

@@ -69,6 +69,12 @@ ARGPARSE_ERRORS = [
     (["bench", "diagnose", "--seed", "-7"], "teleop bench diagnose", ["--seed", "-7", ">= 0"]),
     (["nosuch"], "teleop", ["'nosuch'", "choose from"]),
     (["--bogus"], "teleop", ["--bogus"]),
+    # range checks (teleop.argtypes)
+    (["bench", "link", "--stream-seconds", "-1"], "teleop bench link", ["--stream-seconds", "> 0", "-1"]),
+    (["session", "--robot-rate", "0"], "teleop session", ["--robot-rate", "> 0"]),
+    (["bench", "loop", "--spin-us", "-1"], "teleop bench loop", ["--spin-us", ">= 0"]),
+    (["session", "--robot-rt", "200"], "teleop session", ["--robot-rt", "1-99", "200"]),
+    (["session", "--seconds", "nan"], "teleop session", ["--seconds", "finite", "nan"]),
 ]
 
 

@@ -17,7 +17,8 @@ DEFAULT_JNDS = "0.05,0.1,0.15,0.23,0.3,0.4,0.6,0.8"
 
 
 def register(subparsers) -> None:
-    from teleop.commands.blind_test import add_rig_options, positive_int
+    from teleop.argtypes import positive_int
+    from teleop.commands.blind_test import add_rig_options
 
     p = subparsers.add_parser("blind-jnd", help="correct-ranking share vs stiffness JND (blind test, simulated)")
     p.add_argument("--participants", type=positive_int, default=100, metavar="N", help="participants per point")

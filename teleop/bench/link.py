@@ -15,12 +15,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from teleop.argtypes import positive_float, positive_int
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("link", help="Arduino link on the emulated firmware: round trip, watchdog stop time")
-    p.add_argument("--roundtrips", type=int, default=2000, help="timed round trips (default 2000)")
-    p.add_argument("--trials", type=int, default=100, help="watchdog silence episodes (default 100)")
-    p.add_argument("--stream-seconds", type=float, default=5.0,
+    p.add_argument("--roundtrips", type=positive_int, default=2000, help="timed round trips (default 2000)")
+    p.add_argument("--trials", type=positive_int, default=100, help="watchdog silence episodes (default 100)")
+    p.add_argument("--stream-seconds", type=positive_float, default=5.0,
                    help="seconds of a 1 kHz COMMAND + read() stream (default 5)")
     p.add_argument("--build-dir", metavar="DIR", help="build directory (default ~/.cache/cdpr-teleop/arduino)")
     p.add_argument("--json", metavar="F", help="write the result JSON here")

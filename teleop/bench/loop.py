@@ -9,6 +9,8 @@ from __future__ import annotations
 import os
 import tempfile
 
+from teleop.argtypes import nonnegative_float, positive_float, rt_priority
+
 from teleop.errors import InputError
 
 MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (RELIABILITY.md)
@@ -16,20 +18,20 @@ MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (RELIABILITY.md
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("loop", help="loop timing: lateness, tick and per-stage times (recording on)")
-    p.add_argument("--seconds", type=float, default=10.0)
-    p.add_argument("--rate", type=float, default=1000.0)
+    p.add_argument("--seconds", type=positive_float, default=10.0)
+    p.add_argument("--rate", type=positive_float, default=1000.0)
     p.add_argument("--json", metavar="F", help="write the DESIGN.md loop JSON")
     p.add_argument("--haptic", default="sim://?script=pokes")
     p.add_argument("--robot", default="sim://robot?substeps=2",
                    help="robot URL (default: the pybullet slave, 2 physics steps of 1 ms per reading)")
     p.add_argument("--record", metavar="FILE", help="keep the recording here (default: a temporary file)")
     p.add_argument("--no-record", action="store_true", help="benchmark without the recorder")
-    p.add_argument("--spin-us", type=float, default=200.0, help="spin this long before each deadline [us]")
-    p.add_argument("--stale-ms", type=float, default=20.0,
+    p.add_argument("--spin-us", type=nonnegative_float, default=200.0, help="spin this long before each deadline [us]")
+    p.add_argument("--stale-ms", type=positive_float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO")
-    p.add_argument("--robot-rate", type=float, default=500.0, help="robot process rate [Hz] (default 500)")
-    p.add_argument("--robot-rt", type=int, default=45,
+    p.add_argument("--robot-rate", type=positive_float, default=500.0, help="robot process rate [Hz] (default 500)")
+    p.add_argument("--robot-rt", type=rt_priority, default=45,
                    help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
     p.add_argument("--find-max-rate", action="store_true",
                    help="run --seconds at increasing rates; report the highest with <= 0.1 %% misses")

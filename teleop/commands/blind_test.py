@@ -8,6 +8,8 @@ answer so an interrupted study resumes where it stopped.
 
 from __future__ import annotations
 
+from teleop.argtypes import positive_int
+
 import sys
 
 DEFAULT_STATE = "blind_test_state.json"
@@ -25,18 +27,6 @@ def parse_fraction(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a fraction like 0.23 or a percentage like 23%, got '{text}'")
     if not (math.isfinite(v) and 0 < v <= 5):
         raise argparse.ArgumentTypeError(f"expected a JND in (0, 5] (0.23 = 23 %), got '{text}'")
-    return v
-
-
-def positive_int(text: str) -> int:
-    import argparse
-
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {v}")
     return v
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+from teleop.argtypes import positive_float, rt_priority
+
 from teleop.errors import InputError
 
 
@@ -13,11 +15,11 @@ def register(subparsers) -> None:
     p.add_argument("--robot", default="sim://robot?substeps=2",
                    help="robot URL (default: the pybullet slave, 2 physics steps of 1 ms per reading)")
     p.add_argument("--record", metavar="FILE", help="record the session to FILE (.mcap)")
-    p.add_argument("--seconds", type=float, default=10.0, help="session length [s] (default 10)")
-    p.add_argument("--rate", type=float, default=1000.0, help="haptic loop rate [Hz] (default 1000)")
-    p.add_argument("--robot-rate", type=float, default=500.0,
+    p.add_argument("--seconds", type=positive_float, default=10.0, help="session length [s] (default 10)")
+    p.add_argument("--rate", type=positive_float, default=1000.0, help="haptic loop rate [Hz] (default 1000)")
+    p.add_argument("--robot-rate", type=positive_float, default=500.0,
                    help="robot link rate [Hz]; the robot runs in its own process at this rate (default 500)")
-    p.add_argument("--robot-rt", type=int, default=45,
+    p.add_argument("--robot-rt", type=rt_priority, default=45,
                    help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
     p.add_argument("--robot-inline", action="store_true",
                    help="do the robot I/O inside the haptic tick instead (every tick)")
@@ -30,7 +32,7 @@ def register(subparsers) -> None:
     p.add_argument("--fsr-calibration", metavar="CSV",
                    help="FSR calibration (columns tension_N, conductance_uS, branch) for the estimator "
                         "(default: the built-in synthetic calibration)")
-    p.add_argument("--stale-ms", type=float, default=20.0,
+    p.add_argument("--stale-ms", type=positive_float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
     p.add_argument("--json", metavar="F", help="write the timing summary and events as JSON")

@@ -1,0 +1,58 @@
+"""argparse types for the command line: each rejects a bad value with what was expected, which
+teleop.cli turns into one line on stderr and exit code 2."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+
+def _number(text: str, kind):
+    try:
+        v = kind(text)
+    except ValueError:
+        what = "a whole number" if kind is int else "a number"
+        raise argparse.ArgumentTypeError(f"expected {what}, got '{text}'") from None
+    if kind is float and not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got '{text}'")
+    return v
+
+
+def positive_int(text: str) -> int:
+    """A whole number >= 1 (counts: participants, trials, round trips)."""
+    v = _number(text, int)
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {v}")
+    return v
+
+
+def seed_int(text: str) -> int:
+    """A whole number >= 0 (what numpy's random generators accept)."""
+    v = _number(text, int)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0 (a random generator seed), got {v}")
+    return v
+
+
+def positive_float(text: str) -> float:
+    """A finite number > 0 (durations [s], rates [Hz])."""
+    v = _number(text, float)
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text}")
+    return v
+
+
+def nonnegative_float(text: str) -> float:
+    """A finite number >= 0."""
+    v = _number(text, float)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text}")
+    return v
+
+
+def rt_priority(text: str) -> int:
+    """A SCHED_FIFO priority 1-99, or 0 for time-sharing."""
+    v = _number(text, int)
+    if not 0 <= v <= 99:
+        raise argparse.ArgumentTypeError(f"expected 0 (time-sharing) or a SCHED_FIFO priority 1-99, got {v}")
+    return v
