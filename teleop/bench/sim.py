@@ -15,8 +15,8 @@ per tick [us] p50/p99), in the order of the data flow:
   stylus        the loop's READ stage: simulated operator (hand model) + state machine
   map           the loop's MAP stage: stylus -> target -> cable lengths
   kinematics    SimRobot.command_lengths: forward kinematics (lengths -> pose)
-  pybullet      the pybullet C API calls inside PadWorld (stepSimulation, contact and state queries)
-  physics_py    the rest of PadWorld.step / contact_force / tip (the series spring, Python glue)
+  pybullet_step pybullet's stepSimulation (the contact solver; 1 ms per step)
+  physics_other the rest of PadWorld.step / contact_force / tip: series spring, contact and state queries
   cable_sensor  SimRobot.read minus PadWorld: per-pose terms (structure matrix, tension solver, wrap
                 angles), tension distribution, capstan friction, FSR hysteresis and ADC
   robot_io      the rest of the loop's ROBOT stage
@@ -28,12 +28,13 @@ tick) to check the factor they leave; the kinematics to cable_sensor stages then
 the whole ROBOT stage.
 
 With the batch path (default; `--no-batch` skips it) the same commanded lengths, one row per reading, are
-replayed through a fresh SimRobot's batched `run()` (the palpation path), timed the same way (pybullet,
-physics_py; arrays: the rest), and its FSR counts compared with the loop's.
+replayed through a fresh SimRobot's batched `run()` (the palpation path), timed the same way
+(pybullet_step, physics_other; arrays: the rest), and its FSR counts compared with the loop's.
 
 JSON: {"seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wall_s", "cpu_s",
 "realtime_factor", "realtime_factor_cpu", "budget_factor", "pass", "ticks", "readings", "physics_steps",
-"stages_timed", "pybullet_timed", "stages": {stage: {"wall_s", "fraction", "per_tick_us": {"p50", "p99"}}}, "trajectory": {...},
+"stages_timed", "pybullet_timed", "stages": {stage: {"wall_s", "fraction", "per_tick_us": {"p50", "p99"}}},
+"trajectory": {...},
 "batch": {"simulated_s", "wall_s", "cpu_s", "realtime_factor", "realtime_factor_cpu", "pass", "readings",
 "stages": {stage: {"wall_s", "fraction"}}, "counts_max_abs_diff_vs_loop"}}. Wall-clock numbers depend on
 the machine's load; tests check only their consistency.
@@ -52,9 +53,8 @@ from teleop.errors import InputError
 BUDGET_FACTOR = 20.0  # DESIGN.md performance budget: simulation >= 20x real time when not paced
 RATE_HZ = 1000.0  # loop rate [Hz] (the physics step is 1 ms too)
 LOOP_STAGES = ("stylus", "map", "robot", "estimate", "render", "write", "record")  # teleop.loop.core.STAGES
-STAGES = ("stylus", "map", "kinematics", "pybullet", "physics_py", "cable_sensor", "robot_io", "estimate", "render",
-          "write", "record", "loop_other", "harness")
-_PYBULLET_CALLS = ("_step", "_contacts", "_get_pos", "_get_vel", "_apply_force", "_change_constraint")
+STAGES = ("stylus", "map", "kinematics", "pybullet_step", "physics_other", "cable_sensor", "robot_io", "estimate",
+          "render", "write", "record", "loop_other", "harness")
 
 
 def register(subparsers) -> None:
@@ -101,16 +101,17 @@ class _Meter:
         return timed
 
 
-def _meter_world(world, meter: _Meter, api: _Meter) -> bool:
+def _meter_world(world, meter: _Meter, solver: _Meter) -> bool:
     """Time the pybullet world's public calls with `meter` (instance attributes shadow the methods) and,
-    inside them, the pybullet C API calls PadWorld keeps as attributes with `api`; False when PadWorld no
-    longer has those attributes (then `api` stays at 0 and all physics time counts as physics_py)."""
+    inside them, pybullet's stepSimulation (PadWorld keeps it as `_step`) with `solver`. Only that one call
+    is timed inside: a timer costs about as much as one of pybullet's small state queries on a slow
+    machine. False when PadWorld no longer has `_step` (`solver` then stays at 0)."""
     for name in ("step", "contact_force", "tip"):
         setattr(world, name, meter.wrap(getattr(world, name)))
-    found = [name for name in _PYBULLET_CALLS if callable(getattr(world, name, None))]
-    for name in found:
-        setattr(world, name, api.wrap(getattr(world, name)))
-    return "_step" in found and "_contacts" in found
+    if not callable(getattr(world, "_step", None)):
+        return False
+    world._step = solver.wrap(world._step)
+    return True
 
 
 def _make_robot(pad: str, seed: int, substeps: int):
@@ -165,8 +166,8 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=None if substeps == 1 else RATE_HZ / substeps,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     estimator = default_estimator(frame_period(params, None))
-    kin, phys, api, rd = _Meter(), _Meter(), _Meter(), _Meter()
-    api_timed = False
+    kin, phys, solver, rd = _Meter(), _Meter(), _Meter(), _Meter()
+    solver_timed = False
     n_read = -(-n // params.robot_every)
     L_log = np.zeros((n_read, 6))
     counts_log = np.zeros((n_read, 6), dtype=np.int64)
@@ -181,7 +182,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
         if stages:
             robot.command_lengths = kin.wrap(robot.command_lengths)
             robot.read = rd.wrap(robot.read)
-            api_timed = _meter_world(robot.world, phys, api)
+            solver_timed = _meter_world(robot.world, phys, solver)
         tp = Teleop(stylus, robot, params, estimator=estimator)
         tp.start(0.0)
         dt = params.dt
@@ -197,7 +198,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                 x = tp.tick(clock_t[0])
                 tick_ns[k] = pc() - t0
                 stage_ns[k] = tp.stage_ns
-                sub_ns[k] = (kin.ns, phys.ns, api.ns, rd.ns)
+                sub_ns[k] = (kin.ns, phys.ns, solver.ns, rd.ns)
                 r = x.reading
                 if r is not None:
                     L_log[j] = r.commanded_lengths
@@ -214,10 +215,11 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     simulated = n / RATE_HZ
     wall = wall_ns / 1e9
     sub = np.diff(np.vstack([np.zeros((1, 4), dtype=np.int64), sub_ns]), axis=0)
-    kin_t, phys_t, api_t, read_t = sub[:, 0], sub[:, 1], sub[:, 2], sub[:, 3]
+    kin_t, phys_t, solver_t, read_t = sub[:, 0], sub[:, 1], sub[:, 2], sub[:, 3]
     per_tick = {
-        "stylus": stage_ns[:, 0], "map": stage_ns[:, 1], "kinematics": kin_t, "pybullet": api_t,
-        "physics_py": phys_t - api_t, "cable_sensor": read_t - phys_t, "robot_io": stage_ns[:, 2] - kin_t - read_t, "estimate": stage_ns[:, 3],
+        "stylus": stage_ns[:, 0], "map": stage_ns[:, 1], "kinematics": kin_t, "pybullet_step": solver_t,
+        "physics_other": phys_t - solver_t, "cable_sensor": read_t - phys_t,
+        "robot_io": stage_ns[:, 2] - kin_t - read_t, "estimate": stage_ns[:, 3],
         "render": stage_ns[:, 4], "write": stage_ns[:, 5], "record": stage_ns[:, 6],
         "loop_other": tick_ns - stage_ns.sum(axis=1),
     }
@@ -238,7 +240,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
         "realtime_factor": factor, "realtime_factor_cpu": _factor(simulated, cpu), "budget_factor": BUDGET_FACTOR,
         "pass": bool(factor >= BUDGET_FACTOR and final_state != "FAULT"),
         "ticks": n, "readings": j, "physics_steps": j * substeps,
-        "stages_timed": bool(stages), "pybullet_timed": bool(api_timed), "stages": table,
+        "stages_timed": bool(stages), "pybullet_timed": bool(solver_timed), "stages": table,
         "trajectory": {
             "sha256": _digest(L_log[:j], counts_log[:j], f_truth[:j], p_log, F_log),
             "final_state": final_state, "fault_reason": fault_reason, "enabled_s": enabled / RATE_HZ,
@@ -257,9 +259,9 @@ def bench_batch(lengths: np.ndarray, counts: np.ndarray, pad: str, robot_seed: i
     import gc
 
     robot = _make_robot(pad, robot_seed, substeps)
-    phys, api = _Meter(), _Meter()
+    phys, solver = _Meter(), _Meter()
     with robot:
-        _meter_world(robot.world, phys, api)
+        _meter_world(robot.world, phys, solver)
         gc.collect()
         gc.disable()
         try:
@@ -272,7 +274,8 @@ def bench_batch(lengths: np.ndarray, counts: np.ndarray, pad: str, robot_seed: i
     wall = wall_ns / 1e9
     factor = _factor(simulated, wall)
     table = {name: {"wall_s": round(ns / 1e9, 6), "fraction": round(ns / wall_ns, 4)}
-             for name, ns in (("pybullet", api.ns), ("physics_py", phys.ns - api.ns), ("arrays", wall_ns - phys.ns))}
+             for name, ns in (("pybullet_step", solver.ns), ("physics_other", phys.ns - solver.ns),
+                              ("arrays", wall_ns - phys.ns))}
     diff = int(np.abs(trace.counts - counts).max(initial=0))
     return {"simulated_s": simulated, "wall_s": round(wall, 6), "cpu_s": round(cpu, 6), "realtime_factor": factor,
             "realtime_factor_cpu": _factor(simulated, cpu), "pass": bool(factor >= BUDGET_FACTOR),
@@ -313,16 +316,16 @@ def format_table(out: dict) -> str:
         lines.append(f"{name:8s} {r['simulated_s']:8.3f} {r['wall_s']:8.3f} {r['cpu_s']:8.3f} "
                      f"{r['realtime_factor']:8.2f} {r['realtime_factor_cpu']:8.2f}  {'PASS' if r['pass'] else 'FAIL'}")
     lines.append(f"loop wall time by stage{'' if out['stages_timed'] else ' (robot not split: --no-stages)'}:")
-    lines.append(f"  {'stage':12s} {'wall s':>8s} {'share':>7s} {'p50 us':>9s} {'p99 us':>9s}")
+    lines.append(f"  {'stage':13s} {'wall s':>8s} {'share':>7s} {'p50 us':>9s} {'p99 us':>9s}")
     for name, st in out["stages"].items():
         pt = st["per_tick_us"]
         p50, p99 = (f"{pt['p50']:9.1f}", f"{pt['p99']:9.1f}") if pt else (f"{'':9s}", f"{'':9s}")
-        lines.append(f"  {name:12s} {st['wall_s']:8.3f} {100 * st['fraction']:6.1f}% {p50} {p99}")
+        lines.append(f"  {name:13s} {st['wall_s']:8.3f} {100 * st['fraction']:6.1f}% {p50} {p99}")
     if "batch" in out:
         b = out["batch"]
-        lines.append("batch (SimRobot.run, same commanded lengths): "
-                     + ", ".join(f"{k} {v['wall_s']:.3f} s ({100 * v['fraction']:.1f}%)" for k, v in b["stages"].items())
-                     + f"; FSR counts vs loop: max |diff| {b['counts_max_abs_diff_vs_loop']}")
+        parts = ", ".join(f"{k} {v['wall_s']:.3f} s ({100 * v['fraction']:.1f}%)" for k, v in b["stages"].items())
+        lines.append(f"batch (SimRobot.run, same commanded lengths): {parts}; "
+                     f"FSR counts vs loop: max |diff| {b['counts_max_abs_diff_vs_loop']}")
     return "\n".join(lines)
 
 
