@@ -257,14 +257,18 @@ class LoopTick:
         self.home = [float(v) for v in mapping.home]
         self.estimator = estimator
         self.renderer = renderer if renderer is not None else Renderer()
-        self.reset()
+        self._home_mapping()  # the estimator and renderer keep their state (the loop may hand in its own)
 
-    def reset(self) -> None:
-        """Back at home, not engaged; estimator and renderer reset."""
+    def _home_mapping(self) -> None:
+        # compute()'s own mapping state; the loop keeps its own (Teleop.pose, L_last, anchors) and calls map()
         self.pos = self.home[:3]
         self.anchor_stylus = [0.0, 0.0, 0.0]
         self.anchor_robot = self.home[:3]
         self.L_last = None
+
+    def reset(self) -> None:
+        """Back at home, not engaged; estimator and renderer reset."""
+        self._home_mapping()
         self.estimator.reset()
         self.renderer.reset()
 
