@@ -100,13 +100,54 @@ def test_stale_telemetry_faults_and_zeroes_force_within_one_tick():
     assert "stale" in rig.tp.fault_reason and rig.robot.stops == 1
 
 
-def test_missing_telemetry_faults():
-    rig = Rig()
+@pytest.mark.parametrize("stale_ms", [20.0, 50.0])
+def test_missing_telemetry_faults_one_tick_after_the_staleness_limit(stale_ms):
+    """A robot that never answers (its link is open: boot and handshake happen in open(), before the loop)
+    is a FAULT as soon as the staleness limit has passed, at most one tick later; force zero throughout."""
+    p = LoopParams(stale_limit=stale_ms * 1e-3)
+    rig = Rig(params=p)
     rig.robot.silent = True  # read() returns None: no frame has ever arrived
-    rig.run(499)
-    assert rig.tp.state == State.DISABLED
-    rig.run(3)
+    rig.run(int(stale_ms) + 5)
+    fault_tick = next(i for i, s in enumerate(rig.states) if s == State.FAULT)
+    limit_tick = p.stale_limit / DT
+    assert limit_tick - 1e-9 <= fault_tick <= limit_tick + 1 + 1e-9
+    assert set(rig.states[:fault_tick]) <= {State.DISABLED, State.ALIGNING}
+    assert "robot telemetry missing" in rig.tp.fault_reason
+    assert np.all(np.array(rig.forces) == 0.0) and rig.robot.commands == []
+
+
+def test_explicit_startup_timeout_is_honoured():
+    rig = Rig(params=LoopParams(startup_timeout=0.2))
+    rig.robot.silent = True
+    rig.run(200)
+    assert rig.tp.state != State.FAULT
+    rig.run(2)
     assert rig.tp.state == State.FAULT and "missing" in rig.tp.fault_reason
+
+
+def test_first_frame_just_inside_the_limit_starts_normally():
+    """A robot whose first frame comes 15 ms after the loop starts (< 20 ms) is not a fault."""
+    rig = Rig(script=poke_script())
+    rig.robot.silent = True
+    rig.run(15)
+    rig.robot.silent = False
+    rig.run_until(State.ENABLED)
+    rig.run(200)
+    assert rig.tp.state == State.ENABLED and not rig.tp.fault_reason
+
+
+def test_missing_after_operator_reset_faults_again_after_the_limit():
+    rig = Rig()
+    rig.robot.silent = True
+    rig.run(30)
+    assert rig.tp.state == State.FAULT
+    rig.tp.operator_reset()
+    rig.run(1)
+    k_reset = rig.k - 1
+    assert rig.tp.state == State.DISABLED
+    rig.run(25)
+    fault_tick = next(i for i in range(k_reset, rig.k) if rig.states[i] == State.FAULT)
+    assert fault_tick - k_reset <= LoopParams().stale_limit / DT + 1 + 1e-9
 
 
 def test_telemetry_frozen_from_start_faults():

@@ -34,7 +34,11 @@ class LoopParams:
             mapping.R_reg^T (one registration for motion and force) and the loop clamps to the device's
             continuous limit (spec.max_force_continuous), not to render.max_force.
         stale_limit: telemetry older than this is a FAULT [s] (RELIABILITY: <= 20 ms).
-        startup_timeout: first telemetry must arrive within this [s].
+        startup_timeout: the first telemetry of each source must arrive within this [s] of the loop's start
+            (or of an operator reset), else FAULT "telemetry missing"; None (default): the staleness limit, so
+            a robot that never answers faults one tick after stale_limit, like one that stops answering. The
+            device's own boot time is spent in its open() (HELLO handshake, robot process start), before the
+            loop starts; the loop is DISABLED with zero force until then.
         tension_max: over-range tension [N].
         tension_slack: slack tension [N] (below it the cable is slack).
         tension_window: over-range/slack must persist this long to FAULT [s].
@@ -53,7 +57,7 @@ class LoopParams:
     robot_rate_hz: float | None = None
     render: RenderParams = LOOP_RENDER
     stale_limit: float = 0.020
-    startup_timeout: float = 0.5
+    startup_timeout: float | None = None
     tension_max: float = 6.0
     tension_slack: float = 0.02
     tension_window: float = 0.010
@@ -77,12 +81,15 @@ class LoopParams:
                 raise InputError(f"loop: render settings not understood ({exc})") from None
         changes = {_RENDER_ALIASES[k]: v for k, v in given.items() if v is not None}
         object.__setattr__(self, "render", replace(self.render, R_dev_B=self.mapping.R_reg.T, **changes))
-        positive = ("rate_hz", "stale_limit", "startup_timeout", "tension_max", "tension_window",
+        positive = ("rate_hz", "stale_limit", "tension_max", "tension_window",
                     "stuck_window", "stuck_rise")
         for name in positive:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
                 raise InputError(f"loop: {name} must be a finite number > 0, got {v!r}")
+        v = self.startup_timeout
+        if v is not None and not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+            raise InputError(f"loop: startup_timeout must be None or a finite number > 0, got {v!r}")
         r = self.render
         if not (r.scale > 0 and r.engage_N > 0 and r.engage_ticks >= 1):
             raise InputError(f"loop: force scale and engage force must be > 0 and engage ticks >= 1, got "

@@ -13,10 +13,12 @@ import numpy as np
 
 class Freshness:
     """Telemetry watchdog: a source is stale when its sequence number (or timestamp) has not advanced for
-    longer than `limit` [s], or when nothing arrived within `startup` [s] of `start(now)`."""
+    longer than `limit` [s], and missing when nothing arrived within `startup` [s] of `reset(now)` (None:
+    `limit`, so silence from the start faults as soon as silence after a frame would)."""
 
-    def __init__(self, name: str, limit: float, startup: float):
-        self.name, self.limit, self.startup = name, limit, startup
+    def __init__(self, name: str, limit: float, startup: float | None = None):
+        self.name, self.limit = name, limit
+        self.startup = limit if startup is None else startup
         self.reset(0.0)
 
     def reset(self, now: float) -> None:
