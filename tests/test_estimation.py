@@ -323,7 +323,7 @@ def test_reading_estimator_follows_the_loop_protocol_and_round_trips_its_descrip
 
 
 def test_reading_estimator_tensions_equal_the_fsr_converter():
-    """The loop's float FSR path (branch trigger + tables) against teleop.sensors.FsrConverter."""
+    """The loop's float FSR path (branch trigger, per-count table) against teleop.sensors.FsrConverter."""
     from teleop.estimation.reading import ReadingEstimator
     from teleop.sensors import LOADING, FsrConverter, default_fsr_calibration, synthesize_fsr_counts
 
@@ -336,8 +336,10 @@ def test_reading_estimator_tensions_equal_the_fsr_converter():
     flips = 0
     for k in range(tt.size):
         counts = synthesize_fsr_counts(tension[k], LOADING, cal, rng=rng, noise_counts=2.0)
-        counts[k % 6] = [-3, 2000][k % 2] if k % 97 == 0 else counts[k % 6]  # out of the ADC range: clipped
-        fast = est.tensions(np.asarray(counts, dtype=float).tolist())
+        counts = counts.astype(float)
+        if k % 37 == 0:  # out of the ADC range (clipped), its ends, and between two counts
+            counts[k % 6] = [-3.0, 2000.0, -1.0, 0.0, 1023.0, 1e9, 511.5][k // 37 % 7]
+        fast = est.tensions(counts.tolist())
         np.testing.assert_array_equal(fast, conv.update(counts))
         flips += int(conv.tracker.flipped.sum())
     assert flips > 20

@@ -38,7 +38,20 @@ class ReadingEstimator:
         self.deadband_counts = float(deadband_counts)
         self.n = len(geom.B)
         self.tick = TickComputer(geom, name, turn=turn, dynamic=dynamic, kalman=kalman)
+        # an ADC gives integer counts: the tension of every count on each branch, computed once by the same
+        # per-float conversion (`_tension1`), so a tick looks it up (non-integer counts still compute it)
+        n_counts = int(self.cal.adc_max) + 1 if 0 < self.cal.adc_max <= 65535 else 0
+        self._table = {b: [self._tension1(float(c), b) for c in range(n_counts)] for b in (LOADING, UNLOADING)}
         self.reset()
+
+    def _tension1(self, v: float, branch: int) -> float:
+        """Tension [N] of `v` counts on `branch`: counts -> conductance through the divider (clipped to the ADC
+        range, as FsrCalibration.counts2conductance), then FsrCalibration.tension1."""
+        cal = self.cal
+        amax = float(cal.adc_max)
+        top = amax - 0.5
+        c = 0.0 if v < 0.0 else (top if v > top else v)
+        return cal.tension1(c / ((amax - c) * cal.r_divider), branch)
 
     def reset(self) -> None:
         self._dir = [0.0] * self.n  # FSR reading direction per cable (+1 rising, -1 falling, 0 not yet moved)
@@ -50,11 +63,12 @@ class ReadingEstimator:
 
         The numbers of teleop.sensors.FsrConverter.update (a Schmitt trigger on the counts picks the loading
         or unloading branch, as estimation.direction.DirectionTracker; counts -> conductance through the
-        divider; FsrCalibration.tension1) without its numpy arrays.
+        divider; FsrCalibration.tension1) without its numpy arrays; integer counts come from a table of
+        those same numbers.
         """
-        cal, d, e, db = self.cal, self._dir, self._ext, self.deadband_counts
-        amax = float(cal.adc_max)
-        top, R, tension1 = amax - 0.5, cal.r_divider, cal.tension1
+        d, e, db = self._dir, self._ext, self.deadband_counts
+        tab_load, tab_unload = self._table[LOADING], self._table[UNLOADING]
+        n_tab = len(tab_load)
         out = [0.0] * self.n
         for i in range(self.n):
             v = counts[i]
@@ -70,8 +84,10 @@ class ReadingEstimator:
             elif di < 0.0 and v < ei:
                 ei = v
             d[i], e[i] = di, ei
-            c = 0.0 if v < 0.0 else (top if v > top else v)  # counts2conductance
-            out[i] = tension1(c / ((amax - c) * R), UNLOADING if di < 0.0 else LOADING)
+            if 0.0 <= v < n_tab and v == (c := int(v)):  # an integer count in the table
+                out[i] = tab_unload[c] if di < 0.0 else tab_load[c]
+            else:
+                out[i] = self._tension1(v, UNLOADING if di < 0.0 else LOADING)
         return out
 
     def update_floats(self, counts: list, pose: list, dt: float) -> tuple[list, list]:
