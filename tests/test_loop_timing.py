@@ -3,10 +3,12 @@
 import time
 
 import numpy as np
+import pytest
 
 from teleop.loop.core import STAGES
 from teleop.loop.tap import session_layout
-from teleop.loop.timing import LATE_NS, TimingLog, run_paced, wait_until
+from teleop.loop.timing import (LATE_NS, TimingLog, budget_verdict, format_histogram, period_histogram,
+                                 run_paced, wait_until)
 from teleop.recording import SecondStats
 
 
@@ -38,8 +40,10 @@ def test_run_paced_absolute_schedule_and_summary():
     assert np.all(np.diff(tp.times) > 0) and np.all(log.lateness[:30] >= 0)
     assert tp.times[-1] >= 0.029  # tick k does not start before k periods
     s = log.summary(1000.0)
-    assert set(s) == {"rate_hz", "ticks", "tick_us", "lateness_us", "deadline_misses", "stages_us"}
+    assert {"rate_hz", "ticks", "tick_us", "lateness_us", "deadline_misses", "stages_us"} <= set(s)  # DESIGN.md
     assert list(s["stages_us"]) == list(STAGES)
+    assert sum(s["period_histogram"]["counts"]) + s["period_histogram"]["overflow"] == 29  # 30 starts
+    assert 900.0 <= s["period_us"]["p50"] <= 1100.0
 
 
 def test_summary_counts_misses_and_skips():
@@ -66,3 +70,67 @@ def test_per_second_stats_from_rows():
             out.append(s)
     assert [s["second"] for s in out] == [0, 1] and [s["ticks"] for s in out] == [1000, 1000]
     assert out[0]["misses"] == 2 and out[0]["lateness_us"]["max"] == 600.0
+
+
+def synthetic_log(n=100_000, period=1_000_000, late_every=None, late_ns=0, seed=0):
+    """A TimingLog of n ticks on an absolute 1 kHz schedule with seeded jitter (0..20 us) and every
+    `late_every`-th tick started `late_ns` late."""
+    rng = np.random.default_rng(seed)
+    late = rng.integers(0, 20_000, n)
+    if late_every:
+        late[::late_every] = late_ns
+    log = TimingLog(n)
+    for k in range(n):
+        log.add(int(late[k]), 50_000, np.zeros(len(STAGES)), k * period + int(late[k]))
+    return log, late
+
+
+def test_period_histogram_bins_counts_and_overflow():
+    T = 1_000_000
+    periods = np.array([T, T + 24_999, T + 25_000, T - 25_000, 2 * T, 3 * T - 25_001, 3 * T - 25_000, 10 * T])
+    h = period_histogram(periods, T)
+    assert h["nominal_us"] == 1000.0 and h["bin_us"] == 50.0 and len(h["edges_us"]) == len(h["counts"]) + 1 == 61
+    assert h["edges_us"][20] == 975.0 and h["edges_us"][21] == 1025.0  # the nominal period is a bin centre
+    c = h["counts"]
+    assert c[20] == 3 and c[21] == 1 and c[40] == 1 and c[59] == 1  # T-25us and T+24.999us both in bin 20
+    assert h["overflow"] == 2 and sum(c) + h["overflow"] == len(periods)
+    text = format_histogram(h)
+    assert text.count("\n") == 5 and ">=" in text  # header + 4 non-empty bins + overflow
+
+
+def test_summary_histogram_from_synthetic_ticks_matches_numpy():
+    log, late = synthetic_log(late_every=997, late_ns=700_000)
+    s = log.summary(1000.0)
+    periods = 1_000_000 + np.diff(late)
+    h = s["period_histogram"]
+    ref, _ = np.histogram(periods, bins=np.array(h["edges_us"]) * 1e3)
+    assert h["counts"] == ref.tolist() and h["overflow"] == 0
+    assert s["period_us"]["max"] == round(periods.max() / 1e3, 3) and s["period_us"]["min"] == round(periods.min() / 1e3, 3)
+    assert abs(s["period_us"]["mean"] - periods.mean() / 1e3) < 1e-3
+    assert s["deadline_misses"] == len(late[::997])
+
+
+@pytest.mark.parametrize("late_every, expect_pass", [(1001, True), (999, False)])
+def test_budget_pass_fail_on_synthetic_ticks(late_every, expect_pass):
+    """100 000 ticks with every 1001st 0.7 ms late: 100 misses, 0.1 % (pass); every 999th: 101 (fail)."""
+    log, late = synthetic_log(late_every=late_every, late_ns=700_000)
+    v = budget_verdict(log.summary(1000.0), seconds=100.0, recording=True)
+    assert v["pass"] is expect_pass and v["conclusive"] and v["why_not"] == []
+    assert v["miss_fraction"] == pytest.approx(len(late[::late_every]) / len(late))
+
+
+def test_budget_exactly_half_a_millisecond_is_not_late_and_skips_count():
+    log, _ = synthetic_log(n=10_000, late_every=2, late_ns=LATE_NS)
+    s = log.summary(1000.0)
+    assert s["deadline_misses"] == 0 and budget_verdict(s, 60.0, True)["pass"]
+    log.skipped = 11  # 11 deadlines skipped: 11 / 10 011 > 0.1 %
+    v = budget_verdict(log.summary(1000.0), 60.0, True)
+    assert not v["pass"] and v["miss_fraction"] == pytest.approx(11 / 10_011)
+
+
+def test_budget_short_slow_or_unrecorded_run_is_not_conclusive():
+    log, _ = synthetic_log(n=1000)
+    v = budget_verdict(log.summary(1000.0), seconds=10.0, recording=False)
+    assert v["pass"] and not v["conclusive"]
+    assert any("--seconds 60" in w for w in v["why_not"]) and any("recording" in w for w in v["why_not"])
+    assert not budget_verdict(log.summary(500.0), 60.0, True)["conclusive"]

@@ -1,7 +1,14 @@
 """`teleop bench loop`: the paced master-slave loop's timing (DESIGN.md JSON), recording on by default.
 
-    teleop bench loop --seconds 60 --rate 1000 --json loop.json
+    teleop bench loop --seconds 60 --rate 1000 --json loop.json --plot loop.png
     teleop bench loop --find-max-rate --seconds 10 --json maxrate.json
+
+Besides the DESIGN.md keys the JSON has "period_us" (mean, p50, p99, p999, max, min of the tick-to-tick
+period), "period_histogram" (bins of T/20 over [0, 3 T) and an overflow count), printed as a text histogram,
+and "budget": the RELIABILITY.md check (<= 0.1 % of ticks more than 0.5 ms late, skipped deadlines
+counted). The check is conclusive only with `--seconds 60` (or more) at `--rate 1000` with recording on;
+the default 10 s run prints PASS/FAIL marked "not conclusive" and why. The exit code is 0 either way
+(a benchmark, not a test). `--plot F` writes the period histogram as a PNG.
 """
 
 from __future__ import annotations
@@ -10,7 +17,6 @@ import os
 import tempfile
 
 from teleop.argtypes import nonnegative_float, positive_float, rt_priority
-
 from teleop.errors import InputError
 
 MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (RELIABILITY.md)
@@ -21,6 +27,7 @@ def register(subparsers) -> None:
     p.add_argument("--seconds", type=positive_float, default=10.0)
     p.add_argument("--rate", type=positive_float, default=1000.0)
     p.add_argument("--json", metavar="F", help="write the DESIGN.md loop JSON")
+    p.add_argument("--plot", metavar="F", help="write the period histogram as a PNG")
     p.add_argument("--haptic", default="sim://?script=pokes")
     p.add_argument("--robot", default="sim://robot?substeps=2",
                    help="robot URL (default: the pybullet slave, 2 physics steps of 1 ms per reading)")
@@ -41,6 +48,7 @@ def register(subparsers) -> None:
 def bench_once(args, rate: float) -> dict:
     from teleop.loop.params import LoopParams
     from teleop.loop.session import run_session
+    from teleop.loop.timing import budget_verdict
 
     with tempfile.TemporaryDirectory() as tmp:
         record = None if args.no_record else (args.record or os.path.join(tmp, "bench.mcap"))
@@ -56,11 +64,50 @@ def bench_once(args, rate: float) -> dict:
     out["final_state"] = res.final_state
     out["fault_reason"] = res.fault_reason
     out["scheduling"] = res.scheduling
-    out["miss_fraction"] = out["deadline_misses"] / max(1, out["ticks"])
+    out["budget"] = budget_verdict(out, args.seconds, record is not None)
+    out["miss_fraction"] = out["budget"]["miss_fraction"]
     return out
 
 
+def verdict_line(budget: dict) -> str:
+    """One line: PASS/FAIL against the budget, and whether the run could decide it."""
+    word = "PASS" if budget["pass"] else "FAIL"
+    tail = "" if budget["conclusive"] else f" (not conclusive: {'; '.join(budget['why_not'])})"
+    return f"budget {budget['criterion']}: {word}, {100 * budget['miss_fraction']:.3f} % late{tail}"
+
+
+def plot_histogram(out: dict, path: str) -> None:
+    """PNG of the period histogram (log count) with the nominal period and the 0.5 ms lateness line."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from teleop.loop.timing import LATE_NS
+    from teleop.outputs import save_figure
+
+    h = out["period_histogram"]
+    edges = np.asarray(h["edges_us"])
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    ax.bar(edges[:-1], h["counts"], width=h["bin_us"], align="edge", log=True, color="tab:blue",
+           label=f"{out['ticks']} ticks")
+    if h["overflow"]:
+        ax.bar(edges[-1], h["overflow"], width=h["bin_us"], align="edge", log=True, color="tab:red",
+               label=f">= {edges[-1]:g} us: {h['overflow']}")
+    ax.axvline(h["nominal_us"], color="k", lw=0.8, label="nominal period")
+    ax.axvline(h["nominal_us"] + LATE_NS / 1e3, color="tab:red", ls="--", lw=0.8, label="+0.5 ms")
+    ax.set_xlabel("tick-to-tick period [us]")
+    ax.set_ylabel("ticks")
+    ax.set_title(verdict_line(out["budget"]).split(":")[0] + ": " +
+                 ("PASS" if out["budget"]["pass"] else "FAIL") +
+                 ("" if out["budget"]["conclusive"] else " (not conclusive)"), fontsize=8)
+    ax.legend(fontsize=8)
+    save_figure(fig, path)
+
+
 def run(args) -> int:
+    from teleop.loop.timing import format_histogram
     from teleop.outputs import write_json
 
     if not args.seconds > 0 or not args.rate > 0:
@@ -74,8 +121,15 @@ def run(args) -> int:
               f"final state {out['final_state']}")
         for name, st in out["stages_us"].items():
             print(f"  {name:9s} p50 {st['p50']:8.1f} us  p99 {st['p99']:8.1f} us")
+        pe = out["period_us"]
+        print(f"period mean {pe['mean']} us, p99 {pe['p99']} us, p99.9 {pe['p999']} us, max {pe['max']} us, "
+              f"min {pe['min']} us")
+        print(format_histogram(out["period_histogram"]))
+        print(verdict_line(out["budget"]))
         if args.json:
             write_json(args.json, out)
+        if args.plot:
+            plot_histogram(out, args.plot)
         return 0
     trials = []
     best = None

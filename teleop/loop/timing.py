@@ -64,30 +64,102 @@ def percentiles_us(values_ns: np.ndarray) -> dict:
             "max": round(float(v.max()) / 1e3, 3), "mean": round(float(v.mean()) / 1e3, 3)}
 
 
+HIST_BINS_PER_PERIOD = 20  # period histogram bin width: T / 20 (50 us at 1 kHz)
+HIST_SPAN_PERIODS = 3  # bins cover [0, 3 T); longer periods go to the overflow count
+
+
+def period_histogram(periods_ns: np.ndarray, period_ns: int) -> dict:
+    """Histogram of tick-to-tick periods (start of tick k-1 -> start of tick k) [ns in, us out].
+
+    Bins of width w = T / 20 centred on multiples of w (T = the nominal period `period_ns`, so the nominal
+    period is a bin centre), edges -w/2, w/2, ..., 3 T - w/2; `overflow` counts the periods at or past the
+    last edge (a tick that skipped deadlines). Returns {"nominal_us", "bin_us", "edges_us" (n + 1,),
+    "counts" (n,), "overflow"}.
+    """
+    v = np.asarray(periods_ns, dtype=np.float64)
+    width = period_ns / HIST_BINS_PER_PERIOD
+    nbins = HIST_BINS_PER_PERIOD * HIST_SPAN_PERIODS
+    idx = np.floor(v / width + 0.5).astype(np.int64)  # bin i: [(i - 1/2) w, (i + 1/2) w)
+    counts = np.bincount(idx[(idx >= 0) & (idx < nbins)], minlength=nbins)
+    return {"nominal_us": round(period_ns / 1e3, 3), "bin_us": round(width / 1e3, 3),
+            "edges_us": [round((i - 0.5) * width / 1e3, 3) for i in range(nbins + 1)],
+            "counts": [int(c) for c in counts], "overflow": int((idx >= nbins).sum())}
+
+
+def format_histogram(hist: dict, width: int = 40) -> str:
+    """Compact text view of a period_histogram(): one line per non-empty bin, bar length ~ log10(count)."""
+    counts = list(hist["counts"]) + [hist["overflow"]]
+    edges = hist["edges_us"]
+    top = max(1.0, float(np.log10(max(counts) + 1)))
+    lines = [f"period histogram (nominal {hist['nominal_us']:g} us, bins {hist['bin_us']:g} us, bar ~ log count)"]
+    for i, c in enumerate(counts):
+        if not c:
+            continue
+        label = f"[{edges[i]:7.0f}, {edges[i + 1]:7.0f})" if i < len(hist["counts"]) else f">= {edges[-1]:7.0f}     "
+        bar = "#" * max(1, int(round(width * np.log10(c + 1) / top)))
+        lines.append(f"  {label} us {c:9d} {bar}")
+    return "\n".join(lines)
+
+
+def budget_verdict(summary: dict, seconds: float, recording: bool, max_fraction: float = 0.001,
+                   min_seconds: float = 60.0, rate_hz: float = 1000.0) -> dict:
+    """The RELIABILITY.md timing budget on a loop summary: <= max_fraction of ticks more than 0.5 ms late
+    (skipped deadlines count), over >= min_seconds [s] at rate_hz [Hz] with recording on.
+
+    `pass` is the criterion on the misses; `conclusive` says whether the run was long enough, at the rate and
+    with recording on, for the pass to count as the budget check (`why_not` lists what is missing).
+    """
+    ticks = int(summary["ticks"])
+    misses = int(summary["deadline_misses"])
+    frac = misses / max(1, ticks + summary.get("skipped", 0))
+    why = []
+    if seconds < min_seconds:
+        why.append(f"needs --seconds {min_seconds:g} (ran {seconds:g} s)")
+    if summary["rate_hz"] != rate_hz:
+        why.append(f"needs --rate {rate_hz:g} (ran {summary['rate_hz']:g} Hz)")
+    if not recording:
+        why.append("needs recording on")
+    return {"criterion": f"<= {100 * max_fraction:g} % of ticks > {LATE_NS / 1e6:g} ms late over >= "
+                         f"{min_seconds:g} s at {rate_hz:g} Hz, recording on",
+            "miss_fraction": frac, "max_miss_fraction": max_fraction, "pass": bool(frac <= max_fraction),
+            "conclusive": not why, "why_not": why}
+
+
 class TimingLog:
-    """Preallocated per-tick timing: lateness, tick duration and per-stage durations [ns]."""
+    """Preallocated per-tick timing: lateness, tick duration, per-stage durations and tick start [ns]."""
 
     def __init__(self, capacity: int):
         self.lateness = np.zeros(capacity, dtype=np.int64)
         self.tick = np.zeros(capacity, dtype=np.int64)
+        self.start = np.zeros(capacity, dtype=np.int64)
         self.stages = np.zeros((capacity, len(STAGES)), dtype=np.int64)
         self.n = 0
         self.skipped = 0
 
-    def add(self, lateness_ns: int, tick_ns: int, stage_ns: np.ndarray) -> None:
+    def add(self, lateness_ns: int, tick_ns: int, stage_ns: np.ndarray, start_ns: int = 0) -> None:
+        """Log one tick; `start_ns` is its start (wake) time on any fixed clock [ns]."""
         i = self.n
         if i < len(self.tick):
             self.lateness[i] = lateness_ns
             self.tick[i] = tick_ns
+            self.start[i] = start_ns
             self.stages[i] = stage_ns
             self.n = i + 1
 
+    def periods(self) -> np.ndarray:
+        """(n - 1,) start-to-start periods of the logged ticks [ns]."""
+        return np.diff(self.start[:self.n])
+
     def summary(self, rate_hz: float) -> dict:
-        """The `teleop bench loop` JSON body (DESIGN.md) for the ticks logged so far."""
+        """The `teleop bench loop` JSON body (DESIGN.md) for the ticks logged so far, plus the period
+        statistics ("period_us": mean, p50, p99, p999, max, min) and histogram ("period_histogram")."""
         n = self.n
         lat, tick = self.lateness[:n], self.tick[:n]
         t = percentiles_us(tick)
         la = percentiles_us(lat)
+        periods = self.periods()
+        pe = percentiles_us(periods)
+        pe["min"] = round(float(periods.min()) / 1e3, 3) if periods.size else 0.0
         return {
             "rate_hz": rate_hz,
             "ticks": int(n),
@@ -96,6 +168,9 @@ class TimingLog:
             "deadline_misses": int((lat > LATE_NS).sum()) + int(self.skipped),
             "stages_us": {name: {k: v for k, v in percentiles_us(self.stages[:n, j]).items() if k in ("p50", "p99")}
                           for j, name in enumerate(STAGES)},
+            "skipped": int(self.skipped),
+            "period_us": {k: pe[k] for k in ("mean", "p50", "p99", "p999", "max", "min")},
+            "period_histogram": period_histogram(periods, int(round(1e9 / rate_hz))),
         }
 
 
@@ -130,7 +205,7 @@ def run_paced(tp, seconds: float, rate_hz: float, log: TimingLog | None = None, 
         tp.tick((wake - t0) * 1e-9)
         end = pc()
         tp.prev_tick_ns = end - wake
-        log.add(late, end - wake, tp.stage_ns)
+        log.add(late, end - wake, tp.stage_ns, wake - t0)
         if on_tick is not None:
             on_tick(tp.k - 1, late)
         k_sched += 1
