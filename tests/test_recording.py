@@ -1,15 +1,21 @@
 """Recording (RELIABILITY.md): bit-exact round trip with metadata, damaged files (every truncation, bit
-flips) never crash the reader and give back an intact prefix, and a slow or full disk only drops rows
-(counted, alarmed, bounded memory) without ever blocking the loop side."""
+flips) never crash the reader and give back an intact prefix, a slow or full disk only drops rows (counted,
+alarmed, bounded memory) without changing the loop side's timing, and the writer shares no interpreter lock
+with the loop (timing compared as ratios of medians within one run, never against wall-clock limits)."""
 
 import errno
 import io
+import multiprocessing as mp
+import os
+import signal
+import threading
 import time
 
 import numpy as np
 import pytest
 
 from teleop.errors import InputError
+from teleop.loop.timing import wait_until
 from teleop.loop.tap import session_layout
 from teleop.recording import INT, Layout, Recorder, Ring, Signal, SessionWriter, parse_session, read_session
 
@@ -191,3 +197,126 @@ def test_files_open_with_the_reference_mcap_reader():
     topics = [ch.topic for _, ch, _ in reader.iter_messages()]
     assert topics.count("/stylus") == 30 and "/teleop/events" in topics
     assert {m.name for m in make_reader(io.BytesIO(data)).iter_metadata()} == {"session", "session_end"}
+
+
+PERIOD_NS = 1_000_000  # the loop side's pacing in the timing tests [ns]
+
+
+def loop_side_ns(push, row, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Run n paced 1 kHz ticks that each push `row` (the loop's part of recording: teleop.loop.timing's
+    wait_until, then the push). Returns (n,) push durations [ns] and (n,) deadline -> push done [ns] (what
+    the loop loses per tick to recording, wake-up latency included)."""
+    pc = time.perf_counter_ns
+    push_ns, tick_ns = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    t0 = pc() + PERIOD_NS
+    for k in range(n):
+        deadline = t0 + k * PERIOD_NS
+        wait_until(deadline, 200_000)
+        a = pc()
+        push(row)
+        b = pc()
+        push_ns[k], tick_ns[k] = b - a, b - deadline
+        if b - t0 > (k + 2) * PERIOD_NS:  # fell more than a period behind: restart the schedule from here
+            t0 = b - (k + 1) * PERIOD_NS + PERIOD_NS
+    return push_ns, tick_ns
+
+
+def python_busy(seconds: float) -> int:
+    """Hold the interpreter for `seconds` [s] of pure-Python work (a CPU-bound writer: encoding, compression)."""
+    end, i = time.perf_counter() + seconds, 0
+    while time.perf_counter() < end:
+        i += 1
+    return i
+
+
+class GatedStream(io.BytesIO):
+    """A disk whose writes run in the recorder process; records that process id in `box[0]`. While
+    `box[1]` is 1 every write holds the interpreter for 20 ms (CPU-bound writer); while `box[2]` is 1 every
+    write blocks (stalled disk) until it is cleared."""
+
+    def __init__(self, box):
+        super().__init__()
+        self.box, self.n = box, 0
+
+    def write(self, b):
+        self.box[0] = os.getpid()
+        self.n += 1
+        if self.n > 3:
+            if self.box[1]:
+                python_busy(0.020)
+            while self.box[2]:
+                time.sleep(0.001)
+        return super().write(b)
+
+
+def test_writer_runs_in_another_process_and_shares_no_interpreter_lock_with_the_loop(tmp_path):
+    """The recorder writes from its own process: a writer holding its interpreter (pure-Python work in every
+    write) or frozen (SIGSTOP) leaves the loop side's per-tick cost where it is. The same measurement against
+    a thread of the loop's own process doing that work shows the shared lock (the test can see it)."""
+    layout = session_layout()
+    box = mp.get_context("fork").RawArray("q", 3)
+    rec = Recorder(tmp_path / "s.mcap", layout, META, capacity=4096, flush_interval=0.005,
+                   stream_factory=lambda: GatedStream(box)).start()
+    row = rows(layout, 1)[0]
+    try:
+        loop_side_ns(rec.push, row, 100)  # warm up; the recorder opens its stream
+        box[1] = 1  # the writer now spends its time in Python inside write()
+        time.sleep(0.05)
+        push_busy, tick_busy = loop_side_ns(rec.push, row, 400)
+        assert box[0] == rec.proc.pid != os.getpid()  # the disk writes happen in the recorder process
+        os.kill(rec.proc.pid, signal.SIGSTOP)  # the writer frozen: nothing competes with the loop side
+        try:
+            push_idle, tick_idle = loop_side_ns(rec.push, row, 400)
+        finally:
+            os.kill(rec.proc.pid, signal.SIGCONT)
+        box[1] = 0
+    finally:
+        rec.close({})
+    stop = threading.Event()
+
+    def gil_hog():  # the same writer work in a thread of this process (what the design avoids)
+        while not stop.is_set():
+            python_busy(0.020)
+    hog = threading.Thread(target=gil_hog, daemon=True)
+    ring = Ring(layout.width, 4096)
+    hog.start()
+    try:
+        _, tick_thread = loop_side_ns(ring.push, row, 200)
+    finally:
+        stop.set()
+        hog.join()
+    ratio_push = np.median(push_busy) / np.median(push_idle)
+    ratio_tick = np.median(tick_busy) / np.median(tick_idle)
+    ratio_thread = np.median(tick_thread) / np.median(tick_idle)
+    print(f"\nloop side, busy writer process / frozen writer: push median ratio {ratio_push:.2f}, "
+          f"deadline->pushed median ratio {ratio_tick:.2f}; writer as a thread: {ratio_thread:.1f}")
+    assert 1 / 3 <= ratio_push <= 3 and ratio_tick <= 3
+    assert ratio_thread > 5  # the measurement does see a lock shared with a busy writer
+
+
+def test_slow_disk_leaves_loop_side_timing_unchanged(tmp_path):
+    """Same run, same recorder: per-push time and deadline -> pushed time with a healthy disk, then with
+    every write blocked (the ring fills, rows are dropped and counted): medians within a factor of 3."""
+    layout = session_layout()
+    box = mp.get_context("fork").RawArray("q", 3)
+    rec = Recorder(tmp_path / "s.mcap", layout, META, capacity=256, flush_interval=0.005,
+                   stream_factory=lambda: GatedStream(box)).start()
+    row = rows(layout, 1)[0]
+    try:
+        loop_side_ns(rec.push, row, 100)
+        push_ok, tick_ok = loop_side_ns(rec.push, row, 500)
+        assert rec.drops == 0
+        box[2] = 1  # the disk stalls
+        time.sleep(0.05)
+        push_slow, tick_slow = loop_side_ns(rec.push, row, 500)
+        assert rec.drops > 0 and "behind" in rec.alarm
+        assert rec.ring.data.nbytes == 256 * layout.width * 8
+        box[2] = 0
+    finally:
+        box[2] = 0
+        rec.close({})
+    ratio_push = np.median(push_slow) / np.median(push_ok)
+    ratio_tick = np.median(tick_slow) / np.median(tick_ok)
+    print(f"\nloop side, stalled disk / healthy disk: push median ratio {ratio_push:.2f}, "
+          f"deadline->pushed median ratio {ratio_tick:.2f}; drops {rec.drops}")
+    assert 1 / 3 <= ratio_push <= 3 and 1 / 3 <= ratio_tick <= 3
