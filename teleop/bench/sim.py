@@ -176,7 +176,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     F_log = np.zeros((n, 3))
     enabled = 0
     stage_ns = np.zeros((n, len(LOOP_STAGES)), dtype=np.int64)
-    sub_ns = np.zeros((n, 4), dtype=np.int64)  # cumulative kinematics, physics, pybullet API, read [ns]
+    sub_ns = np.zeros((n, 4), dtype=np.int64)  # cumulative kinematics, physics, stepSimulation, read [ns]
     tick_ns = np.zeros(n, dtype=np.int64)
     with robot, stylus:
         if stages:
