@@ -290,8 +290,9 @@ def test_writer_runs_in_another_process_and_shares_no_interpreter_lock_with_the_
     ratio_thread = np.median(tick_thread) / np.median(tick_idle)
     print(f"\nloop side, busy writer process / frozen writer: push median ratio {ratio_push:.2f}, "
           f"deadline->pushed median ratio {ratio_tick:.2f}; writer as a thread: {ratio_thread:.1f}")
-    assert 1 / 3 <= ratio_push <= 3 and ratio_tick <= 3
-    assert ratio_thread > 5  # the measurement does see a lock shared with a busy writer
+    assert 1 / 3 <= ratio_push <= 3
+    assert ratio_tick <= 5  # the busy writer takes one of the cores: room for the machine's other load
+    assert ratio_thread > 20  # the measurement does see a lock shared with a busy writer (measured ~400)
 
 
 def test_slow_disk_leaves_loop_side_timing_unchanged(tmp_path):

@@ -229,7 +229,10 @@ def kill_trials(mega: EmulatedMega, home_lengths, n: int = 100, stream_s: float 
                 zygote.stdin.write(json.dumps({"port": mega.port, "home": home.tolist(), "target": target.tolist(),
                                                "stream_s": stream_s, "state": f.name}) + "\n")
                 zygote.stdin.flush()
-                pid = int(zygote.stdout.readline())
+                line = zygote.stdout.readline()
+                if not line.strip().isdigit():
+                    raise RuntimeError(f"kill trials: the host factory stopped (exit code {zygote.poll()})")
+                pid = int(line)
                 deadline = time.monotonic() + 10.0
                 while state[0] == 0 and time.monotonic() < deadline:
                     time.sleep(0.0005)
