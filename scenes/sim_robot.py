@@ -25,11 +25,11 @@ from numpy.polynomial.polynomial import polyval
 
 from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes.pads import Pad, z_test_pad
+from scenes.pose_follow import PoseFollower, pose_terms
 from scenes.world import PadWorld, WorldParams
 from teleop.errors import InputError
 from teleop.geometry import Geometry, default_geometry
-from teleop.kinematics import (bending_angles, check_lengths, pose2cables, poses2lengths, rotation_zyx,
-                               structure_matrix)
+from teleop.kinematics import bending_angles, check_lengths, poses2lengths
 from teleop.physics.capstan import CapstanStep, tip2motor_transitions
 from teleop.sensors import FsrBranchLag, FsrCalibration, default_fsr_calibration
 from teleop.tension import TensionSolver, wrench2tensions
@@ -263,6 +263,7 @@ class SimRobot(ContextDevice):
         self.L_home = poses2lengths(HOME_POSE, self.geom)[0]
         self.L_cmd = self.L_home.copy()
         self.pose = HOME_POSE.copy()
+        self._fk = PoseFollower(self.geom, self.pose)
         self._terms = None
         self.t = 0.0
         self.seq = 0
@@ -288,7 +289,7 @@ class SimRobot(ContextDevice):
         self._require_open()
         L = check_lengths(lengths, self.geom)
         if not self.stopped:
-            pose = lengths2poses(L, self.geom, guess=self.pose)[0]
+            pose = np.array(self._fk.solve(L))
             if not np.array_equal(pose, self.pose):
                 self.pose, self._terms = pose, None
             self.L_cmd = L.copy()
@@ -308,9 +309,8 @@ class SimRobot(ContextDevice):
         of the commanded pose, computed once per pose."""
         if self._terms is None:
             g = self.geom
-            tip_offset = rotation_zyx(*self.pose[3:]) @ g.tip
-            solver = TensionSolver(structure_matrix(self.pose, g), g.t_min, g.t_max, self.params.pretension)
-            theta = bending_angles(pose2cables(self.pose, g), g) + g.theta0
+            A, theta, tip_offset = pose_terms(self.pose.tolist(), g)
+            solver = TensionSolver(A, g.t_min, g.t_max, self.params.pretension)
             self._terms = (tip_offset, self.pose[:3] + tip_offset, solver, theta)
         return self._terms
 
@@ -392,6 +392,7 @@ class SimRobot(ContextDevice):
         self.seq += n
         self.L_cmd = L[-1].copy()
         self.pose, self._terms = poses[-1].copy(), None
+        self._fk.q = self.pose.tolist()
         return SimTrace(t=t, lengths=L, poses=poses, tip=tips, wrench_truth=f, t_tip=t_tip, t_fsr=t_fsr,
                         counts=counts, theta=theta)
 

@@ -162,6 +162,7 @@ class PadWorld:
                 D = (p.dt * self.K + self.C)
                 self._Mi = np.linalg.inv(np.eye(3) + D * (p.dt / p.indenter_mass))
                 self._D = D
+                self._Mil, self._Dl, self._dtm = self._Mi.tolist(), D.tolist(), p.dt / p.indenter_mass
         self.is_open = True
 
     def close(self) -> None:
@@ -266,9 +267,13 @@ class PadWorld:
         else:
             v = self._get_vel(self.body)[0]
             e = (pos[0] - tx, pos[1] - ty, pos[2] - tz)
-            if self._implicit:
-                vp = np.asarray(v) + (self.params.dt / self.params.indenter_mass) * self.contact_force()
-                f = (self._Mi @ (-(self.K @ np.asarray(e)) - self._D @ vp)).tolist()
+            if self._implicit:  # in floats: numpy's per-call cost dominates on 3-vectors
+                fc, dtm = self._contact_force_list(), self._dtm
+                vp = [v[i] + dtm * fc[i] for i in range(3)]
+                K, D, Mi = self._Kl, self._Dl, self._Mil
+                g = [-(K[i][0] * e[0] + K[i][1] * e[1] + K[i][2] * e[2])
+                     - (D[i][0] * vp[0] + D[i][1] * vp[1] + D[i][2] * vp[2]) for i in range(3)]
+                f = [Mi[i][0] * g[0] + Mi[i][1] * g[1] + Mi[i][2] * g[2] for i in range(3)]
                 self._apply_force(self.body, -1, f, pos, self._world_frame)
                 self._step()
                 return
@@ -280,6 +285,9 @@ class PadWorld:
 
     def contact_force(self) -> np.ndarray:
         """(3,) force of the pad on the tip [N]: normal plus friction forces of every contact point."""
+        return np.array(self._contact_force_list())
+
+    def _contact_force_list(self) -> list:
         F = [0.0, 0.0, 0.0]
         for cp in self._contacts(bodyA=self.body):
             # cp[7] normal on B pointing towards A, cp[9] its force; cp[10..13] friction magnitudes and
@@ -287,7 +295,7 @@ class PadWorld:
             n, d1, d2 = cp[7], cp[11], cp[13]
             for i in range(3):
                 F[i] += cp[9] * n[i] - cp[10] * d1[i] - cp[12] * d2[i]
-        return np.array(F)
+        return F
 
     def n_contacts(self) -> int:
         """Number of contact points between the tip and the pad (1 while touching, by construction)."""

@@ -8,6 +8,8 @@ otherwise). Used by the simulated robot and for pretension; pure numpy/scipy.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from teleop.errors import InfeasibleError
@@ -25,6 +27,13 @@ class TensionSolver:
         self.rank = int((s > tol * max(1.0, s[0])).sum())
         self.Ur, self.sr, self.Vr = U[:, :self.rank].T, s[:self.rank], Vt[:self.rank].T
         self.N = Vt[self.rank:].T
+        self._fast = None
+        if self.N.shape[1] == 1 and self.A.shape == (6, 6):
+            # the one-dimensional null space of the CDPR: solve in floats (numpy's per-call cost dominates
+            # at six cables). P = -A^+, n the null direction with positive sum.
+            P = -(self.Vr @ (self.Ur / self.sr[:, None]))
+            n = self.N[:, 0] * np.sign(self.N[:, 0].sum() or 1.0)
+            self._fast = (P.tolist(), self.A.tolist(), n.tolist(), float(n @ n))
 
     def solve(self, f) -> np.ndarray:
         """(6,) cable tensions [N] that balance the external wrench f (6,) [N, N m]: A t + f = 0.
@@ -35,6 +44,8 @@ class TensionSolver:
         f = np.asarray(f, dtype=float)
         if f.shape != (6,) or not np.isfinite(f).all():
             raise InfeasibleError(f"wrench must be 6 finite numbers, got {np.asarray(f).tolist()}")
+        if self._fast is not None:
+            return np.array(self._solve_null1(f.tolist()))
         t_min, t_max, t_ref, N = self.t_min, self.t_max, self.t_ref, self.N
         # t_p = -A^+ f (minimum norm), N = null-space basis (6 x k)
         t_p = -(self.Vr @ ((self.Ur @ f) / self.sr))
@@ -73,6 +84,32 @@ class TensionSolver:
             if not res.success or (t < t_min - 1e-6).any() or (t > t_max + 1e-6).any():
                 raise InfeasibleError(f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set")
         return np.clip(t, t_min, t_max)
+
+    def _solve_null1(self, f: list) -> list:
+        """`solve` for a one-dimensional null space, on floats (same numbers to rounding)."""
+        P, A, n, nn = self._fast
+        t_min, t_max, t_ref = self.t_min, self.t_max, self.t_ref
+        t_p = [P[i][0] * f[0] + P[i][1] * f[1] + P[i][2] * f[2] + P[i][3] * f[3] + P[i][4] * f[4]
+               + P[i][5] * f[5] for i in range(6)]
+        resid = max(abs(sum(a * b for a, b in zip(A[i], t_p)) + f[i]) for i in range(6))
+        if resid > 1e-7 * max(1.0, max(abs(v) for v in f)):
+            raise InfeasibleError(
+                f"wrench {np.round(f, 6).tolist()} has a component no cable tensions can produce "
+                f"(residual {resid:.3g}); for this robot that is a moment about the shaft axis")
+        lo, hi = -math.inf, math.inf
+        for ti, ni in zip(t_p, n):
+            if abs(ni) < 1e-12:
+                if not (t_min - 1e-9 <= ti <= t_max + 1e-9):
+                    lo, hi = math.inf, -math.inf
+                continue
+            a, b = (t_min - ti) / ni, (t_max - ti) / ni
+            lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
+        if lo > hi + 1e-12:
+            raise InfeasibleError(f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set for "
+                                  f"tensions in [{t_min:g}, {t_max:g}] N")
+        lam = sum(ni * (t_ref - ti) for ni, ti in zip(n, t_p)) / nn
+        lam = lo if lam < lo else (hi if lam > hi else lam)
+        return [min(t_max, max(t_min, ti + lam * ni)) for ti, ni in zip(t_p, n)]
 
 
 def wrench2tensions(f, A: np.ndarray, t_min: float, t_max: float, t_ref: float | None = None,

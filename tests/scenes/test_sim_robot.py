@@ -131,3 +131,29 @@ def test_from_url():
         open_device("sim://robot?pad=nope")
     with pytest.raises(InputError):
         open_device("sim://robot?colour=red")
+
+
+def test_pose_follower_and_float_pose_terms_match_the_batched_math():
+    from scenes.pose_follow import PoseFollower, pose_terms
+    from scenes.sim_robot import capstan_angles_batch, lengths2poses, structure_matrices
+    from teleop.kinematics import rotation_zyx
+
+    rng = np.random.default_rng(3)
+    q = np.zeros(6)
+    q[2] = 0.002
+    # a loop-like trajectory (steps of a few um and mrad) and one long jump
+    qs = q + np.cumsum(rng.normal(0, 3e-6, (300, 6)) * np.array([1, 1, 1, 0, 300, 300]), axis=0)
+    qs = np.vstack([qs, qs[-1] + np.array([0.003, -0.002, 0.002, 0, 0.05, -0.04])])
+    L = poses2lengths(qs, GEOM)
+    fk = PoseFollower(GEOM, q)
+    got = np.array([fk.solve(Lk) for Lk in L])
+    ref = lengths2poses(L, GEOM, guess=q)
+    # both stop at a 1e-9 m length residual: positions agree to 1e-9 m, angles to ~1e-9 m / 15 mm
+    assert np.abs(poses2lengths(got, GEOM) - L).max() < 1e-9
+    assert np.abs(got[:, :3] - ref[:, :3]).max() < 1e-8 and np.abs(got[:, 3:] - ref[:, 3:]).max() < 1e-7
+    A, theta, tip = pose_terms(got[-1].tolist(), GEOM)
+    assert np.allclose(A, structure_matrices(got[-1:], GEOM)[0], atol=1e-12)
+    assert np.allclose(theta, capstan_angles_batch(got[-1:], GEOM)[0], atol=1e-12)
+    assert np.allclose(tip, rotation_zyx(*got[-1, 3:]) @ GEOM.tip, atol=1e-15)
+    with pytest.raises(InputError):
+        fk.solve(L[-1] + np.array([0.01, 0, 0, 0, 0, 0]))  # no pose has these lengths
