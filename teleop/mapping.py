@@ -163,18 +163,27 @@ class Follower:
         x = hi[0] if x > hi[0] else (lo[0] if x < lo[0] else x)  # np.minimum(np.maximum(p, lo), hi)
         y = hi[1] if y > hi[1] else (lo[1] if y < lo[1] else y)
         z = hi[2] if z > hi[2] else (lo[2] if z < lo[2] else z)
-        L = self.lengths(x, y, z)
-        dmax, l_min, l_max = self.dmax, self.l_min, self.l_max
-        step = max([abs(a - b) for a, b in zip(L, L_prev)])
+        dmax, l_min, l_max, sqrt = self.dmax, self.l_min, self.l_max, math.sqrt
+        # one pass: lengths (position2lengths), their largest step, the clipped lengths and their largest step
+        L, step, step_c = [], 0.0, 0.0
+        for (ox, oy, oz), lp in zip(self.offsets, L_prev):
+            v = sqrt((ox + x) ** 2 + (oy + y) ** 2 + (oz + z) ** 2)
+            d = v - lp if v > lp else lp - v
+            if d > step:
+                step = d
+            v = l_max if v > l_max else (l_min if v < l_min else v)
+            d = v - lp if v > lp else lp - v
+            if d > step_c:
+                step_c = d
+            L.append(v)
         if step > dmax:  # move along the straight line as far as the cable speed allows this tick
             f = dmax / step
             x0, y0, z0 = pos_prev[0], pos_prev[1], pos_prev[2]
             x, y, z = x0 + (x - x0) * f, y0 + (y - y0) * f, z0 + (z - z0) * f
-            L = self.lengths(x, y, z)
-        L = [l_max if v > l_max else (l_min if v < l_min else v) for v in L]
-        step = max([abs(a - b) for a, b in zip(L, L_prev)])
-        if step > dmax:  # second-order residue of the line step: limit_lengths' hard limit
-            f = self.dmax_hard / step if step > self.dmax_hard else 1.0
+            L = [l_max if v > l_max else (l_min if v < l_min else v) for v in self.lengths(x, y, z)]
+            step_c = max([abs(a - b) for a, b in zip(L, L_prev)])
+        if step_c > dmax:  # second-order residue of the line step: limit_lengths' hard limit
+            f = self.dmax_hard / step_c if step_c > self.dmax_hard else 1.0
             L = [b + (a - b) * f for a, b in zip(L, L_prev)]
             L = [l_max if v > l_max else (l_min if v < l_min else v) for v in L]
         return [x, y, z], L

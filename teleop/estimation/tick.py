@@ -58,6 +58,10 @@ class TickComputer:
             (f.axis, f.duration, f.deadband, [list(map(float, c)) for c in f.forward],
              [list(map(float, c)) for c in f.backward]) for f in turn.axes]
         self.kalman = SteadyWrenchKalman(wrench_kalman_params(geom, kalman)) if kalman is not None else None
+        # the per-tick constants in one tuple each (one attribute load, not ten)
+        self._consts = (*self.v, self.mu, self.theta0, self.db, self.mode)
+        self._dyn_consts = tuple(float(v) for v in (dynamic.b, dynamic.dahl_Fc, dynamic.dahl_sigma,
+                                                    dynamic.v_smooth, dynamic.capstan_k))
         self.renderer = renderer if renderer is not None else Renderer()
         self.reset()
 
@@ -107,23 +111,20 @@ class TickComputer:
         if isinstance(tensions, np.ndarray):
             tensions = tensions.tolist()
         x, y, z, a, b, g = pose
-        cab = self._orient(a, b, g)
+        cab = self._orient_cache if self._orient_key == (a, b, g) else self._orient(a, b, g)
         sqrt, exp, asin = math.sqrt, math.exp, math.asin
-        vx, vy, vz = self.v
-        mu, th0, db, mode = self.mu, self.theta0, self.db, self.mode
+        vx, vy, vz, mu, th0, db, mode = self._consts
         dirs, ext = self.dir, self.ext
         L_prev = self.L_prev
         first = L_prev is None
         lengths = [0.0] * 6
         fx = fy = fz = mx = my = mz = 0.0
         if mode == 3:
-            dyn = self.dyn
-            b_visc, Fc, sig = dyn.b, dyn.dahl_Fc, dyn.dahl_sigma
+            b_visc, Fc, sig, v_smooth, k_st = self._dyn_consts
             dahl = Fc > 0.0 and not first
-            a_v = dt / (dyn.v_smooth + dt) if dt > 0 else 0.0
+            a_v = dt / (v_smooth + dt) if dt > 0 else 0.0
             inv_dt = 1.0 / dt if dt > 0 else 0.0
             vel, F_dahl, phi = self.vel, self.F_dahl, self.phi
-            k_st = dyn.capstan_k
         for i in range(6):
             # cable vector l_i = p + R r_i - B_i (eq 4-5), length, unit vector
             cx, cy, cz, qx, qy, qz = cab[i]
@@ -246,8 +247,9 @@ class LoopTick:
         L, t, w, F = lt.compute(p_stylus, v_stylus, counts, dt)
 
     Inputs are what the devices give: stylus position (3,) [m] and velocity (3,) [m/s] in the device frame,
-    raw FSR counts (6,). Outputs: commanded lengths L (6,) ndarray [m] (the robot command), tensions [N] and
-    wrench [N, N m] in {B} as lists of 6 floats, force (3,) tuple [N] in the device frame.
+    raw FSR counts (6,), as numpy arrays. Outputs: commanded lengths L [m] (the robot command; the loop makes
+    the device's array), tensions [N] and wrench [N, N m] in {B} as lists of 6 floats, force (3,) tuple [N]
+    in the device frame.
     """
 
     def __init__(self, geom: Geometry, mapping, estimator, renderer: Renderer | None = None, cmd_dt: float = 1e-3):
@@ -292,12 +294,11 @@ class LoopTick:
         return self.renderer.render_xyz(fx, fy, fz, dt, vx, vy, vz)
 
     def compute(self, p_stylus, v_stylus, counts, dt: float):
-        """One full tick (see the class docstring): (L ndarray (6,), tensions [6], wrench [6], force (3,))."""
+        """One full tick (see the class docstring): (L [6], tensions [6], wrench [6], force (3,))."""
         pos, L = self.follower.step(p_stylus.tolist(), self.anchor_stylus, self.anchor_robot, self.pos,
                                     self.L_last)
         self.pos, self.L_last = pos, L
-        L_cmd = np.array(L)  # the robot command
         h = self.home
         t, w = self.estimator.update_floats(counts.tolist(), [pos[0], pos[1], pos[2], h[3], h[4], h[5]], dt)
         vx, vy, vz = v_stylus.tolist()
-        return L_cmd, t, w, self.renderer.render_xyz(w[0], w[1], w[2], dt, vx, vy, vz)
+        return L, t, w, self.renderer.render_xyz(w[0], w[1], w[2], dt, vx, vy, vz)

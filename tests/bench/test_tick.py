@@ -62,7 +62,7 @@ def test_full_tick_equals_the_reference_through_every_branch(name):
         out_ref = ref.compute(p_s[k], v_s[k], counts[k], dt)
         worst = np.maximum(worst, [np.abs(np.asarray(a, dtype=float) - b).max() for a, b in zip(out, out_ref)])
         clipped += abs(fast.pos[0]) >= MappingParams().workspace_max[0]
-        limited += np.abs(out[0] - L_prev).max() >= fast.follower.dmax * (1 - 1e-9)
+        limited += np.abs(np.subtract(out[0], L_prev)).max() >= fast.follower.dmax * (1 - 1e-9)
         branches |= set(ref.branch_dir.tolist())
     assert worst[0] < 1e-15 and worst[1] < 1e-12, worst   # lengths [m], tensions [N]
     assert worst[2] < 1e-9 and worst[3] < 1e-8, worst     # wrench, force (the passivity damper divides by v^2 dt)
