@@ -353,6 +353,8 @@ class Teleop:
             except Exception:  # noqa: BLE001 - already in FAULT; the device's own watchdog takes over
                 pass
         t6 = ns()
+        st = self.stage_ns  # this tick's stages before the tap records them (record_us: the previous tick's)
+        st[0], st[1], st[2], st[3], st[4], st[5] = t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5
         # RECORD ------------------------------------------------------------------------------------------------
         if self.tap is not None:
             try:
@@ -363,9 +365,7 @@ class Teleop:
                     self.haptic.servo_cf(np.zeros(3))
                 except Exception:  # noqa: BLE001
                     pass
-        t7 = ns()
-        st = self.stage_ns
-        st[0], st[1], st[2], st[3], st[4], st[5], st[6] = t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5, t7 - t6
+        st[6] = ns() - t6
         self.k += 1
         return x
 
