@@ -167,7 +167,8 @@ class Follower:
         # one pass: lengths (position2lengths), their largest step, the clipped lengths and their largest step
         L, step, step_c = [], 0.0, 0.0
         for (ox, oy, oz), lp in zip(self.offsets, L_prev):
-            v = sqrt((ox + x) ** 2 + (oy + y) ** 2 + (oz + z) ** 2)
+            vx, vy, vz = ox + x, oy + y, oz + z
+            v = sqrt(vx * vx + vy * vy + vz * vz)
             d = v - lp if v > lp else lp - v
             if d > step:
                 step = d
