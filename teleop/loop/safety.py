@@ -51,30 +51,31 @@ class Freshness:
 
 
 class TensionRange:
-    """Over-range or slack tension on any cable persisting longer than `window` [s] -> fault."""
+    """Over-range or slack tension on any cable persisting longer than `window` [s] -> fault.
+
+    Six cables per tick: plain floats (numpy's per-call cost would dominate)."""
 
     def __init__(self, t_max: float, t_slack: float, window: float, n: int = 6):
-        self.t_max, self.t_slack, self.window = t_max, t_slack, window
-        self.since_over = np.full(n, np.nan)
-        self.since_slack = np.full(n, np.nan)
+        self.t_max, self.t_slack, self.window, self.n = t_max, t_slack, window, n
+        self.reset()
 
     def reset(self) -> None:
-        self.since_over[:] = np.nan
-        self.since_slack[:] = np.nan
+        self.since_over = [None] * self.n  # host time the condition started [s], None while it does not hold
+        self.since_slack = [None] * self.n
 
     def update(self, now: float, t) -> str | None:
-        t = np.asarray(t, dtype=float)
-        for since, cond, what in ((self.since_over, t > self.t_max, "over-range"),
-                                  (self.since_slack, t < self.t_slack, "slack")):
-            since[~cond] = np.nan
-            start = cond & np.isnan(since)
-            since[start] = now
-            held = now - since
-            bad = np.flatnonzero(held > self.window)
-            if bad.size:
-                i = int(bad[0])
-                return (f"cable {i + 1} tension {what} for {1e3 * held[i]:.1f} ms "
-                        f"({t[i]:.3f} N; limits {self.t_slack:g}..{self.t_max:g} N)")
+        t = [float(v) for v in t]
+        t_max, t_slack, window = self.t_max, self.t_slack, self.window
+        for since, what, over in ((self.since_over, "over-range", True), (self.since_slack, "slack", False)):
+            for i, ti in enumerate(t):
+                if (ti > t_max) if over else (ti < t_slack):
+                    if since[i] is None:
+                        since[i] = now
+                    elif now - since[i] > window:
+                        return (f"cable {i + 1} tension {what} for {1e3 * (now - since[i]):.1f} ms "
+                                f"({ti:.3f} N; limits {t_slack:g}..{t_max:g} N)")
+                else:
+                    since[i] = None
         return None
 
 
@@ -85,55 +86,63 @@ class StuckCable:
     lasted `window` [s], a tension more than `rise` [N] above the lowest tension of the streak, seen on
     `confirm` consecutive updates, reports the cable stuck. A pause or reversal of the command ends the streak.
     Tensions are low-pass filtered first (time constant `tau` [s]) so sensor noise and FSR branch flips
-    do not count as a rise.
+    do not count as a rise. Plain floats, like TensionRange.
     """
 
     def __init__(self, window: float, rise: float, payout_eps: float, n: int = 6, confirm: int = 3,
                  tau: float = 0.02):
-        self.window, self.rise, self.eps, self.confirm, self.tau = window, rise, payout_eps, confirm, tau
-        self.t0 = np.full(n, np.nan)
-        self.Tmin = np.zeros(n)
-        self.count = np.zeros(n, dtype=int)
-        self.tf = None
+        self.window, self.rise, self.eps, self.confirm, self.tau, self.n = window, rise, payout_eps, confirm, tau, n
+        self.Tmin = [0.0] * n
         self.t_prev = None
+        self.reset()
 
     def reset(self) -> None:
-        self.t0[:] = np.nan
-        self.count[:] = 0
+        self.t0 = [None] * self.n  # start of each cable's pay-out streak [s], None outside one
+        self.count = [0] * self.n
         self.tf = None
 
     def update(self, now: float, t, dL) -> str | None:
-        t = np.asarray(t, dtype=float)
+        t = [float(v) for v in t]
         if self.tf is None:
-            self.tf = t.copy()
+            self.tf = t
         else:  # tf += a (t - tf), a = 1 - exp(-dt / tau)
-            self.tf += (1.0 - math.exp(-max(now - self.t_prev, 0.0) / self.tau)) * (t - self.tf)
+            a = 1.0 - math.exp(-max(now - self.t_prev, 0.0) / self.tau)
+            self.tf = [f + a * (ti - f) for f, ti in zip(self.tf, t)]
         self.t_prev = now
-        t = self.tf
-        paying = np.asarray(dL, dtype=float) > self.eps
-        self.t0[~paying] = np.nan
-        start = paying & np.isnan(self.t0)
-        self.t0[start] = now
-        self.Tmin[start] = t[start]
-        np.minimum(self.Tmin, t, out=self.Tmin, where=paying)
-        held = now - self.t0
-        cond = (held >= self.window) & (t - self.Tmin > self.rise)
-        self.count = np.where(cond, self.count + 1, 0)
-        bad = np.flatnonzero(self.count >= self.confirm)
-        if bad.size:
-            i = int(bad[0])
-            return (f"cable {i + 1} stuck: tension rose {t[i] - self.Tmin[i]:.2f} N over "
-                    f"{1e3 * held[i]:.0f} ms while paying out")
+        tf, t0, Tmin, count = self.tf, self.t0, self.Tmin, self.count
+        bad = None
+        for i, (ti, dl) in enumerate(zip(tf, dL)):
+            if not float(dl) > self.eps:  # not paying out: the streak ends
+                t0[i] = None
+                count[i] = 0
+                continue
+            if t0[i] is None:
+                t0[i], Tmin[i] = now, ti
+            elif ti < Tmin[i]:
+                Tmin[i] = ti
+            if now - t0[i] >= self.window and ti - Tmin[i] > self.rise:
+                count[i] += 1
+                if count[i] >= self.confirm and bad is None:
+                    bad = i
+            else:
+                count[i] = 0
+        if bad is not None:
+            return (f"cable {bad + 1} stuck: tension rose {tf[bad] - Tmin[bad]:.2f} N over "
+                    f"{1e3 * (now - t0[bad]):.0f} ms while paying out")
         return None
+
+
+def _all_finite(values) -> bool:
+    return all(math.isfinite(v) for v in (values.tolist() if hasattr(values, "tolist") else values))
 
 
 def is_finite_sample(sample) -> bool:
     """True when a HapticSample's numbers are all finite."""
-    return bool(np.isfinite(sample.measured_cp).all() and np.isfinite(sample.measured_cv).all()
-                and np.isfinite(sample.orientation).all() and math.isfinite(sample.t))
+    return (_all_finite(sample.measured_cp) and _all_finite(sample.measured_cv)
+            and _all_finite(np.ravel(sample.orientation)) and math.isfinite(sample.t))
 
 
 def is_finite_reading(reading) -> bool:
     """True when a RobotReading's numbers are all finite."""
-    return bool(np.isfinite(reading.fsr_counts).all() and np.isfinite(reading.position_steps).all()
-                and np.isfinite(reading.commanded_lengths).all() and math.isfinite(reading.t))
+    return (_all_finite(reading.fsr_counts) and _all_finite(reading.position_steps)
+            and _all_finite(reading.commanded_lengths) and math.isfinite(reading.t))
