@@ -16,6 +16,7 @@ polygonal approximation on three faces at once). One BulletClient per world, DIR
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import ctypes
 import functools
@@ -27,6 +28,29 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenes.pads import Pad
+
+
+_BANNER_SILENCED = []
+
+
+def _silence_banner_at_exit() -> None:
+    """pybullet writes its "pybullet build time" banner to fd 1 when the process exits (no fflush before
+    reaches it; measured), which would end every piped command's output. Once pybullet is loaded, the
+    last Python exit handler flushes Python's streams and points fd 1 at /dev/null."""
+    if _BANNER_SILENCED:
+        return
+    _BANNER_SILENCED.append(True)
+
+    def _mute():
+        try:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            with open(os.devnull, "w") as null:
+                os.dup2(null.fileno(), 1)
+        except (OSError, ValueError):
+            pass
+
+    atexit.register(_mute)
 
 
 @contextlib.contextmanager
@@ -115,6 +139,7 @@ class PadWorld:
         with _quiet_stdout():  # the pybullet C library prints its build time on import, argv on connect
             import pybullet as pb
             from pybullet_utils.bullet_client import BulletClient
+        _silence_banner_at_exit()
 
         from scenes.calibration import default_calibration
 
