@@ -27,13 +27,13 @@ class TensionSolver:
         self.rank = int((s > tol * max(1.0, s[0])).sum())
         self.Ur, self.sr, self.Vr = U[:, :self.rank].T, s[:self.rank], Vt[:self.rank].T
         self.N = Vt[self.rank:].T
-        self._fast = None
-        if self.N.shape[1] == 1 and self.A.shape == (6, 6):
-            # the one-dimensional null space of the CDPR: solve in floats (numpy's per-call cost dominates
-            # at six cables). P = -A^+, n the null direction with positive sum.
+        self._null1 = None
+        if self.N.shape[1] == 1:
+            # the CDPR's one-dimensional null space: solved on floats (numpy's per-call cost dominates at six
+            # cables). P = -A^+, n the null direction with positive sum.
             P = -(self.Vr @ (self.Ur / self.sr[:, None]))
             n = self.N[:, 0] * np.sign(self.N[:, 0].sum() or 1.0)
-            self._fast = (P.tolist(), self.A.tolist(), n.tolist(), float(n @ n))
+            self._null1 = (P.tolist(), self.A.tolist(), n.tolist(), float(n @ n))
 
     def solve(self, f) -> np.ndarray:
         """(6,) cable tensions [N] that balance the external wrench f (6,) [N, N m]: A t + f = 0.
@@ -44,7 +44,7 @@ class TensionSolver:
         f = np.asarray(f, dtype=float)
         if f.shape != (6,) or not np.isfinite(f).all():
             raise InfeasibleError(f"wrench must be 6 finite numbers, got {np.asarray(f).tolist()}")
-        if self._fast is not None:
+        if self._null1 is not None:
             return np.array(self._solve_null1(f.tolist()))
         t_min, t_max, t_ref, N = self.t_min, self.t_max, self.t_ref, self.N
         # t_p = -A^+ f (minimum norm), N = null-space basis (6 x k)
@@ -58,22 +58,6 @@ class TensionSolver:
         k = N.shape[1]
         if k == 0:
             t = t_p
-        elif k == 1:
-            n = N[:, 0] * np.sign(N[:, 0].sum() or 1.0)
-            lo, hi = -np.inf, np.inf
-            for ti, ni in zip(t_p, n):
-                if abs(ni) < 1e-12:
-                    if not (t_min - 1e-9 <= ti <= t_max + 1e-9):
-                        lo, hi = np.inf, -np.inf
-                    continue
-                a, b = (t_min - ti) / ni, (t_max - ti) / ni
-                lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
-            if lo > hi + 1e-12:
-                raise InfeasibleError(
-                    f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set for tensions in "
-                    f"[{t_min:g}, {t_max:g}] N")
-            lam = float(np.clip(n @ (t_ref - t_p) / (n @ n), lo, hi))  # closest to t_ref, clipped
-            t = t_p + lam * n
         else:
             from scipy.optimize import minimize
 
@@ -86,12 +70,14 @@ class TensionSolver:
         return np.clip(t, t_min, t_max)
 
     def _solve_null1(self, f: list) -> list:
-        """`solve` for a one-dimensional null space, on floats (same numbers to rounding)."""
-        P, A, n, nn = self._fast
+        """`solve` for a one-dimensional null space n: t = t_p + lambda n, t_p = -A^+ f the minimum-norm
+        particular solution, lambda closest to t_ref and clipped to the interval where every tension lies in
+        [t_min, t_max]; on floats."""
+        P, A, n, nn = self._null1
         t_min, t_max, t_ref = self.t_min, self.t_max, self.t_ref
-        t_p = [P[i][0] * f[0] + P[i][1] * f[1] + P[i][2] * f[2] + P[i][3] * f[3] + P[i][4] * f[4]
-               + P[i][5] * f[5] for i in range(6)]
-        resid = max(abs(sum(a * b for a, b in zip(A[i], t_p)) + f[i]) for i in range(6))
+        f0, f1, f2, f3, f4, f5 = f
+        t_p = [r[0] * f0 + r[1] * f1 + r[2] * f2 + r[3] * f3 + r[4] * f4 + r[5] * f5 for r in P]
+        resid = max(abs(sum(a * b for a, b in zip(row, t_p)) + fi) for row, fi in zip(A, f))
         if resid > 1e-7 * max(1.0, max(abs(v) for v in f)):
             raise InfeasibleError(
                 f"wrench {np.round(f, 6).tolist()} has a component no cable tensions can produce "
