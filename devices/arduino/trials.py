@@ -85,6 +85,9 @@ def watchdog_trials(robot: ArduinoRobot, mega: EmulatedMega, home_lengths, n: in
             early += 1
             continue
         ms, steps = _stop_time(wait_for_silence(mega, silence_ms))
+        if steps == 0:  # stopped before the last byte arrived: a trip in a host stall, seen late
+            early += 1
+            continue
         stop_ms.append(ms)
         steps_after.append(steps)
         latched.append(bool(robot.read_fresh().status & msg.Status.WATCHDOG_STOP))
@@ -147,6 +150,9 @@ def close_trials(mega: EmulatedMega, home_lengths, n: int = 100, stream_s: float
             continue
         drop_port(robot)
         ms, steps = _stop_time(wait_for_silence(mega, silence_ms))
+        if steps == 0:  # stopped before the last byte arrived: a trip in a host stall, seen late
+            early += 1
+            continue
         stop_ms.append(ms)
         steps_after.append(steps)
     latched.append(bool(_first_status(mega.port) & msg.Status.WATCHDOG_STOP))
@@ -254,6 +260,9 @@ def kill_trials(mega: EmulatedMega, home_lengths, n: int = 100, stream_s: float 
                     wait_for_silence(mega, silence_ms)
                     continue
                 ms, steps = _stop_time(wait_for_silence(mega, silence_ms))
+                if steps == 0:  # stopped before the last byte arrived: a trip in a host stall, seen late
+                    early += 1
+                    continue
                 stop_ms.append(ms)
                 steps_after.append(steps)
         finally:
