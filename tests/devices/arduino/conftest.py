@@ -56,6 +56,9 @@ class RawLink:
 
         self.serial = serial.Serial(port, 1_000_000, timeout=0.01)
         self.serial.reset_input_buffer()
+        deadline = time.monotonic() + 0.1  # drop what is still on its way from a previous test's frames
+        while self.serial.read(4096) and time.monotonic() < deadline:
+            pass
         self.state = framing.DecoderState()
         self.seq = 0
         self.errors: list[str] = []
@@ -84,12 +87,28 @@ class RawLink:
             out += [msg.decode(p) for p in payloads]
         return out
 
+    @staticmethod
+    def answers(reply, message) -> bool:
+        """Whether `reply` can be the firmware's answer to `message` (telemetry names the frame it answers)."""
+        if isinstance(reply, msg.Telemetry):
+            return reply.reply_to == message.seq & 0xFF
+        if isinstance(reply, msg.HelloReply):
+            return isinstance(message, msg.Hello)
+        if isinstance(reply, msg.DiagReply):
+            return isinstance(message, msg.DiagRequest)
+        return True
+
     def exchange(self, message, timeout: float = 1.0):
-        """Send one message and return the first reply (fails the test when none arrives)."""
+        """Send one message and return its reply, skipping late replies to earlier frames (a reply still on
+        its way from a previous test, or a retransmission's second answer); fails the test when none arrives."""
         self.send(message)
-        replies = self.receive(timeout)
-        assert replies, f"no reply to {message!r} within {timeout} s"
-        return replies[0]
+        deadline = time.monotonic() + timeout
+        while True:
+            replies = self.receive(max(0.0, deadline - time.monotonic()))
+            assert replies, f"no reply to {message!r} within {timeout} s"
+            for r in replies:
+                if self.answers(r, message):
+                    return r
 
     def diag(self) -> msg.DiagReply:
         self.send(msg.DiagRequest(self.next_seq()))
