@@ -590,8 +590,11 @@ def load_response(truth, estimate) -> dict:
 
     What separates an estimator that ranks stiffness regions from one that cannot: a gain near 1 with a
     constant offset still ranks (the offset cancels between regions); a gain near 0 does not. Under the
-    capstan law with each cable's friction direction fixed during a poke, the non-compensated gain lies
-    between exp(-mu Theta) and exp(+mu Theta) of the load-bearing cables (0.83-1.20 for the default robot: Theta = theta0 + 28-44 deg).
+    capstan law with each cable's friction direction fixed during a poke, the non-compensated gain is
+    sum_i a_i m_i dt_i/dF with m_i in [exp(-mu Theta_i), exp(+mu Theta_i)] and sum_i a_i dt_i/dF = 1 (a_i the
+    cable's share of the poke direction in A); when every cable's term pushes the same way (the poke loads one
+    group of cables and unloads the other, as in the default robot) the gain lies between those factors:
+    0.83-1.20 for the default robot (Theta = theta0 + 28-44 deg).
     """
     gain, offset = np.polyfit(np.asarray(truth, dtype=float), np.asarray(estimate, dtype=float), 1)
     return {"offset_N": _num(offset), "gain": _num(gain)}
