@@ -55,6 +55,13 @@ def _stop_time(status: dict) -> tuple[float, int]:
     return (status["last_step_ns"] - status["last_rx_ns"]) * 1e-6, int(status["steps_after_rx"])
 
 
+def _measured(mega: EmulatedMega, silence_ms: float) -> tuple[float, int] | None:
+    """`_stop_time` of the episode once `silence_ms` have passed, or None when the motors had stopped before
+    the host's last byte arrived (a watchdog trip in a host stall, seen late: an early trip, to repeat)."""
+    ms, steps = _stop_time(wait_for_silence(mega, silence_ms))
+    return None if steps == 0 else (ms, steps)
+
+
 def _is_moving(status: int) -> bool:
     """A telemetry status of a firmware still moving and not stopped by its watchdog."""
     return bool(status & msg.Status.MOVING) and not status & msg.Status.WATCHDOG_STOP
@@ -84,10 +91,11 @@ def watchdog_trials(robot: ArduinoRobot, mega: EmulatedMega, home_lengths, n: in
         if not _is_moving(reading.status):
             early += 1
             continue
-        ms, steps = _stop_time(wait_for_silence(mega, silence_ms))
-        if steps == 0:  # stopped before the last byte arrived: a trip in a host stall, seen late
+        measured = _measured(mega, silence_ms)
+        if measured is None:
             early += 1
             continue
+        ms, steps = measured
         stop_ms.append(ms)
         steps_after.append(steps)
         latched.append(bool(robot.read_fresh().status & msg.Status.WATCHDOG_STOP))
@@ -149,10 +157,11 @@ def close_trials(mega: EmulatedMega, home_lengths, n: int = 100, stream_s: float
             robot.close()  # orderly: STOP
             continue
         drop_port(robot)
-        ms, steps = _stop_time(wait_for_silence(mega, silence_ms))
-        if steps == 0:  # stopped before the last byte arrived: a trip in a host stall, seen late
+        measured = _measured(mega, silence_ms)
+        if measured is None:
             early += 1
             continue
+        ms, steps = measured
         stop_ms.append(ms)
         steps_after.append(steps)
     latched.append(bool(_first_status(mega.port) & msg.Status.WATCHDOG_STOP))
@@ -259,10 +268,11 @@ def kill_trials(mega: EmulatedMega, home_lengths, n: int = 100, stream_s: float 
                     early += 1
                     wait_for_silence(mega, silence_ms)
                     continue
-                ms, steps = _stop_time(wait_for_silence(mega, silence_ms))
-                if steps == 0:  # stopped before the last byte arrived: a trip in a host stall, seen late
+                measured = _measured(mega, silence_ms)
+                if measured is None:
                     early += 1
                     continue
+                ms, steps = measured
                 stop_ms.append(ms)
                 steps_after.append(steps)
         finally:
