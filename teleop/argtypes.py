@@ -56,3 +56,40 @@ def rt_priority(text: str) -> int:
     if not 0 <= v <= 99:
         raise argparse.ArgumentTypeError(f"expected 0 (time-sharing) or a SCHED_FIFO priority 1-99, got {v}")
     return v
+
+
+def input_file(text: str) -> str:
+    """A path to an existing, readable file (not a directory)."""
+    from teleop.config import input_problem
+
+    problem = input_problem(text)
+    if problem:
+        raise argparse.ArgumentTypeError(f"'{text}': {problem}")
+    return text
+
+
+def output_file(text: str) -> str:
+    """A path a result file can be written to (checked before any work starts; nothing is created yet)."""
+    from teleop.outputs import output_problem
+
+    problem = output_problem(text)
+    if problem:
+        raise argparse.ArgumentTypeError(f"'{text}' {problem}")
+    return text
+
+
+def output_dir(text: str) -> str:
+    """A path that is, or can be made, a writable directory."""
+    from teleop.outputs import output_problem
+
+    problem = output_problem(text, directory=True)
+    if problem:
+        raise argparse.ArgumentTypeError(f"'{text}' {problem}")
+    return text
+
+
+# Options that name a result file or directory: every parser of the `teleop` command checks them with
+# these types when declared without one (teleop.cli.TeleopArgumentParser), so each output is checked
+# before the work starts.
+OUTPUT_OPTIONS = {"--json": output_file, "--plot": output_file, "--csv": output_file, "--save-model": output_file,
+                  "--record": output_file, "--state": output_file, "--build-dir": output_dir}

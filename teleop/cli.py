@@ -14,7 +14,7 @@ import re
 import sys
 
 from teleop import __version__
-from teleop.argtypes import seed_int
+from teleop.argtypes import OUTPUT_OPTIONS, seed_int
 from teleop.errors import InputError
 
 
@@ -43,12 +43,17 @@ class TeleopArgumentParser(argparse.ArgumentParser):
     `add_subparsers` hands its class to the subcommands' parsers (argparse's default ``parser_class``
     is ``type(self)``), so every parser under `build_parser` (``teleop bench tick`` too) behaves so.
     An argument no parser knows is reported by the deepest subcommand that received it. A ``--seed``
-    declared with ``type=int`` is checked as `seed_int` (numpy rejects negative seeds with a traceback).
+    declared with ``type=int`` is checked as `seed_int` (numpy rejects negative seeds with a traceback);
+    an output option (``--json``, ``--plot``, ... see `teleop.argtypes.OUTPUT_OPTIONS`) declared without a
+    type is checked as a writable path while the arguments are parsed, before any work starts.
     """
 
     def add_argument(self, *args, **kwargs):
         if "--seed" in args and kwargs.get("type") is int:
             kwargs["type"] = seed_int
+        for name in args:
+            if name in OUTPUT_OPTIONS and kwargs.get("type") is None and kwargs.get("action") in (None, "store"):
+                kwargs["type"] = OUTPUT_OPTIONS[name]
         return super().add_argument(*args, **kwargs)
 
     def parse_known_args(self, args=None, namespace=None):
@@ -125,6 +130,27 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("teleop: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:
+        if exc.filename is None:
+            raise
+        # a file the command was given (or its directory) failed under it: name it, no traceback
+        names = " -> ".join(str(f) for f in (exc.filename, exc.filename2) if f is not None)
+        print(f"teleop: error: {names}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except Exception as exc:
+        message = _device_error(exc)
+        if message is None:
+            raise
+        print(f"teleop: error: {message}", file=sys.stderr)
+        return 2
+
+
+def _device_error(exc: Exception) -> str | None:
+    """One line for a device that failed (devices.base.DeviceError: a port that will not open, a lost
+    link, an SDK error), or None for any other exception (a bug, shown with its traceback)."""
+    from devices.base import DeviceError
+
+    return " ".join(str(exc).split()) if isinstance(exc, DeviceError) else None
 
 
 if __name__ == "__main__":  # pragma: no cover

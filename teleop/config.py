@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any, Iterable
@@ -15,14 +16,36 @@ else:  # pragma: no cover - exercised on Python 3.10 only
     import tomli as tomllib
 
 
-def load_toml(path: str | Path) -> dict:
-    """Read a TOML file; a missing file or a syntax error is an InputError naming the file."""
+def input_problem(path: str | Path) -> str | None:
+    """Why `path` cannot be read as an input file (missing, a directory, unreadable), or None."""
     path = Path(path)
+    if not path.exists():
+        return "file not found"
+    if path.is_dir():
+        return "is a directory, expected a file"
+    if not os.access(path, os.R_OK):
+        return "is not readable (permission denied)"
+    return None
+
+
+def check_input(path: str | Path) -> Path:
+    """`path` if it is a readable file, else an InputError naming it (call before the work starts)."""
+    problem = input_problem(path)
+    if problem:
+        raise InputError(f"{path}: {problem}")
+    return Path(path)
+
+
+def load_toml(path: str | Path) -> dict:
+    """Read a TOML file; a missing, unreadable or non-UTF-8 file or a syntax error is an InputError naming it."""
+    path = check_input(path)
     try:
         with path.open("rb") as fh:
             return tomllib.load(fh)
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not UTF-8 text ({exc.reason})") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{path}: invalid TOML ({exc})") from None
 

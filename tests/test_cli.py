@@ -60,7 +60,7 @@ ARGPARSE_ERRORS = [
     (["palpate", "--test", "z", "--seed", "-1"], "teleop palpate", ["--seed", "-1", ">= 0"]),
     (["session", "--seconds", "soon"], "teleop session", ["--seconds", "expected a number", "'soon'"]),
     (["geometry", "--pose-mm-deg", "1", "2"], "teleop geometry", ["--pose-mm-deg", "6 arguments"]),
-    (["export", "rec.mcap"], "teleop export", ["--csv", "required", "expected --csv OUT"]),
+    (["export", __file__], "teleop export", ["--csv", "required", "expected --csv OUT"]),
     (["diagnose"], "teleop diagnose", ["REC", "required"]),
     (["bench", "--bogus"], "teleop bench", ["--bogus"]),
     (["bench", "tick", "--bogus"], "teleop bench tick", ["--bogus"]),

@@ -5,11 +5,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from teleop.argtypes import input_file
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "diagnose", help="locate sim-vs-real mismatch in recordings, name the missing physics, show the fit")
-    p.add_argument("recordings", nargs="+", metavar="REC", help="interchange CSV (or any layout with --map)")
+    p.add_argument("recordings", nargs="+", type=input_file, metavar="REC",
+                   help="interchange CSV (or any layout with --map)")
     p.add_argument("--map", metavar="MAP", help="column map: a .toml path or a shipped name (e.g. mrdlab)")
     p.add_argument("--holdout", type=float, default=0.4, help="fraction at the end scoring the models (0.4)")
     p.add_argument("--json", metavar="PATH", help="write the report as JSON")

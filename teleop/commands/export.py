@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import sys
 
+from teleop.argtypes import input_file
 from teleop.errors import InputError
 from teleop.recording import TOPIC_ROBOT, TOPIC_SETPOINT
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("export", help="write a recorded session as the interchange CSV (one cable)")
-    p.add_argument("file", help="session recording (.mcap)")
+    p.add_argument("file", type=input_file, help="session recording (.mcap)")
     p.add_argument("--csv", required=True, metavar="OUT", help="output CSV")
     p.add_argument("--cable", type=int, default=1, help="cable 1..6 (default 1)")
     p.set_defaults(func=run)

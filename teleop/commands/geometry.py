@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from teleop.argtypes import input_file
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("geometry", help="check a geometry TOML and show kinematics at a pose")
-    p.add_argument("--geometry", metavar="TOML", help="geometry file (default: the seed robot)")
+    p.add_argument("--geometry", type=input_file, metavar="TOML", help="geometry file (default: the seed robot)")
     p.add_argument("--pose-mm-deg", nargs=6, type=float, default=[0, 0, 0, 0, 0, 0],
                    metavar=("X", "Y", "Z", "ALPHA", "BETA", "GAMMA"), help="pose in mm and deg (Z-Y-X Euler)")
     p.add_argument("--json", metavar="PATH", help="write the result as JSON")

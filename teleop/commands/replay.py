@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import sys
 
+from teleop.argtypes import input_file
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("replay", help="replay a recorded session through the loop; exit 1 if it differs")
-    p.add_argument("file", help="session recording (.mcap)")
+    p.add_argument("file", type=input_file, help="session recording (.mcap)")
     p.add_argument("--json", metavar="F", help="write the replay report as JSON")
     p.set_defaults(func=run)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from teleop.argtypes import positive_float, rt_priority
+from teleop.argtypes import input_file, positive_float, rt_priority
 
 from teleop.errors import InputError
 
@@ -29,7 +29,7 @@ def register(subparsers) -> None:
                    help="zero forces along -z of the stylus frame, i.e. toward the pad (seed 000 blind test)")
     p.add_argument("--passivity-damping", type=float, default=0.0, metavar="N_S_PER_M",
                    help="largest damping of the passivity observer/controller [N s/m] (default 0: off)")
-    p.add_argument("--fsr-calibration", metavar="CSV",
+    p.add_argument("--fsr-calibration", type=input_file, metavar="CSV",
                    help="FSR calibration (columns tension_N, conductance_uS, branch) for the estimator "
                         "(default: the built-in synthetic calibration)")
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
