@@ -22,8 +22,34 @@ from teleop.errors import InputError
 from teleop.physics import get_effect
 
 HOLDOUT = 0.4           # last 40 % of each recording scores the models
+#: the project's simulation of a cable setup: the sheath's capstan friction on the force link (over the
+#: recorded bend, or a fitted mu Theta where none is recorded); the spring load is the position link's gain
+PROJECT_BASELINE = ("capstan_friction",)
 STRUCTURE = 2.0         # residual RMS above this many noise levels, with a condition explaining >= R2_MIN
 R2_MIN = 0.3            # of it, is reported as unexplained
+
+
+def baseline_effects(spec: str | None) -> tuple[str, ...]:
+    """The catalogue effects a `--baseline` value names: 'default' (or None) -> the project's simulation
+    (PROJECT_BASELINE), 'lossless' -> none (the ideal rigid, lossless link), else a comma list of
+    catalogue names (each added to every link whose channels allow it)."""
+    if spec is None or spec.strip() in ("", "default", "project"):
+        return PROJECT_BASELINE
+    if spec.strip() in ("lossless", "none", "ideal"):
+        return ()
+    names = tuple(n.strip() for n in spec.split(",") if n.strip())
+    for n in names:
+        get_effect(n)   # InputError naming the known effects
+    return names
+
+
+def baseline_text(names: tuple) -> str:
+    """One line saying what the baseline simulation is."""
+    ideal = "ideal rigid lossless link: output = gain * input + offset (contact: gain * max(indentation, 0) + offset)"
+    if not names:
+        return ideal
+    which = "the project's simulation" if names == PROJECT_BASELINE else "the user's simulation"
+    return f"{which}: {ideal}, with {', '.join(names)} where the link's channels carry it"
 
 
 def split(n: int, holdout: float) -> tuple[slice, slice]:
@@ -76,6 +102,7 @@ class Diagnosis:
     holdout: float
     links: tuple
     peer: dict
+    baseline: tuple = PROJECT_BASELINE
 
     @property
     def hold(self) -> slice:
@@ -101,8 +128,9 @@ class Diagnosis:
                     block["width_input"] = {"value": w["value"] / g,
                                             "stderr": None if w["stderr"] is None else w["stderr"] / g,
                                             "unit": self.rec.units[d.link.input], "derived": True}
+                first = len(before.model.effects) == before.model.base
                 alts = sorted(((n, f.rmse_hold) for n, f in res.ranking.items() if n != name),
-                              key=lambda kv: kv[1])[:3] if not before.model.effects else []
+                              key=lambda kv: kv[1])[:3] if first else []
                 out.append({
                     "effect": name,
                     "channel": d.link.output,
@@ -145,7 +173,7 @@ class Diagnosis:
         channels = {}
         for name, x in self.rec.channels.items():
             channels[name] = {"unit": self.rec.units[name]}
-        base_params, base_rmse = {}, {}
+        base_params, base_rmse, base_effects = {}, {}, {}
         for res in self.links:
             d = res.data
             m = res.baseline.model
@@ -162,13 +190,15 @@ class Diagnosis:
                                "offset": {"value": m.offset, "unit": self.rec.units[ch]}}
             if d.link.kind == "force":
                 base_params[ch]["direction"] = {"value": m.direction, "unit": "1"}
+            for name, p in m.effects[: m.base]:
+                base_params[ch][name] = _param_block(self.rec, d, name, p, res.baseline.stderr.get(name, {}))
+            base_effects[ch] = list(m.baseline_names)
             base_rmse[ch] = res.baseline.rmse_hold
         return {
             "recording": self.rec.path,
             "channels": channels,
-            "baseline": {"params": base_params, "rmse": base_rmse,
-                         "model": "ideal rigid lossless link: output = gain * input + offset "
-                                  "(contact: gain * max(indentation, 0) + offset)"},
+            "baseline": {"params": base_params, "rmse": base_rmse, "effects": base_effects,
+                         "requested": list(self.baseline), "model": baseline_text(self.baseline)},
             "findings": self.findings(),
             "unexplained": self.unexplained(),
             "holdout": {"fraction": self.holdout, "t_start": float(self.rec.t[self.hold][0])},
@@ -176,15 +206,34 @@ class Diagnosis:
         }
 
 
-def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int = 0) -> Diagnosis:
-    """Diagnose `rec` (see the module docstring); progress(k) is called as candidate fits finish; seed
-    drives the extra starts of multi-start fits (the report is reproducible for a given seed)."""
+def sensor_correction(res: LinkResult) -> np.ndarray | None:
+    """(n,) what the sensor effects identified on a link add to its output channel's reading, or None."""
+    m = res.final.model
+    if not any(get_effect(n).link == "sensor" for n, _ in m.effects[m.base:]):
+        return None
+    plain = m.with_effects([(n, p) for n, p in m.effects if get_effect(n).link != "sensor"])
+    return predict(res.data, m) - predict(res.data, plain)
+
+
+def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int = 0,
+             baseline: tuple = PROJECT_BASELINE) -> Diagnosis:
+    """Diagnose `rec` beyond the `baseline` simulation (see the module docstring); progress(k) is called
+    as candidate fits finish; seed drives the extra starts of multi-start fits (the report is reproducible
+    for a given seed). A sensor effect found on a channel is taken out of that channel where a later link
+    uses it as its input (a tip force sensor's drift is not the sheath's friction)."""
     fit_idx, hold_idx = split(rec.n, holdout)
-    results, peer = [], {}
+    results, peer, corrections = [], {}, {}
     for link in find_links(rec):
-        d = link_data(rec, link)
-        res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed)
+        d = link_data(rec, link, corrections)
+        res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed,
+                                        baseline=tuple(baseline))
         results.append(res)
+        corr = sensor_correction(res)
+        if corr is not None:
+            corrections[link.output] = corr
+        elif res.delay:   # the channel lags its link's input: read it tau later where it is an input
+            y = rec.channels[link.output]
+            corrections[link.output] = y - np.interp(rec.t + res.delay[0], rec.t, y)
         peer[link.output] = {"arx_rmse": arx_rmse(d, fit_idx, hold_idx),
                              "baseline_rmse": res.baseline.rmse_hold, "model_rmse": res.final.rmse_hold}
-    return Diagnosis(rec, holdout, tuple(results), peer)
+    return Diagnosis(rec, holdout, tuple(results), peer, tuple(baseline))

@@ -25,12 +25,14 @@ from teleop.diagnosis.recording_io import interchange_text
 from teleop.outputs import atomic_write
 from teleop.physics import get_effect
 
-RIG_EFFECTS = ("backlash", "cable_compliance", "capstan_friction", "coulomb_friction", "viscous_friction",
+# the rig always has the sheath's capstan friction (the project's simulation of the setup, the
+# diagnosis' default baseline); these are concealed on top of it
+RIG_EFFECTS = ("backlash", "cable_compliance", "coulomb_friction", "viscous_friction",
                "stribeck_friction", "dahl_hysteresis", "sensor_hysteresis", "thermal_drift")
 PAD_EFFECTS = ("hertz_contact", "viscoelasticity", "contact_damping")
 CASE_EFFECTS = RIG_EFFECTS + PAD_EFFECTS
 # the parameters a diagnosis is scored on (the others are nuisance or shape parameters)
-PRIMARY = {"backlash": ("width",), "cable_compliance": ("k",), "capstan_friction": ("mu",),
+PRIMARY = {"backlash": ("width",), "cable_compliance": ("k",),
            "coulomb_friction": ("Fc",), "viscous_friction": ("b",), "stribeck_friction": ("Fc", "Fs"),
            "dahl_hysteresis": ("Fc",), "sensor_hysteresis": ("h",), "thermal_drift": ("c",),
            "hertz_contact": ("k",), "viscoelasticity": ("g", "tau"), "contact_damping": ("c",)}
@@ -140,7 +142,11 @@ def _rig(rng: np.random.Generator, effect: str, index: int, cfg: GenConfig) -> C
         tip = _run_steps(effect, params, x=z, load=load)
     else:
         tip = z
-    # force link: motor = effect(load = g_f load_tip) + c_f, sensor effects on the motor reading
+    # force link: motor = effect(capstan(load = g_f load_tip)) + c_f, sensor effects on the motor reading
+    mu = rng.uniform(0.03, 0.1)
+    band = 2 * L0 * math.sinh(mu * theta[0])
+    capstan = {"mu": mu, "theta": float(theta[0]), "k": band / (rng.uniform(0.02, 0.08) * A)}
+    Lref = _run_steps("capstan_friction", capstan, x=x, load=Lref, theta=theta)
     Fc = rng.uniform(0.06, 0.2) * L0
     if effect == "coulomb_friction":
         params = {"Fc": Fc}
@@ -154,11 +160,6 @@ def _rig(rng: np.random.Generator, effect: str, index: int, cfg: GenConfig) -> C
     elif effect == "dahl_hysteresis":
         params = {"Fc": Fc, "sigma": Fc / (rng.uniform(0.05, 0.2) * A)}
         fm = _run_steps(effect, params, x=x, load=Lref)
-    elif effect == "capstan_friction":
-        mu = rng.uniform(0.03, 0.1)
-        band = 2 * L0 * math.sinh(mu * theta[0])
-        params = {"mu": mu, "theta": float(theta[0]), "k": band / (rng.uniform(0.02, 0.08) * A)}
-        fm = _run_steps(effect, params, x=x, load=Lref, theta=theta)
     else:
         fm = Lref
     fm = fm + c_f

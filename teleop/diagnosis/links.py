@@ -66,18 +66,28 @@ class Link:
 
     @property
     def effect_kinds(self) -> tuple:
-        """Physics link kinds whose effects can be added on this link."""
-        return {"position": ("position",), "force": ("force", "sensor"),
-                "contact": ("contact", "sensor")}[self.kind]
+        """Physics link kinds whose effects can be added on this link: a position link whose output is a
+        force (the tip pulling a spring: the spring turns the tip's travel into force) also carries that
+        force sensor's effects."""
+        if self.kind == "position":
+            return ("position", "sensor") if self.output.endswith("force") else ("position",)
+        return {"force": ("force", "sensor"), "contact": ("contact", "sensor")}[self.kind]
 
 
 def find_links(rec: Recording) -> list[Link]:
-    """The links `rec` holds, position first; InputError when it holds none."""
+    """The links `rec` holds, position first; InputError when it holds none.
+
+    With `load = spring`, no tip position and a tip force, the tip force against the motor position is a
+    position link (tip_force = spring gain * tip travel + preload): play and the tip force sensor's own
+    effects show there and nowhere else.
+    """
     links = []
     ch = rec.channels
     if "motor_pos" in ch and "tip_pos" in ch:
         load = "tip_force" if "tip_force" in ch else ("motor_force" if "motor_force" in ch else None)
         links.append(Link("position", "tip_pos", "motor_pos", "motor_pos", load))
+    elif "motor_pos" in ch and "tip_force" in ch and rec.metadata.get("load") == "spring":
+        links.append(Link("position", "tip_force", "motor_pos", "motor_pos"))
     if "motor_force" in ch:
         drive = "motor_pos" if "motor_pos" in ch else ("tip_pos" if "tip_pos" in ch else None)
         if "tip_force" in ch:
@@ -131,9 +141,14 @@ class LinkData:
                         cut(self.temperature), cut(self.theta), self.resolution_s)
 
 
-def link_data(rec: Recording, link: Link) -> LinkData:
-    """The arrays of `link` from `rec`; inputs (not the output) are smoothed (see smooth_width)."""
-    ch = rec.channels
+def link_data(rec: Recording, link: Link, corrections: dict | None = None) -> LinkData:
+    """The arrays of `link` from `rec`; inputs (not the output) are smoothed (see smooth_width).
+    corrections: {channel: (n,) array} subtracted from a recorded channel before use (a sensor effect
+    identified on another link, taken out of this link's input)."""
+    ch = dict(rec.channels)
+    for name, c in (corrections or {}).items():
+        if name in ch:
+            ch[name] = ch[name] - c
     dt = rec.dt
 
     widths = []
@@ -153,7 +168,8 @@ def link_data(rec: Recording, link: Link) -> LinkData:
 @dataclass(frozen=True)
 class LinkModel:
     """Baseline gain g, offset c, direction (+1/-1), load_sign (+1/-1) and the effect chain
-    ((name, {param: value}), ...) of one link."""
+    ((name, {param: value}), ...) of one link; the first `base` effects belong to the baseline (the
+    simulation the user already has, e.g. the sheath's capstan friction), the rest are findings."""
 
     link: Link
     gain: float
@@ -161,18 +177,32 @@ class LinkModel:
     direction: float = 1.0
     load_sign: float = 1.0
     effects: tuple = field(default=())
+    base: int = 0
 
     def with_effects(self, effects) -> "LinkModel":
-        return LinkModel(self.link, self.gain, self.offset, self.direction, self.load_sign, tuple(effects))
+        effects = tuple(effects)
+        names = [n for n, _ in effects]
+        base = sum(1 for n in self.baseline_names if n in names)
+        return LinkModel(self.link, self.gain, self.offset, self.direction, self.load_sign, effects, base)
+
+    @property
+    def baseline_names(self) -> tuple:
+        """Names of the baseline's effects."""
+        return tuple(n for n, _ in self.effects[: self.base])
 
     def baseline_params(self) -> dict:
         return {"gain": self.gain, "offset": self.offset}
 
 
-def clean_rate(x: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """(n,) rate of x with its sign cleaned at reversals: where |v| is within the noise (3 sigma of the
-    differentiated noise), a pause keeps its direction and a reversal switches at the middle of the quiet
-    stretch instead of flickering with the noise. Magnitudes are kept."""
+STOP_S = 0.05   # a quiet stretch (|v| within the noise) longer than this is a stop, not a reversal
+
+
+def clean_motion(x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(x, v) of drive x with its rate's sign cleaned: where |v| is within the noise (3 sigma of the
+    differentiated noise), a short quiet stretch (a reversal) keeps its direction up to its middle and
+    switches there instead of flickering with the noise; a stretch longer than STOP_S is a stop: v = 0
+    (sign(0) = 0, as the catalogue's rate laws define it) and x held, so that no state model integrates
+    the sensor noise of a motor at rest. Magnitudes are kept elsewhere."""
     v = np.gradient(x, t)
     hf = v - smooth(v, 9)
     eps = 3.0 * 1.4826 * float(np.median(np.abs(hf - np.median(hf))))
@@ -191,7 +221,16 @@ def clean_rate(x: np.ndarray, t: np.ndarray) -> np.ndarray:
     mid = 0.5 * (last_on + idx_b)
     sign = np.where(quiet, np.where((k <= mid) & (fwd != 0) | (bwd == 0), fwd, bwd), s)
     sign = np.where(sign == 0, bwd, sign)
-    return sign * np.abs(v)
+    dt = float(np.median(np.diff(t)))
+    stopped = quiet & ((idx_b - last_on) * dt > STOP_S) & (s[last_on] != 0) & (s[idx_b] != 0)
+    sign = np.where(stopped, 0.0, sign)
+    xc = np.where(stopped, x[last_on], x)
+    return xc, sign * np.abs(v)
+
+
+def clean_rate(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(n,) rate of x with its sign cleaned (see clean_motion)."""
+    return clean_motion(x, t)[1]
 
 
 def fast_replace(sig: Signals, **changes) -> Signals:
@@ -209,8 +248,9 @@ def _template(d: LinkData, m: LinkModel) -> Signals:
     if key not in d.cache:
         kw = {"t": d.t}
         if d.x is not None:
-            kw["x"] = m.direction * d.x
-            kw["v"] = m.direction * clean_rate(d.x, d.t)
+            xc, vc = clean_motion(d.x, d.t)
+            kw["x"] = m.direction * xc
+            kw["v"] = m.direction * vc
         if d.temperature is not None:
             kw["temperature"] = d.temperature
         if d.theta is not None:
