@@ -78,6 +78,11 @@ def bending_angles(l: np.ndarray, geom: Geometry) -> np.ndarray:
     return np.abs(np.arcsin(np.clip(s, -1.0, 1.0)))
 
 
+def capstan_angles(pose, geom: Geometry) -> np.ndarray:
+    """(6,) total wrap Theta_i = theta_i (eq 6) + theta0 [rad] between each FSR and the end effector."""
+    return bending_angles(pose2cables(pose, geom), geom) + geom.theta0
+
+
 def structure_matrix(pose, geom: Geometry) -> np.ndarray:
     """(6, 6) structure matrix A of eq 8, so that A t + f = 0 for cable tensions t [N] and wrench f.
 

@@ -71,7 +71,6 @@ class ReferenceTick:
         """(lengths (6,), wrench (6,), force (3,)) like TickComputer.compute."""
         from scipy.spatial.transform import Rotation
 
-        from teleop.estimation.estimators import capstan_state
         from teleop.physics.capstan import motor2tip
         from teleop.physics.friction import viscous
 
@@ -96,7 +95,9 @@ class ReferenceTick:
                 a = np.exp(-p.dahl_sigma * np.abs(dx) / p.dahl_Fc)
                 self.F_dahl = a * self.F_dahl + np.sign(dx) * p.dahl_Fc * (1 - a)
                 t = t - self.F_dahl
-            self.phi = capstan_state(self.phi, dx, t, g.mu * theta, p.capstan_k)
+            # capstan friction state: d phi = k dx / (mu Theta t), clipped to [-1, 1] (slack: slips at once)
+            mT = g.mu * theta
+            self.phi = np.clip(self.phi + p.capstan_k * dx / np.maximum(mT * np.maximum(t, 1e-6), 1e-12), -1.0, 1.0)
             t = t * np.exp(-self.phi * g.mu * theta)
         self.L_prev = L
         A = np.vstack([-u.T, -np.cross(Rr, u).T])

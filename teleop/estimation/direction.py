@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from teleop.kernels.estimate import direction_update
+
 
 class DirectionTracker:
     """Per-channel direction +1 (increasing), -1 (decreasing) or 0 (not yet moved).
@@ -23,31 +25,11 @@ class DirectionTracker:
         self.reset()
 
     def reset(self) -> None:
-        self._d = [0.0] * self.n
-        self._e = [float("nan")] * self.n
-        self.direction = np.zeros(self.n)
-        self.extreme = np.full(self.n, np.nan)
-        self.flipped = np.zeros(self.n, dtype=bool)
+        self._d, self._e, self._f = np.zeros(self.n), np.full(self.n, np.nan), np.zeros(self.n, dtype=bool)
+        self.direction, self.extreme, self.flipped = self._d.copy(), self._e.copy(), self._f.copy()
 
     def update(self, value) -> np.ndarray:
-        """(n,) direction after seeing `value` (n,). (A float loop: faster than numpy for a few channels.)"""
-        vals = value.tolist() if isinstance(value, np.ndarray) else [float(v) for v in value]
-        d, e, db = self._d, self._e, self.deadband
-        flipped = [False] * self.n
-        for i, v in enumerate(vals):
-            di, ei = d[i], e[i]
-            if ei != ei:  # first value: the reference
-                ei = v
-            if di <= 0.0 and v > ei + db:      # rising past the dead band
-                flipped[i], di, ei = di < 0.0, 1.0, v
-            elif di >= 0.0 and v < ei - db:    # falling past the dead band
-                flipped[i], di, ei = di > 0.0, -1.0, v
-            elif di > 0.0 and v > ei:          # the extreme follows the motion
-                ei = v
-            elif di < 0.0 and v < ei:
-                ei = v
-            d[i], e[i] = di, ei
-        self.direction = np.array(d)
-        self.extreme = np.array(e)
-        self.flipped = np.array(flipped)
+        """(n,) direction after seeing `value` (n,) (teleop.kernels.friction.direction_step per channel)."""
+        direction_update(self._d, self._e, self._f, np.asarray(value, dtype=float).reshape(self.n), self.deadband)
+        self.direction, self.extreme, self.flipped = self._d.copy(), self._e.copy(), self._f.copy()
         return self.direction

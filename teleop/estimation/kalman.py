@@ -27,6 +27,8 @@ from filterpy.common import Q_discrete_white_noise
 from filterpy.kalman import KalmanFilter
 
 from teleop.geometry import Geometry
+from teleop.kernels import kalman as KK
+from teleop.kernels.kalman import kalman_update
 from teleop.kinematics import structure_matrix
 
 
@@ -169,38 +171,46 @@ def make_filterpy(params: WrenchKalmanParams, steady: bool = True) -> KalmanFilt
 
 
 class SteadyWrenchKalman:
-    """Steady-state wrench filter in plain floats (the hot path). `update(z)` -> filtered (6,) wrench.
+    """Steady-state wrench filter (the hot path). `update(z)` -> filtered (6,) wrench.
 
-    Per axis: predict w_p = w + dt w_dot; innovation y = z - w_p; w = w_p + K0 y; w_dot = w_dot + K1 y.
-    The first measurement initialises the state to [z, 0].
+    The step is teleop.kernels.kalman.kalman_update (per axis: predict w_p = w + dt w_dot; innovation
+    y = z - w_p; w = w_p + K0 y; w_dot = w_dot + K1 y; the first measurement initialises the state to [z, 0])
+    on this object's filter array `kf`, which the tick kernels update in place too.
     """
 
     def __init__(self, params: WrenchKalmanParams):
         self.params = params
         self.dt = params.dt
-        self.K0 = [k[0] for k in params.K]
-        self.K1 = [k[1] for k in params.K]
+        self.kf = np.zeros((5, len(params.K)))  # teleop.kernels.kalman's filter array: w, w_dot, K0, K1, meta
+        self.kf[KK.K0] = [k[0] for k in params.K]
+        self.kf[KK.K1] = [k[1] for k in params.K]
+        self.kf[KK.META, 1] = params.dt
         self.reset()
 
     def reset(self) -> None:
-        self.w = [0.0] * 6
-        self.w_dot = [0.0] * 6
-        self.started = False
+        self.kf[KK.W] = 0.0
+        self.kf[KK.W_DOT] = 0.0
+        self.kf[KK.META, 0] = 0.0
+
+    @property
+    def started(self) -> bool:
+        return bool(self.kf[KK.META, 0])
+
+    @property
+    def w(self) -> list:
+        """Filtered wrench (6 floats)."""
+        return self.kf[KK.W].tolist()
+
+    @property
+    def w_dot(self) -> list:
+        """Its rate (6 floats) [N/s, N m/s]."""
+        return self.kf[KK.W_DOT].tolist()
 
     def update(self, z) -> list:
-        """Filtered wrench (list of 6 floats) from the measured wrench z (6 floats)."""
-        if not self.started:
-            self.w = [float(v) for v in z]
-            self.w_dot = [0.0] * 6
-            self.started = True
-            return list(self.w)
-        dt, w, wd, K0, K1 = self.dt, self.w, self.w_dot, self.K0, self.K1
-        for k in range(6):
-            wp = w[k] + dt * wd[k]  # x = F x
-            y = z[k] - wp           # y = z - H x
-            w[k] = wp + K0[k] * y   # x = x + K y
-            wd[k] += K1[k] * y
-        return list(w)
+        """Filtered wrench (list of 6 floats) from the measured wrench z (6 floats): teleop.kernels.kalman."""
+        z = np.array(z, dtype=float)
+        kalman_update(self.kf, z)
+        return z.tolist()
 
 
 class FilterpyWrenchKalman:

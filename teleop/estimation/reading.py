@@ -17,11 +17,12 @@ from dataclasses import asdict, fields
 
 import numpy as np
 
-from teleop.estimation.estimators import DynamicParams
 from teleop.estimation.kalman import KalmanNoise
+from teleop.estimation.estimators import DynamicParams
 from teleop.estimation.tick import TickComputer
 from teleop.estimation.turn import AxisTurnFit, TurnCompensation
 from teleop.geometry import Geometry
+from teleop.kernels.estimate import fsr_tensions
 from teleop.sensors import LOADING, UNLOADING, FsrCalibration, default_fsr_calibration
 
 
@@ -41,7 +42,10 @@ class ReadingEstimator:
         # an ADC gives integer counts: the tension of every count on each branch, computed once by the same
         # per-float conversion (`_tension1`), so a tick looks it up (non-integer counts still compute it)
         n_counts = int(self.cal.adc_max) + 1 if 0 < self.cal.adc_max <= 65535 else 0
-        self._table = {b: [self._tension1(float(c), b) for c in range(n_counts)] for b in (LOADING, UNLOADING)}
+        self._table = np.array([[self._tension1(float(c), b) for c in range(n_counts)] for b in (LOADING, UNLOADING)],
+                               dtype=float).reshape(2, n_counts)
+        self._counts = np.zeros(self.n)
+        self._t = np.zeros(self.n)
         self.reset()
 
     def _tension1(self, v: float, branch: int) -> float:
@@ -54,46 +58,37 @@ class ReadingEstimator:
         return cal.tension1(c / ((amax - c) * cal.r_divider), branch)
 
     def reset(self) -> None:
-        self._dir = [0.0] * self.n  # FSR reading direction per cable (+1 rising, -1 falling, 0 not yet moved)
-        self._ext = [float("nan")] * self.n  # extreme reading since the last flip [counts]
+        # FSR reading direction per cable (+1 rising, -1 falling, 0 not yet moved), extreme since the last flip
+        self._fsr = np.zeros((2, self.n))
+        self._fsr[1] = np.nan
         self.tick.reset()
 
-    def tensions(self, counts: list) -> list:
-        """Tensions [N] (list) from raw FSR counts (list of floats); updates the branch state.
+    def tensions_into(self, counts: np.ndarray) -> np.ndarray:
+        """Tensions [N] (the estimator's (n,) buffer) from raw FSR counts (n,) float64; updates the branch state.
 
-        The numbers of teleop.sensors.FsrConverter.update (a Schmitt trigger on the counts picks the loading
-        or unloading branch, as estimation.direction.DirectionTracker; counts -> conductance through the
-        divider; FsrCalibration.tension1) without its numpy arrays; integer counts come from a table of
-        those same numbers.
+        The numbers of teleop.sensors.FsrConverter.update: a Schmitt trigger on the counts picks the loading or
+        unloading branch (teleop.kernels.estimate.fsr_tensions); an integer count looks its tension up in the
+        table, any other goes through counts -> conductance -> FsrCalibration.tension1.
         """
-        d, e, db = self._dir, self._ext, self.deadband_counts
-        tab_load, tab_unload = self._table[LOADING], self._table[UNLOADING]
-        n_tab = len(tab_load)
-        out = [0.0] * self.n
-        for i in range(self.n):
-            v = counts[i]
-            di, ei = d[i], e[i]
-            if ei != ei:  # first value: the reference
-                ei = v
-            if di <= 0.0 and v > ei + db:  # rising past the dead band
-                di, ei = 1.0, v
-            elif di >= 0.0 and v < ei - db:  # falling past the dead band
-                di, ei = -1.0, v
-            elif di > 0.0 and v > ei:  # the extreme follows the motion
-                ei = v
-            elif di < 0.0 and v < ei:
-                ei = v
-            d[i], e[i] = di, ei
-            if 0.0 <= v < n_tab and v == (c := int(v)):  # an integer count in the table
-                out[i] = tab_unload[c] if di < 0.0 else tab_load[c]
-            else:
-                out[i] = self._tension1(v, UNLOADING if di < 0.0 else LOADING)
-        return out
+        t = self._t
+        if fsr_tensions(counts, self._fsr, self.deadband_counts, self._table, t):
+            for i in np.flatnonzero(np.isnan(t)):
+                t[i] = self._tension1(float(counts[i]), UNLOADING if self._fsr[0, i] < 0.0 else LOADING)
+        return t
 
-    def update_floats(self, counts: list, pose: list, dt: float) -> tuple[list, list]:
-        """(tensions [N], wrench [N, N m] in {B}) as lists of 6 floats from counts and pose (lists of floats)."""
-        t = self.tensions(counts)
-        return t, self.tick.estimate(pose, t, dt)[1]
+    def tensions(self, counts) -> list:
+        """Tensions [N] (list) from raw FSR counts (any sequence of floats); updates the branch state."""
+        self._counts[:] = counts
+        return self.tensions_into(self._counts).tolist()
+
+    def update_floats(self, counts, pose, dt: float) -> tuple[list, list]:
+        """(tensions [N], wrench [N, N m] in {B}) as lists of 6 floats from counts and pose (sequences)."""
+        self._counts[:] = counts
+        t = self.tensions_into(self._counts)
+        tc = self.tick
+        tc._pose[:] = pose
+        out = tc.estimate_into(tc._pose, t, float(dt))
+        return t.tolist(), out[1, :6].tolist()
 
     def update(self, reading, pose, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """(tensions (6,) [N] at the FSRs, wrench (6,) [N, N m] in {B})."""

@@ -18,6 +18,7 @@ from numpy.polynomial import Polynomial
 
 from teleop.errors import InputError
 from teleop.estimation.direction import DirectionTracker
+from teleop.kernels.estimate import turn_correct
 
 FORWARD, BACKWARD = 1, -1
 
@@ -105,23 +106,36 @@ def fit_turn_compensation(t, poses, wrench, axis: int = 2, degree: int = 4, dura
                        deadband=deadband)
 
 
+def turn_arrays(comp: TurnCompensation | None) -> tuple[np.ndarray, np.ndarray]:
+    """(turn (k, 6), coefs (k, 2, 6, deg+1)): the arrays of teleop.kernels.estimate.turn_correct for the fits
+    (state columns direction 0, extreme NaN, tau inf: no turn yet); (0, 6) and (0, 2, 6, 1) for none.
+    Polynomials of lower degree are padded with zero high-order coefficients (the same values)."""
+    axes = () if comp is None else comp.axes
+    deg = max([len(c) for f in axes for c in (*f.forward, *f.backward)], default=1)
+    turn = np.zeros((len(axes), 6))
+    coefs = np.zeros((len(axes), 2, 6, deg))
+    for k, f in enumerate(axes):
+        turn[k, :6] = (f.axis, f.duration, f.deadband, 0.0, np.nan, np.inf)
+        for b, side in enumerate((f.forward, f.backward)):
+            for j, c in enumerate(side):
+                coefs[k, b, j, :len(c)] = c
+    return turn, coefs
+
+
 class TurnCompensator:
-    """Per-sample step 3: detects turns of the end effector and returns the wrench correction."""
+    """Per-sample step 3: detects turns of the end effector and returns the wrench correction
+    (teleop.kernels.estimate.turn_correct on the fits' arrays)."""
 
     def __init__(self, comp: TurnCompensation):
         self.comp = comp
         self.reset()
 
     def reset(self) -> None:
-        self.trackers = [DirectionTracker(1, f.deadband) for f in self.comp.axes]
-        self.tau = [np.inf] * len(self.comp.axes)
+        self.turn, self.coefs = turn_arrays(self.comp)
 
     def update(self, position, dt: float) -> np.ndarray:
         """(6,) correction to subtract from the wrench, given the end-effector position (3,) [m]."""
-        out = np.zeros(6)
-        for i, f in enumerate(self.comp.axes):
-            tr = self.trackers[i]
-            tr.update(np.asarray(position, dtype=float)[f.axis:f.axis + 1])
-            self.tau[i] = 0.0 if tr.flipped[0] else self.tau[i] + dt
-            out += f.correction(int(tr.direction[0]), self.tau[i])
-        return out
+        w = np.zeros(6)
+        x, y, z = (float(v) for v in np.asarray(position, dtype=float)[:3])
+        turn_correct(w, x, y, z, float(dt), self.turn, self.coefs)
+        return -w

@@ -1,0 +1,18 @@
+"""Compiled kernels: the one definition of each formula on the tick path, written once as plain scalar code
+(numba `njit(cache=True)`; the same source runs as Python without numba, see `jit.py`).
+
+Where each formula lives (the numpy array forms, the physics Steps, the estimators, the simulated robot and
+the loop's tick all call these):
+- geometry.py   ZYX rotation (eq 5), platform offsets, cable length and unit vector (eq 4), wrap angle
+                (eq 6 + theta0), structure-matrix column (eq 8), inverse and forward kinematics
+- friction.py   direction (Schmitt) rule, Dahl step, capstan band / stick-transition step / seed compensation
+                (eq 7), the `dynamic` estimator's capstan friction state
+- tension.py    the closed-form tension distribution of a one-dimensional null space
+- kalman.py     the steady-state Kalman update
+- estimate.py   the per-tick estimate of each estimator (one compiled call), turn correction, FSR branch
+                lookup
+- mapping.py    the stylus -> robot target -> cable length step (motion scale, workspace box, cable speed)
+- sim.py        the simulated robot's per-reading cable physics (pose terms, tension distribution, capstan)
+`warm.warm_up()` compiles (or loads from the on-disk cache) every kernel with the hot path's argument types;
+the loop calls it before its first tick.
+"""

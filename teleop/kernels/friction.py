@@ -1,0 +1,88 @@
+"""Kernels of the sheath friction and the direction rule, per sample on floats: the one definition of each.
+
+Conventions of teleop.physics: x increasing = the motor hauls its cable in (pulling); a motor travel dx > 0
+pulls. Each returns the new state; the callers (the physics Steps and array forms, the estimators, the
+simulated robot, the loop's tick) keep the state.
+
+- `direction_step`: the Schmitt trigger on reversals (estimation.direction): direction d (+1 rising, -1
+  falling, 0 not yet moved) flips only once the value has come back more than the dead band from the
+  extreme reached since the last flip.
+- `dahl_step`: Dahl pre-sliding friction, exact over a monotone step: F = s Fc + (F - s Fc) e^(-sigma |dx| / Fc).
+- `capstan_play_step`: the capstan with stick transitions, motor side (physics capstan_friction): the motor
+  force follows the cable stretch, F <- clamp(F + k dx, F_t e^-mu Theta, F_t e^+mu Theta).
+- `capstan_band`: (lo, hi) = (F e^-mu Theta, F e^+mu Theta) sorted.
+- `capstan_hold`: the seed's compensation (seed 000 eq 7, physics.capstan.motor2tip): t e^-mu Theta while
+  pulling (shortening or unmoved), t e^+mu Theta while paying out.
+- `capstan_state_step`: the friction state phi in [-1, 1] of the `dynamic` estimator: the sensor tension
+  t e^(phi mu Theta) moves by k dx while the cable sticks, d phi = k dx / (mu Theta t_sensor), clipped at
+  +-1 where it slips (a slack cable, t <= 1e-6 N, slips at once).
+"""
+
+from __future__ import annotations
+
+import math
+
+from teleop.kernels.jit import njit
+
+
+@njit
+def sgn(v):
+    """sign(v) as a float, sign(0) = 0."""
+    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+
+
+@njit
+def clamp(y, lo, hi):
+    """min(max(y, lo), hi) (the play operator's step; needs lo <= hi)."""
+    return hi if y > hi else (lo if y < lo else y)
+
+
+@njit
+def direction_step(d, e, v, deadband):
+    """(d, e, flipped): direction and extreme after value v; e NaN = no value yet (v becomes the reference)."""
+    if e != e:
+        e = v
+    if d <= 0.0 and v > e + deadband:      # rising past the dead band
+        return 1.0, v, d < 0.0
+    if d >= 0.0 and v < e - deadband:      # falling past the dead band
+        return -1.0, v, d > 0.0
+    if d > 0.0 and v > e:                  # the extreme follows the motion
+        e = v
+    elif d < 0.0 and v < e:
+        e = v
+    return d, e, False
+
+
+@njit
+def dahl_step(F, dx, sigma, Fc):
+    """Dahl force [N] after a motor travel dx [m] from force F; sigma [N/m], Fc [N] > 0."""
+    a = math.exp(-sigma * abs(dx) / Fc)
+    return a * F + sgn(dx) * Fc * (1.0 - a)
+
+
+@njit
+def capstan_band(F, mu_theta):
+    """(lo, hi): F e^-mu Theta and F e^+mu Theta, ordered (F may be negative)."""
+    e = math.exp(mu_theta)
+    a, b = F / e, F * e
+    return (a, b) if a <= b else (b, a)
+
+
+@njit
+def capstan_play_step(F, dx, F_tip, mu_theta, k):
+    """Motor force [N] after a motor travel dx [m]: clamp(F + k dx) into the band of the tip force F_tip."""
+    lo, hi = capstan_band(F_tip, mu_theta)
+    return clamp(F + k * dx, lo, hi)
+
+
+@njit
+def capstan_hold(t, pulling, mu_theta):
+    """Tip tension [N] from the sensor tension t [N]: t e^-mu Theta while pulling, t e^+mu Theta releasing."""
+    return t * math.exp(-mu_theta) if pulling else t * math.exp(mu_theta)
+
+
+@njit
+def capstan_state_step(phi, dx, t_sensor, mu_theta, k):
+    """Friction state phi in [-1, 1] after a motor travel dx [m] at sensor tension t_sensor [N]."""
+    den = mu_theta * (t_sensor if t_sensor > 1e-6 else 1e-6)
+    return clamp(phi + k * dx / (den if den > 1e-12 else 1e-12), -1.0, 1.0)

@@ -1,0 +1,140 @@
+"""Kernels of the CDPR geometry (seed 000 eqs 4-6, 8) on floats: the one definition of each formula.
+
+- `rotation_zyx`: R = Rz(alpha) Ry(beta) Rx(gamma) (eq 5), as 9 floats row by row.
+- `platform_offsets`: per cable (R r_i - B_i, R r_i) for one orientation, (n, 6) [m].
+- `cable`: length L_i = |p + R r_i - B_i| and unit vector u_i (eq 4).
+- `wrap_angle`: total capstan wrap Theta_i = |theta_i| (eq 6, bending at the scaffold exit) + theta0 [rad].
+- `pose2lengths_into` / `poses2lengths_batch`: inverse kinematics of one pose / of (n, 6) poses.
+- `structure_column`: column i of A (eq 8), [-u_i; -(R r_i) x u_i].
+- `forward_kinematics`: the pose whose cable lengths match (Gauss-Newton from a guess, forward-difference
+  Jacobian over the free coordinates).
+Geometry arrays: r (n, 3) platform anchors in {P}, B (n, 3) base anchors in {B} [m].
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from teleop.kernels.jit import njit
+
+
+@njit
+def rotation_zyx(a, b, g):
+    """R = Rz(a) Ry(b) Rx(g) (angles [rad]) as (R00, R01, R02, R10, R11, R12, R20, R21, R22)."""
+    ca, sa, cb, sb, cg, sg = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(g), math.sin(g)
+    return (ca * cb, ca * sb * sg - sa * cg, ca * sb * cg + sa * sg,
+            sa * cb, sa * sb * sg + ca * cg, sa * sb * cg - ca * sg,
+            -sb, cb * sg, cb * cg)
+
+
+@njit
+def platform_offsets(a, b, g, r, B, out):
+    """out (n, 6): per cable (R r_i - B_i, R r_i) [m] for orientation (a, b, g) [rad]; returns out."""
+    R00, R01, R02, R10, R11, R12, R20, R21, R22 = rotation_zyx(a, b, g)
+    for i in range(r.shape[0]):
+        rx, ry, rz = r[i, 0], r[i, 1], r[i, 2]
+        qx = R00 * rx + R01 * ry + R02 * rz
+        qy = R10 * rx + R11 * ry + R12 * rz
+        qz = R20 * rx + R21 * ry + R22 * rz
+        out[i, 0], out[i, 1], out[i, 2] = qx - B[i, 0], qy - B[i, 1], qz - B[i, 2]
+        out[i, 3], out[i, 4], out[i, 5] = qx, qy, qz
+    return out
+
+
+@njit
+def cable(x, y, z, off, i):
+    """(L [m], ux, uy, uz) of cable i at position (x, y, z) [m]: l_i = p + (R r_i - B_i) (eq 4)."""
+    lx = x + off[i, 0]
+    ly = y + off[i, 1]
+    lz = z + off[i, 2]
+    L = math.sqrt(lx * lx + ly * ly + lz * lz)
+    return L, lx / L, ly / L, lz / L
+
+
+@njit
+def wrap_angle(ux, uy, uz, vx, vy, vz, theta0):
+    """Theta = |theta| + theta0 [rad]: theta = asin(v . u) the cable's bend at the scaffold exit (eq 6,
+    90 deg - angle to the base-plane normal v; a magnitude: the sheath bends the same either way)."""
+    s = ux * vx + uy * vy + uz * vz
+    s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
+    return abs(math.asin(s)) + theta0
+
+
+@njit
+def structure_column(ux, uy, uz, qx, qy, qz):
+    """Column of A (eq 8) for unit vector u and R r_i = q: (-u, -(q x u))."""
+    return (-ux, -uy, -uz, -(qy * uz - qz * uy), -(qz * ux - qx * uz), -(qx * uy - qy * ux))
+
+
+@njit
+def pose2lengths_into(q, r, B, off, out):
+    """out (n,): cable lengths [m] at pose q (6,) [m, rad]; off (n, 6) scratch. Returns out."""
+    platform_offsets(q[3], q[4], q[5], r, B, off)
+    for i in range(r.shape[0]):
+        out[i] = cable(q[0], q[1], q[2], off, i)[0]
+    return out
+
+
+@njit
+def poses2lengths_batch(q, r, B, out):
+    """out (m, n): cable lengths [m] for poses q (m, 6). Returns out."""
+    off = np.empty((r.shape[0], 6))
+    for k in range(q.shape[0]):
+        pose2lengths_into(q[k], r, B, off, out[k])
+    return out
+
+
+@njit
+def forward_kinematics(L, q, free, r, B, tol, max_iter):
+    """Pose q (6,) [m, rad], updated in place from its value as the guess, whose cable lengths match L (n,)
+    [m]; only the coordinates listed in `free` move (an axial geometry fixes the roll alpha). Gauss-Newton
+    with a forward-difference Jacobian (h = 1e-7) and step halving while the residual grows. Returns the
+    largest length residual [m] reached."""
+    n, m = L.shape[0], free.shape[0]
+    h = 1e-7
+    off = np.empty((n, 6))
+    Lq = np.empty(n)
+    Lh = np.empty(n)
+    res = np.empty(n)
+    J = np.empty((n, m))
+    qt = np.empty(6)
+    pose2lengths_into(q, r, B, off, Lq)
+    worst = 0.0
+    sse = 0.0
+    for i in range(n):
+        res[i] = Lq[i] - L[i]
+        worst = max(worst, abs(res[i]))
+        sse += res[i] * res[i]
+    for _ in range(max_iter):
+        if worst < tol:
+            break
+        for j in range(m):
+            qt[:] = q
+            qt[free[j]] += h
+            pose2lengths_into(qt, r, B, off, Lh)
+            for i in range(n):
+                J[i, j] = (Lh[i] - Lq[i]) / h
+        step = np.linalg.solve(J.T @ J, J.T @ res)
+        lam = 1.0
+        for _half in range(30):  # accept the first step (halved as needed) that lowers the residual
+            qt[:] = q
+            for j in range(m):
+                qt[free[j]] -= lam * step[j]
+            pose2lengths_into(qt, r, B, off, Lh)
+            sse_t = 0.0
+            for i in range(n):
+                sse_t += (Lh[i] - L[i]) ** 2
+            if sse_t < sse or lam < 1e-6:
+                break
+            lam *= 0.5
+        q[:] = qt
+        worst = 0.0
+        sse = 0.0
+        for i in range(n):
+            Lq[i] = Lh[i]
+            res[i] = Lh[i] - L[i]
+            worst = max(worst, abs(res[i]))
+            sse += res[i] * res[i]
+    return worst

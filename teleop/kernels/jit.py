@@ -1,0 +1,31 @@
+"""The one decorator of the compiled kernels: numba's `njit(cache=True)`, or the plain function without numba.
+
+A kernel is written once, in the subset of Python numba compiles (floats, ints, tuples, numpy arrays, `math`);
+with numba installed it runs compiled (machine code cached on disk, see `teleop.kernels.warm`), without it
+the same source runs as Python (`kernel.py_func` is that source in both cases). There is no second copy.
+
+Cache location: numba writes next to the sources (`__pycache__`), falls back to a per-user directory when
+the package directory is read-only, and `NUMBA_CACHE_DIR` overrides both; an unwritable cache only costs
+the compile time at start-up (numba warns and compiles in memory).
+"""
+
+from __future__ import annotations
+
+import os
+
+try:  # numba is a dependency (pyproject.toml); TELEOP_NO_JIT=1 runs the same sources as Python
+    if os.environ.get("TELEOP_NO_JIT"):
+        raise ImportError("TELEOP_NO_JIT set")
+    import numba as _numba
+except ImportError:  # pragma: no cover - exercised with TELEOP_NO_JIT=1
+    _numba = None
+
+COMPILED = _numba is not None
+
+
+def njit(fn):
+    """Compile `fn` with numba (nopython, cached on disk, no GIL held); without numba return it as is."""
+    if _numba is None:
+        fn.py_func = fn
+        return fn
+    return _numba.njit(cache=True, nogil=True)(fn)

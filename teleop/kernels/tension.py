@@ -1,0 +1,72 @@
+"""Kernel of the closed-form tension distribution for a one-dimensional null space (teleop.tension).
+
+A t + f = 0 with t = t_p + lambda n: t_p = P f the minimum-norm particular solution (P = -A^+), n the null
+direction; lambda is the value closest to t_ref (least squares: n . (t_ref - t_p) / n . n) clipped to the
+interval where every tension lies in [t_min, t_max]; the tensions are finally clipped to that range.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from teleop.kernels.jit import njit
+
+OK, OUT_OF_RANGE, INFEASIBLE = 0, 1, 2  # status codes of `null1_tensions`
+
+
+@njit
+def null1_terms(A):
+    """(P = -A^+ (n, n) over the rank-(n-1) part, null direction n (n,) with a positive sum) of A (n, n)."""
+    U, s, Vt = np.linalg.svd(A)
+    m = A.shape[0] - 1
+    P = np.zeros((A.shape[1], A.shape[0]))
+    for j in range(m):
+        for a in range(A.shape[1]):
+            va = Vt[j, a] / s[j]
+            for b in range(A.shape[0]):
+                P[a, b] -= va * U[b, j]
+    nv = Vt[m].copy()
+    if nv.sum() < 0.0:
+        nv = -nv
+    return P, nv
+
+
+@njit
+def null1_tensions(P, A, nv, f, t_min, t_max, t_ref, out):
+    """Tensions (out, (n,) [N]) balancing the wrench f (n,): (status, residual). Status OUT_OF_RANGE: f has a
+    component A cannot produce (residual |A t_p + f| above 1e-7 max(1, |f|)); INFEASIBLE: no lambda keeps
+    every tension in [t_min, t_max]. `out` is written only when the status is OK."""
+    n = nv.shape[0]
+    t_p = P @ f
+    resid = 0.0
+    fmax = 1.0
+    for i in range(n):
+        acc = f[i]
+        for j in range(n):
+            acc += A[i, j] * t_p[j]
+        resid = max(resid, abs(acc))
+        fmax = max(fmax, abs(f[i]))
+    if resid > 1e-7 * fmax:
+        return OUT_OF_RANGE, resid
+    lo, hi = -math.inf, math.inf
+    num = 0.0
+    nn = 0.0
+    for i in range(n):
+        ni, ti = nv[i], t_p[i]
+        num += ni * (t_ref - ti)
+        nn += ni * ni
+        if abs(ni) < 1e-12:
+            if not (t_min - 1e-9 <= ti <= t_max + 1e-9):
+                lo, hi = math.inf, -math.inf
+            continue
+        a, b = (t_min - ti) / ni, (t_max - ti) / ni
+        lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
+    if lo > hi + 1e-12:
+        return INFEASIBLE, resid
+    lam = num / nn
+    lam = lo if lam < lo else (hi if lam > hi else lam)
+    for i in range(n):
+        out[i] = min(t_max, max(t_min, t_p[i] + lam * nv[i]))
+    return OK, resid
