@@ -1,23 +1,25 @@
 """Recording (RELIABILITY.md): bit-exact round trip with metadata, damaged files (every truncation, bit
 flips) never crash the reader and give back an intact prefix, a slow or full disk only drops rows (counted,
 alarmed, bounded memory) without changing the loop side's timing, and the writer shares no interpreter lock
-with the loop (timing compared as ratios of medians within one run, never against wall-clock limits)."""
+with the loop (shown with counters and process ids; time figures belong to `teleop bench loop`)."""
 
 import errno
+import hashlib
 import io
+import json
 import multiprocessing as mp
 import os
 import signal
-import threading
 import time
 
 import numpy as np
+import orjson
 import pytest
 
 from teleop.errors import InputError
-from teleop.loop.timing import wait_until
 from teleop.loop.tap import session_layout
 from teleop.recording import INT, Layout, Recorder, Ring, Signal, SessionWriter, parse_session, read_session
+from teleop.recording.ring import DROPS, FLUSHES, HEAD, TAIL, WRITTEN
 
 META = {"configuration": {"loop": {"rate_hz": 1000.0}}, "calibration": {"fsr": [1.5, 2.5]},
         "firmware_version": "cdpr-fw 1.2.3", "software_version": "cdpr-teleop test"}
@@ -129,7 +131,7 @@ def test_garbage_and_non_mcap_files(tmp_path):
     with pytest.raises(InputError, match="not found"):
         read_session(tmp_path / "missing.mcap")
     s = parse_session(b"\x89MCAP0\r\n" + bytes([0x06]) + (2**63).to_bytes(8, "little") + b"\0" * 64)
-    assert "truncated" in s.damage and not s.records  # a huge declared length allocates nothing
+    assert "exceeds" in s.damage and not s.records  # a huge declared length allocates nothing
 
 
 def test_ring_push_pop_and_drop_counting():
@@ -189,36 +191,38 @@ def test_slow_or_full_disk_drops_and_alarms_never_blocks(tmp_path, disk):
     rec.proc = None
 
 
-def test_files_open_with_the_reference_mcap_reader():
+def test_files_open_with_the_reference_mcap_reader_bit_exact():
+    """The mcap package's own indexed reader gives back every message of ours: same topics, log times,
+    sequence numbers and payloads; floats equal to the rows written (bit-exact)."""
     from mcap.reader import make_reader
 
-    _, R, data = write_file(30)
+    layout, R, data = write_file(30)
+    ours = parse_session(data)
     reader = make_reader(io.BytesIO(data))
-    topics = [ch.topic for _, ch, _ in reader.iter_messages()]
-    assert topics.count("/stylus") == 30 and "/teleop/events" in topics
+    theirs = [(ch.topic, m.log_time, m.sequence, json.loads(m.data)) for _, ch, m in reader.iter_messages()]
+    key = lambda r: (r[1], r[0], r[2])  # noqa: E731 - the indexed reader orders by log time
+    assert sorted(theirs, key=key) == sorted(ours.records, key=key)
+    sl = layout.slices()
+    stylus = [m for tp, _, _, m in theirs if tp == "/stylus"]
+    assert len(stylus) == 30
+    a, b = sl[("/stylus", "measured_cp")]
+    assert [m["measured_cp"] for m in stylus] == [r[a:b].tolist() for r in R]
     assert {m.name for m in make_reader(io.BytesIO(data)).iter_metadata()} == {"session", "session_end"}
+    summary = make_reader(io.BytesIO(data)).get_summary()
+    assert summary.statistics.message_count == len(ours.records)  # the library wrote a summary: seekable
 
 
-PERIOD_NS = 1_000_000  # the loop side's pacing in the timing tests [ns]
-
-
-def loop_side_ns(push, row, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Run n paced 1 kHz ticks that each push `row` (the loop's part of recording: teleop.loop.timing's
-    wait_until, then the push). Returns (n,) push durations [ns] and (n,) deadline -> push done [ns] (what
-    the loop loses per tick to recording, wake-up latency included)."""
-    pc = time.perf_counter_ns
-    push_ns, tick_ns = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
-    t0 = pc() + PERIOD_NS
-    for k in range(n):
-        deadline = t0 + k * PERIOD_NS
-        wait_until(deadline, 200_000)
-        a = pc()
-        push(row)
-        b = pc()
-        push_ns[k], tick_ns[k] = b - a, b - deadline
-        if b - t0 > (k + 2) * PERIOD_NS:  # fell more than a period behind: restart the schedule from here
-            t0 = b - (k + 1) * PERIOD_NS + PERIOD_NS
-    return push_ns, tick_ns
+def test_old_recordings_stay_readable():
+    """A recording by the hand-written writer this package replaced reads back to the same records."""
+    here = os.path.join(os.path.dirname(__file__), "data")
+    s = read_session(os.path.join(here, "session_v1_handwriter.mcap"))
+    with open(os.path.join(here, "session_v1_handwriter.expected.json")) as fh:
+        want = json.load(fh)
+    got = hashlib.sha256(orjson.dumps([[t, lt, seq, m] for t, lt, seq, m in s.records],
+                                      option=orjson.OPT_SORT_KEYS)).hexdigest()
+    assert s.is_intact and s.complete == want["complete"]
+    assert len(s.records) == want["records"] and got == want["sha256_records"]
+    assert sorted(set(s.topics.values())) == want["topics"] and sorted(s.metadata) == want["metadata_keys"]
 
 
 def python_busy(seconds: float) -> int:
@@ -234,9 +238,15 @@ class GatedStream(io.BytesIO):
     `box[1]` is 1 every write holds the interpreter for 20 ms (CPU-bound writer); while `box[2]` is 1 every
     write blocks (stalled disk) until it is cleared."""
 
-    def __init__(self, box):
+    def __init__(self, box, path=None):
         super().__init__()
-        self.box, self.n = box, 0
+        self.box, self.n, self.path = box, 0, path
+
+    def close(self):
+        if self.path is not None and not self.closed:  # keep what reached the "disk"
+            with open(self.path, "wb") as fh:
+                fh.write(self.getvalue())
+        super().close()
 
     def write(self, b):
         self.box[0] = os.getpid()
@@ -249,75 +259,69 @@ class GatedStream(io.BytesIO):
         return super().write(b)
 
 
-def test_writer_runs_in_another_process_and_shares_no_interpreter_lock_with_the_loop(tmp_path):
-    """The recorder writes from its own process: a writer holding its interpreter (pure-Python work in every
-    write) or frozen (SIGSTOP) leaves the loop side's per-tick cost where it is. The same measurement against
-    a thread of the loop's own process doing that work shows the shared lock (the test can see it)."""
+def push_all(rec, row, n: int) -> int:
+    """Push n rows (ticks k = 0..n-1 on the rows' own clock, 1 ms apart); returns how many were accepted."""
+    ok = 0
+    for k in range(n):
+        row[0], row[1] = k, k * 1e-3
+        ok += rec.push(row)
+    return ok
+
+
+def test_writer_runs_in_another_process_and_never_holds_the_loop_back(tmp_path):
+    """The recorder writes from its own process (so it shares no interpreter lock with the loop). While it
+    holds its interpreter in every write, or is frozen (SIGSTOP), the loop side's pushes all return: the ring
+    takes what it has room for, the rest is dropped and counted, nothing waits. Time figures of the push
+    belong to `teleop bench loop` (record_us), not here."""
     layout = session_layout()
     box = mp.get_context("fork").RawArray("q", 3)
-    rec = Recorder(tmp_path / "s.mcap", layout, META, capacity=4096, flush_interval=0.005,
-                   stream_factory=lambda: GatedStream(box)).start()
+    cap = 512
+    rec = Recorder(tmp_path / "s.mcap", layout, META, capacity=cap, flush_interval=0.005,
+                   stream_factory=lambda: GatedStream(box, tmp_path / "s.mcap")).start()
     row = rows(layout, 1)[0]
     try:
-        loop_side_ns(rec.push, row, 100)  # warm up; the recorder opens its stream
         box[1] = 1  # the writer now spends its time in Python inside write()
-        time.sleep(0.05)
-        push_busy, tick_busy = loop_side_ns(rec.push, row, 400)
+        assert push_all(rec, row, 200) == 200
+        while rec.ring.ctrl[WRITTEN] < 200:
+            time.sleep(0.005)
         assert box[0] == rec.proc.pid != os.getpid()  # the disk writes happen in the recorder process
-        os.kill(rec.proc.pid, signal.SIGSTOP)  # the writer frozen: nothing competes with the loop side
+        os.kill(rec.proc.pid, signal.SIGSTOP)  # the writer frozen: the loop side must not notice
         try:
-            push_idle, tick_idle = loop_side_ns(rec.push, row, 400)
+            free = cap - int(rec.ring.ctrl[HEAD] - rec.ring.ctrl[TAIL])
+            accepted = push_all(rec, row, 3 * cap)
         finally:
             os.kill(rec.proc.pid, signal.SIGCONT)
+        assert accepted == free and rec.drops == 3 * cap - free and "behind" in rec.alarm
         box[1] = 0
     finally:
         rec.close({})
-    stop = threading.Event()
-
-    def gil_hog():  # the same writer work in a thread of this process (what the design avoids)
-        while not stop.is_set():
-            python_busy(0.020)
-    hog = threading.Thread(target=gil_hog, daemon=True)
-    ring = Ring(layout.width, 4096)
-    hog.start()
-    try:
-        _, tick_thread = loop_side_ns(ring.push, row, 200)
-    finally:
-        stop.set()
-        hog.join()
-    ratio_push = np.median(push_busy) / np.median(push_idle)
-    ratio_tick = np.median(tick_busy) / np.median(tick_idle)
-    ratio_thread = np.median(tick_thread) / np.median(tick_idle)
-    print(f"\nloop side, busy writer process / frozen writer: push median ratio {ratio_push:.2f}, "
-          f"deadline->pushed median ratio {ratio_tick:.2f}; writer as a thread: {ratio_thread:.1f}")
-    assert 1 / 3 <= ratio_push <= 3
-    assert ratio_tick <= 5  # the busy writer takes one of the cores: room for the machine's other load
-    assert ratio_thread > 20  # the measurement does see a lock shared with a busy writer (measured ~400)
+    s = read_session(tmp_path / "s.mcap")
+    assert s.complete and len(s.messages("/loop")) == 200 + free  # what was accepted is all there
 
 
-def test_slow_disk_leaves_loop_side_timing_unchanged(tmp_path):
-    """Same run, same recorder: per-push time and deadline -> pushed time with a healthy disk, then with
-    every write blocked (the ring fills, rows are dropped and counted): medians within a factor of 3."""
+def test_stalled_disk_drops_and_counts_then_recovers(tmp_path):
+    """A stalled disk: every push returns, the ring fills, the overflow is dropped and counted with an alarm,
+    memory stays the ring's; when the disk comes back the rows held in the ring are written:
+    rows written + rows dropped == rows pushed."""
     layout = session_layout()
     box = mp.get_context("fork").RawArray("q", 3)
     rec = Recorder(tmp_path / "s.mcap", layout, META, capacity=256, flush_interval=0.005,
                    stream_factory=lambda: GatedStream(box)).start()
     row = rows(layout, 1)[0]
     try:
-        loop_side_ns(rec.push, row, 100)
-        push_ok, tick_ok = loop_side_ns(rec.push, row, 500)
-        assert rec.drops == 0
+        assert push_all(rec, row, 100) == 100
+        while rec.ring.ctrl[WRITTEN] < 100:
+            time.sleep(0.005)
+        assert rec.drops == 0 and not rec.alarm
         box[2] = 1  # the disk stalls
-        time.sleep(0.05)
-        push_slow, tick_slow = loop_side_ns(rec.push, row, 500)
-        assert rec.drops > 0 and "behind" in rec.alarm
+        while box[0] == 0 or rec.ring.ctrl[FLUSHES] == 0:
+            time.sleep(0.005)
+        pushed = 2000
+        accepted = push_all(rec, row, pushed)
+        assert rec.drops == pushed - accepted > 0 and "behind" in rec.alarm
         assert rec.ring.data.nbytes == 256 * layout.width * 8
         box[2] = 0
     finally:
         box[2] = 0
         rec.close({})
-    ratio_push = np.median(push_slow) / np.median(push_ok)
-    ratio_tick = np.median(tick_slow) / np.median(tick_ok)
-    print(f"\nloop side, stalled disk / healthy disk: push median ratio {ratio_push:.2f}, "
-          f"deadline->pushed median ratio {ratio_tick:.2f}; drops {rec.drops}")
-    assert 1 / 3 <= ratio_push <= 3 and 1 / 3 <= ratio_tick <= 3
+    assert rec.ring.ctrl[WRITTEN] + rec.ring.ctrl[DROPS] == 100 + pushed
