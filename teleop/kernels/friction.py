@@ -86,3 +86,62 @@ def capstan_state_step(phi, dx, t_sensor, mu_theta, k):
     """Friction state phi in [-1, 1] after a motor travel dx [m] at sensor tension t_sensor [N]."""
     den = mu_theta * (t_sensor if t_sensor > 1e-6 else 1e-6)
     return clamp(phi + k * dx / (den if den > 1e-12 else 1e-12), -1.0, 1.0)
+
+
+@njit
+def coulomb_force(v, Fc):
+    """Coulomb friction [N]: Fc sign(v)."""
+    return Fc * sgn(v)
+
+
+@njit
+def viscous_force(v, b):
+    """Viscous friction [N]: b v, b [N s/m]."""
+    return b * v
+
+
+@njit
+def stribeck_force(v, Fc, Fs, vs):
+    """Stribeck friction [N]: (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v); vs [m/s] the Stribeck velocity."""
+    return (Fc + (Fs - Fc) * math.exp(-(v / vs) ** 2)) * sgn(v)
+
+
+@njit
+def capstan_tip_step(F_tip, F_motor, mu_theta):
+    """Tip force [N] estimated from the motor force with flat transitions: the tip force holds while it
+    stays inside the band of the motor force, clamp(F_tip, F_m e^-mu Theta, F_m e^+mu Theta)."""
+    lo, hi = capstan_band(F_motor, mu_theta)
+    return clamp(F_tip, lo, hi)
+
+
+# ------------------------------------------------------------------ array forms: loops over the steps above
+@njit
+def dahl_run(x, sigma, Fc, F0, out):
+    """out (n,): Dahl force [N] along the positions x (n,) [m], from F0 at the first sample."""
+    F = F0
+    for k in range(x.shape[0]):
+        if k > 0:
+            F = dahl_step(F, x[k] - x[k - 1], sigma, Fc)
+        out[k] = F
+    return out
+
+
+@njit
+def capstan_play_run(x, F_tip, mu_theta, k, F0, out):
+    """out (n,): motor force [N] with stick transitions for motor positions x (n,) [m], tip forces F_tip
+    (n,) [N] and wraps mu_theta (n,); from F0 clamped into the first band."""
+    F = F0
+    for j in range(x.shape[0]):
+        F = capstan_play_step(F, 0.0 if j == 0 else x[j] - x[j - 1], F_tip[j], mu_theta[j], k)
+        out[j] = F
+    return out
+
+
+@njit
+def capstan_tip_run(F_motor, mu_theta, F0, out):
+    """out (n,): tip force [N] from motor forces F_motor (n,) [N] with flat transitions, from F0."""
+    F = F0
+    for j in range(F_motor.shape[0]):
+        F = capstan_tip_step(F, F_motor[j], mu_theta[j])
+        out[j] = F
+    return out

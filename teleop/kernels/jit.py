@@ -29,3 +29,18 @@ def njit(fn):
         fn.py_func = fn
         return fn
     return _numba.njit(cache=True, nogil=True)(fn)
+
+
+
+def broadcast_call(loop, *args):
+    """Array form of a scalar kernel: `loop(a1, ..., ak, out)` is a compiled loop applying the kernel to
+    1-D float arrays element by element; the arguments are broadcast against each other (numpy rules) and
+    the result has their broadcast shape (a 0-d result comes back as a float)."""
+    import numpy as np
+
+    arrs = np.broadcast_arrays(*[np.asarray(a, dtype=float) for a in args])
+    shape = arrs[0].shape
+    flat = [np.ascontiguousarray(a).reshape(-1) for a in arrs]
+    out = np.empty(flat[0].shape[0])
+    loop(*flat, out)
+    return out.reshape(shape) if shape else float(out[0])

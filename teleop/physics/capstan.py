@@ -13,50 +13,54 @@ motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)).
 
 from __future__ import annotations
 
-import math
 from typing import Mapping
 
 import numpy as np
 
+from teleop.kernels.friction import capstan_play_run, capstan_play_step, capstan_tip_run
+from teleop.kernels.jit import broadcast_call
+from teleop.kernels.ufuncs import hold_loop, tip_loop
 from teleop.physics.base import Effect, ParamSpec, Signals, Step, register
-from teleop.physics.scan import clamp_scan, clamp_step
 
 
 def capstan_out(T_in, mu, theta):
     """Output tension of a capstan driven by T_in: T_out = T_in exp(-mu theta). Broadcasts (e.g. (6,) cables)."""
-    return np.asarray(T_in, dtype=float) * np.exp(-np.asarray(mu, dtype=float) * np.asarray(theta, dtype=float))
+    return motor2tip(T_in, mu, theta, True)
 
 
 def capstan_in(T_out, mu, theta):
     """Inverse of `capstan_out`: the driving tension that holds T_out, T_in = T_out exp(mu theta)."""
-    return np.asarray(T_out, dtype=float) * np.exp(np.asarray(mu, dtype=float) * np.asarray(theta, dtype=float))
+    return motor2tip(T_out, mu, theta, False)
 
 
-def _direction(pulling):
-    """+1 for pulling, -1 for releasing; accepts bools or signed numbers (0 counts as pulling, seed 001 eq 5)."""
+def _pulling(pulling):
+    """1.0 for pulling, 0.0 for releasing; accepts bools or signed numbers (0 counts as pulling, seed 001 eq 5)."""
     p = np.asarray(pulling)
-    if p.dtype == bool:
-        return np.where(p, 1.0, -1.0)
-    return np.where(p >= 0, 1.0, -1.0)
+    return p.astype(float) if p.dtype == bool else (p >= 0).astype(float)
+
+
+def _mu_theta(mu, theta):
+    return np.asarray(mu, dtype=float) * np.asarray(theta, dtype=float)
 
 
 def tip2motor(F_tip, mu, theta, pulling):
     """Motor force [N] from tip force [N]: F_m = F_t exp(+/- mu theta), + while pulling (sign(dx) switch)."""
-    return np.asarray(F_tip, dtype=float) * np.exp(_direction(pulling) * np.asarray(mu) * np.asarray(theta))
+    # F_t exp(+mu theta) pulling = capstan_hold of a releasing cable (exp(+mu Theta)), and the other way round
+    return broadcast_call(hold_loop, F_tip, 1.0 - _pulling(pulling), _mu_theta(mu, theta))
 
 
 def motor2tip(F_motor, mu, theta, pulling):
     """Compensation, inverse of `tip2motor`: F_t = F_m exp(-/+ mu theta), - while pulling.
 
-    Seed 000 eq 7 (T_hold = T_load e^-mu theta) with the load/hold sides picked by the motion.
+    Seed 000 eq 7 (T_hold = T_load e^-mu theta) with the load/hold sides picked by the motion (kernel
+    friction.capstan_hold).
     """
-    return np.asarray(F_motor, dtype=float) * np.exp(-_direction(pulling) * np.asarray(mu) * np.asarray(theta))
+    return broadcast_call(hold_loop, F_motor, _pulling(pulling), _mu_theta(mu, theta))
 
 
 def capstan_band(F_tip, mu, theta):
     """(lo, hi) motor forces reachable for tip force F_tip: the releasing and pulling lines, lo <= hi."""
-    a = np.asarray(F_tip, dtype=float) * np.exp(-np.asarray(mu) * np.asarray(theta))
-    b = np.asarray(F_tip, dtype=float) * np.exp(np.asarray(mu) * np.asarray(theta))
+    a, b = motor2tip(F_tip, mu, theta, True), motor2tip(F_tip, mu, theta, False)  # F e^-mu theta, F e^+mu theta
     return np.minimum(a, b), np.maximum(a, b)
 
 
@@ -65,29 +69,27 @@ def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
 
     x (n,) motor position [m], F_tip (n,) tip force [N], theta scalar or (n,) [rad], k stick stiffness
     [N/m]; F0 initial motor force (default F_tip[0], inside the band).
-    F_m,k = clamp(F_m,k-1 + k (x_k - x_k-1), F_t,k e^-mu theta, F_t,k e^+mu theta).
+    F_m,k = clamp(F_m,k-1 + k (x_k - x_k-1), F_t,k e^-mu theta, F_t,k e^+mu theta) (kernel
+    friction.capstan_play_step).
     """
-    x = np.asarray(x, dtype=float)
-    lo, hi = capstan_band(F_tip, mu, theta)
-    lo = np.broadcast_to(lo, x.shape)
-    hi = np.broadcast_to(hi, x.shape)
-    S = np.zeros(x.shape)
-    np.cumsum(k * np.diff(x), out=S[1:])
-    # z = F_m - S turns clamp(F + k dx) into a pure clamp recursion
-    y0 = float(np.asarray(F_tip, dtype=float).ravel()[0]) if F0 is None else float(F0)
-    return clamp_scan(y0, lo - S, hi - S) + S
+    x = np.ascontiguousarray(x, dtype=float)
+    F_tip = np.ascontiguousarray(np.broadcast_to(np.asarray(F_tip, dtype=float), x.shape))
+    mt = np.ascontiguousarray(np.broadcast_to(_mu_theta(mu, theta), x.shape))
+    y0 = float(F_tip.ravel()[0]) if F0 is None else float(F0)
+    return capstan_play_run(x, F_tip, mt, float(k), y0, np.empty(x.shape[0]))
 
 
 def motor2tip_transitions(F_motor, mu, theta, F0=None):
     """(n,) tip force [N] estimated from motor force (n,) [N] with flat transitions (direction-free).
 
-    F_t,k = clamp(F_t,k-1, F_m,k e^-mu theta, F_m,k e^+mu theta); F0 default F_motor[0].
-    Inverts `tip2motor_transitions` whenever the tip force is constant during reversals.
+    F_t,k = clamp(F_t,k-1, F_m,k e^-mu theta, F_m,k e^+mu theta); F0 default F_motor[0] (kernel
+    friction.capstan_tip_step). Inverts `tip2motor_transitions` whenever the tip force is constant during
+    reversals.
     """
-    F_motor = np.asarray(F_motor, dtype=float)
-    lo, hi = capstan_band(F_motor, mu, theta)
+    F_motor = np.ascontiguousarray(F_motor, dtype=float)
+    mt = np.ascontiguousarray(np.broadcast_to(_mu_theta(mu, theta), F_motor.shape))
     y0 = float(F_motor.ravel()[0]) if F0 is None else float(F0)
-    return clamp_scan(y0, np.broadcast_to(lo, F_motor.shape), np.broadcast_to(hi, F_motor.shape))
+    return capstan_tip_run(F_motor, mt, y0, np.empty(F_motor.shape[0]))
 
 
 def _theta(signals: Signals, params: Mapping[str, float]):
@@ -132,14 +134,11 @@ class CapstanStep(Step):
 
     def step(self, x: float, load: float, theta: float | None = None) -> float:
         p = self.params
-        th = p["theta"] if theta is None else theta
-        e = math.exp(p["mu"] * th)
-        a, b = load / e, load * e
-        lo, hi = (a, b) if a <= b else (b, a)
-        if self.x_prev is None:
-            self.F = clamp_step(load, lo, hi)
+        mu_theta = p["mu"] * (p["theta"] if theta is None else theta)
+        if self.x_prev is None:  # starts on the tip force, clamped into its band
+            self.F = capstan_play_step(float(load), 0.0, float(load), mu_theta, p["k"])
         else:
-            self.F = clamp_step(self.F + p["k"] * (x - self.x_prev), lo, hi)
+            self.F = capstan_play_step(self.F, float(x - self.x_prev), float(load), mu_theta, p["k"])
         self.x_prev = x
         return float(self.F)
 
@@ -161,12 +160,12 @@ class CapstanCompensator:
 
     def step(self, F_motor, theta=None):
         F_motor = np.asarray(F_motor, dtype=float)
-        e = np.exp(self.mu * (self.theta if theta is None else np.asarray(theta, dtype=float)))
-        a, b = F_motor / e, F_motor * e
+        mt = self.mu * (self.theta if theta is None else np.asarray(theta, dtype=float))
         prev = F_motor if self.F is None else self.F
-        # F_t = clamp(F_t_prev, lower line, upper line)
-        self.F = np.minimum(np.maximum(prev, np.minimum(a, b)), np.maximum(a, b))
-        return float(self.F) if self.F.ndim == 0 else self.F.copy()
+        # F_t = clamp(F_t_prev, lower line, upper line): kernel friction.capstan_tip_step per cable
+        F = broadcast_call(tip_loop, prev, F_motor, mt)
+        self.F = np.asarray(F, dtype=float)
+        return float(F) if self.F.ndim == 0 else self.F.copy()
 
 
 CAPSTAN_FRICTION = register(Effect(

@@ -8,6 +8,8 @@ Each effect returns the motor-side force F_m = load + F_f, with F_f:
   sample (x monotone in between) exactly: F_k = s Fc + (F_k-1 - s Fc) exp(-sigma |dx| / Fc), s = sgn(dx),
   from F = 0 at the first sample. Smooth pre-sliding transition of initial slope sigma after reversals.
 v is the motor velocity (positive while pulling); sign(0) = 0.
+Each formula is one scalar kernel of teleop.kernels.friction; the array forms loop over it (compiled), the
+Steps call it per sample.
 """
 
 from __future__ import annotations
@@ -17,33 +19,33 @@ from typing import Mapping
 
 import numpy as np
 
+from teleop.kernels.friction import coulomb_force, dahl_run, dahl_step, stribeck_force, viscous_force
+from teleop.kernels.jit import broadcast_call
+from teleop.kernels.ufuncs import coulomb_loop, stribeck_loop, viscous_loop
 from teleop.physics.base import Effect, ParamSpec, Signals, Step, register
-from teleop.physics.scan import affine_scan
 
 
 def coulomb(v, Fc):
-    """Coulomb friction force [N] for velocity v: Fc sign(v)."""
-    return Fc * np.sign(v)
+    """Coulomb friction force [N] for velocity v: Fc sign(v) (kernel friction.coulomb_force)."""
+    return broadcast_call(coulomb_loop, v, Fc)
 
 
 def viscous(v, b):
-    """Viscous friction force [N]: b v, b [N s/m]."""
-    return b * np.asarray(v, dtype=float)
+    """Viscous friction force [N]: b v, b [N s/m] (kernel friction.viscous_force)."""
+    return broadcast_call(viscous_loop, v, b)
 
 
 def stribeck(v, Fc, Fs, vs):
-    """Stribeck friction [N]: (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v); vs [m/s] Stribeck velocity."""
-    v = np.asarray(v, dtype=float)
-    return (Fc + (Fs - Fc) * np.exp(-(v / vs) ** 2)) * np.sign(v)
+    """Stribeck friction [N]: (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v); vs [m/s] Stribeck velocity
+    (kernel friction.stribeck_force)."""
+    return broadcast_call(stribeck_loop, v, Fc, Fs, vs)
 
 
 def dahl(x, sigma, Fc, F0: float = 0.0):
-    """(n,) Dahl friction force [N] along the position x (n,) [m]; sigma [N/m], Fc [N] (> 0)."""
-    x = np.asarray(x, dtype=float)
-    dx = np.diff(x, prepend=x[0])
-    a = np.exp(-sigma * np.abs(dx) / Fc)
-    # F_k = a F_k-1 + s Fc (1 - a)
-    return affine_scan(F0, a, np.sign(dx) * Fc * (1.0 - a))
+    """(n,) Dahl friction force [N] along the position x (n,) [m]; sigma [N/m], Fc [N] (> 0).
+    F_k = a F_k-1 + s Fc (1 - a), a = exp(-sigma |dx| / Fc), s = sign(dx) (kernel friction.dahl_step)."""
+    x = np.ascontiguousarray(x, dtype=float)
+    return dahl_run(x, float(sigma), float(Fc), float(F0), np.empty(x.shape[0]))
 
 
 def _moving(v: np.ndarray) -> np.ndarray:
@@ -96,10 +98,6 @@ def _dahl_guess(s: Signals, y: np.ndarray) -> dict:
     return {"Fc": Fc, "sigma": sigma}
 
 
-def _sgn(v: float) -> float:
-    return 1.0 if v > 0 else (-1.0 if v < 0 else 0.0)
-
-
 class CoulombStep(Step):
     """Per-sample coulomb_friction: step(v, load) -> motor force [N]."""
 
@@ -109,7 +107,7 @@ class CoulombStep(Step):
         pass
 
     def step(self, v: float, load: float) -> float:
-        return float(load + self.params["Fc"] * _sgn(v))
+        return float(load + coulomb_force(float(v), self.params["Fc"]))
 
 
 class ViscousStep(Step):
@@ -121,7 +119,7 @@ class ViscousStep(Step):
         pass
 
     def step(self, v: float, load: float) -> float:
-        return float(load + self.params["b"] * v)
+        return float(load + viscous_force(float(v), self.params["b"]))
 
 
 class StribeckStep(Step):
@@ -134,7 +132,7 @@ class StribeckStep(Step):
 
     def step(self, v: float, load: float) -> float:
         p = self.params
-        return float(load + (p["Fc"] + (p["Fs"] - p["Fc"]) * math.exp(-(v / p["vs"]) ** 2)) * _sgn(v))
+        return float(load + stribeck_force(float(v), p["Fc"], p["Fs"], p["vs"]))
 
 
 class DahlStep(Step):
@@ -148,10 +146,7 @@ class DahlStep(Step):
 
     def step(self, x: float, load: float) -> float:
         if self.x_prev is not None:
-            dx = x - self.x_prev
-            Fc = self.params["Fc"]
-            a = math.exp(-self.params["sigma"] * abs(dx) / Fc)
-            self.F = a * self.F + _sgn(dx) * Fc * (1.0 - a)
+            self.F = dahl_step(self.F, x - self.x_prev, self.params["sigma"], self.params["Fc"])
         self.x_prev = x
         return float(load + self.F)
 
