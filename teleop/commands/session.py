@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from teleop.argtypes import input_file, positive_float, rt_priority
+from teleop.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, input_file, positive_float,
+                             rt_priority)
 
 from teleop.errors import InputError
 
@@ -15,9 +16,10 @@ def register(subparsers) -> None:
     p.add_argument("--robot", default="sim://robot?substeps=2",
                    help="robot URL (default: the pybullet slave, 2 physics steps of 1 ms per reading)")
     p.add_argument("--record", metavar="FILE", help="record the session to FILE (.mcap)")
-    p.add_argument("--seconds", type=positive_float, default=10.0, help="session length [s] (default 10)")
-    p.add_argument("--rate", type=positive_float, default=1000.0, help="haptic loop rate [Hz] (default 1000)")
-    p.add_argument("--robot-rate", type=positive_float, default=500.0,
+    p.add_argument("--seconds", type=SESSION_SECONDS, default=10.0,
+                   help="session length [s] (default 10, at most 4 h)")
+    p.add_argument("--rate", type=LOOP_RATE_HZ, default=1000.0, help="haptic loop rate [Hz] (default 1000)")
+    p.add_argument("--robot-rate", type=ROBOT_RATE_HZ, default=500.0,
                    help="robot link rate [Hz]; the robot runs in its own process at this rate (default 500)")
     p.add_argument("--robot-rt", type=rt_priority, default=45,
                    help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
@@ -36,7 +38,29 @@ def register(subparsers) -> None:
                    help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
     p.add_argument("--json", metavar="F", help="write the timing summary and events as JSON")
+    add_live_arguments(p)
     p.set_defaults(func=run)
+
+
+def add_live_arguments(p) -> None:
+    """--live [PORT] and --live-host (also used by `teleop bench loop` and `teleop blind-test`)."""
+    p.add_argument("--live", type=port_number, nargs="?", const=8765, default=None, metavar="PORT",
+                   help="serve the session live to Foxglove (WebSocket) on PORT (default 8765; 0: any free port)")
+    p.add_argument("--live-host", default="127.0.0.1", metavar="HOST",
+                   help="address the live view listens on (default 127.0.0.1; 0.0.0.0 exposes it on purpose)")
+
+
+def port_number(text: str) -> int:
+    """A TCP port 0..65535 (argparse type)."""
+    import argparse
+
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number 0..65535, got {text!r}") from None
+    if not 0 <= v <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a port number 0..65535, got {v}")
+    return v
 
 
 def run(args) -> int:
@@ -68,7 +92,8 @@ def run(args) -> int:
     estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
     res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params, estimator=estimator,
                       robot_process_hz=robot_hz, realtime=not args.no_realtime,
-                      robot_rt_priority=args.robot_rt or None)
+                      robot_rt_priority=args.robot_rt or None,
+                      live=(args.live_host, args.live) if args.live is not None else None)
     t = res.timing
     print(f"session: {t['ticks']} ticks at {t['rate_hz']:g} Hz, lateness p50/p99/max "
           f"{t['lateness_us']['p50']:.0f}/{t['lateness_us']['p99']:.0f}/{t['lateness_us']['max']:.0f} us, "
@@ -76,6 +101,10 @@ def run(args) -> int:
           + (f" ({res.fault_reason})" if res.fault_reason else "") + f"; {res.scheduling}")
     for ev in res.events:
         print(f"  t={ev['t']:.3f} s  {ev['src']} -> {ev['dst']}" + (f": {ev['reason']}" if ev["reason"] else ""))
+    if res.live:
+        lv = res.live
+        print(f"live view: {lv['frames_sent']} frames sent, {lv['frames_dropped']} dropped for slow viewers, "
+              f"{lv['rows_skipped']} ticks skipped")
     if args.record:
         print(f"recorded {args.record}" + (f"; ALARM: {res.alarm}" if res.alarm else f", {res.drops} ticks dropped"))
     if res.alarm:
@@ -83,5 +112,6 @@ def run(args) -> int:
     if args.json:
         write_json(args.json, {"timing": t, "events": res.events, "final_state": res.final_state,
                                "scheduling": res.scheduling,
-                               "fault_reason": res.fault_reason, "drops": res.drops, "alarm": res.alarm})
+                               "fault_reason": res.fault_reason, "drops": res.drops, "alarm": res.alarm,
+                               "live": res.live})
     return 0

@@ -37,6 +37,7 @@ class SessionResult:
     alarm: str = ""
     record: str | None = None
     scheduling: str = ""
+    live: dict = field(default_factory=dict)  # the live view's counters (teleop.live.LiveView.stats), if served
 
 
 def software_version() -> str:
@@ -70,6 +71,33 @@ def session_metadata(tp: Teleop, haptic_url: str, robot_url: str, seconds: float
     }
 
 
+def _start_live(tp, layout, extras, recorder, live: tuple, scene: dict | None):
+    """Start the live view on the recorder's ring (or a ring of its own, overwritten when no one records)."""
+    from teleop.live import LiveView
+    from teleop.recording import Ring
+
+    if recorder is not None:
+        ring = recorder.ring
+    else:
+        ring = Ring(layout.width, 4096, gated=False)
+        tp.tap = RowTap(layout, ring.push, extras)
+    g = tp.geom
+    view = LiveView(layout, ring, host=live[0], port=live[1],
+                    scene={"geometry": {"B": g.B.tolist(), "r": g.r.tolist()}, **(scene or {})}).start()
+    if view.failed:
+        view.close()
+        return None
+    print(f"live view: ws://{live[0]}:{view.port} (Foxglove WebSocket)", flush=True)
+    on_event = tp.on_event
+
+    def both(ev):
+        if on_event is not None:
+            on_event(ev)
+        view.event(vars(ev))
+    tp.on_event = both
+    return view
+
+
 class _Terminate(Exception):
     pass
 
@@ -96,14 +124,17 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 params: LoopParams | None = None, estimator=None, seed: int | None = None,
                 spin_us: float = 200.0, flush_interval: float = 0.1, haptic=None, robot=None,
                 robot_process_hz: float | None = 1000.0, realtime: bool = True,
-                robot_rt_priority: int | None = None) -> SessionResult:
+                robot_rt_priority: int | None = None, live: tuple | None = None,
+                live_scene: dict | None = None) -> SessionResult:
     """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
 
     With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
     .ProcessRobot) and the loop exchanges the latest command/reading with it every tick; None runs the
     robot's I/O inline in the tick (at LoopParams.robot_rate_hz). With `realtime` the loop runs under
     SCHED_FIFO 50 when the OS allows it; the robot process (SCHED_FIFO `robot_rt_priority` if given, else nice -10)
-    and the recorder (nice -10) stay behind it.
+    and the recorder (nice -10) stay behind it. `live` = (host, port) serves the session to Foxglove from
+    another process reading the same ring (teleop.live; port 0 picks a free one, printed on stdout);
+    `live_scene` adds pads to its 3D scene.
     """
     params = params or LoopParams()
     if estimator is None:
@@ -118,7 +149,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                                  rt_priority=robot_rt_priority if realtime else None)
         else:
             robot = open_device(robot_url)
-    recorder = None
+    recorder = live_view = None
     old = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         with haptic, robot:
@@ -126,23 +157,25 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             first = robot.read()  # telemetry only; no motion command is sent before ENABLED
             tp.last_reading = first
             extras = numeric_extras(first)
+            layout = session_layout(extras)
             if record:
                 from teleop.recording import Recorder
 
-                layout = session_layout(extras)
                 meta = session_metadata(tp, haptic_url, robot_url, seconds, seed)
                 recorder = Recorder(record, layout, meta, flush_interval=flush_interval,
                                     t0_ns=meta["start_time_ns"]).start()
-                tap = RowTap(layout, recorder.push, extras)
-                tp.tap = tap
+                tp.tap = RowTap(layout, recorder.push, extras)
                 tp.on_event = lambda ev: recorder.event(vars(ev))
+            if live is not None:
+                live_view = _start_live(tp, layout, extras, recorder, live, live_scene)
             log = TimingLog(int(round(seconds * params.rate_hz)))
             scheduling = set_realtime(50) if realtime else "SCHED_OTHER (not requested)"
             gc.collect()
             gc.disable()
             try:
                 run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us,
-                          on_start=recorder.set_t0 if recorder is not None else None)
+                          on_start=recorder.set_t0 if recorder is not None else
+                          live_view.ring.set_t0 if live_view is not None else None)
             except (KeyboardInterrupt, _Terminate):
                 pass
             finally:
@@ -161,6 +194,10 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                                    fault_reason=tp.fault_reason, record=record, scheduling=scheduling)
     finally:
         signal.signal(signal.SIGTERM, old)
+        if live_view is not None:
+            live_stats = live_view.close()
+            if "result" in locals():
+                result.live = live_stats
         if recorder is not None:
             end = {"timing": timing if "timing" in locals() else {},
                    "final_state": result.final_state if "result" in locals() else "unknown",

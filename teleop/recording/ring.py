@@ -50,6 +50,10 @@ class Ring:
         self.__dict__.update(d)
         self.attach()
 
+    def set_t0(self, t0_ns: int) -> None:
+        """Wall-clock time [ns since epoch] of session time 0, for the consumers' log times."""
+        self.ctrl[T0_NS] = int(t0_ns)
+
     def push(self, row: np.ndarray) -> bool:
         """Copy a row in (producer); False (and a drop counted) when a gated ring is full."""
         c = self.ctrl
