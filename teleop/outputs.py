@@ -95,14 +95,15 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
     return path
 
 
-def dumps_json(obj: Any) -> str:
-    """Deterministic JSON text (sorted keys are NOT used: insertion order is the documented order)."""
-    return json.dumps(obj, indent=2, default=_default, allow_nan=False) + "\n"
+def dumps_json(obj: Any, sort_keys: bool = False) -> str:
+    """Deterministic JSON text: insertion order (the documented order) unless `sort_keys`; floats as
+    Python's shortest round-trip repr."""
+    return json.dumps(obj, indent=2, default=_default, allow_nan=False, sort_keys=sort_keys) + "\n"
 
 
-def write_json(path: str | Path, obj: Any) -> Path:
+def write_json(path: str | Path, obj: Any, sort_keys: bool = False) -> Path:
     """Write `obj` as JSON atomically. NaN/inf are refused (they are not JSON)."""
-    text = dumps_json(obj)
+    text = dumps_json(obj, sort_keys)
     return atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 

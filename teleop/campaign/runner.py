@@ -1,0 +1,118 @@
+"""Running a campaign: the tasks not yet in the store go to the scheduler; each result is written to the
+store as it arrives; then the summary, its table and the plots are made from what the store holds."""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+
+from teleop.campaign.progress import Progress
+from teleop.campaign.scheduler import open_scheduler
+from teleop.campaign.spec import Campaign, kind_module
+from teleop.campaign.store import ResultStore
+from teleop.outputs import atomic_write, write_json
+
+
+def execute_task(task):
+    """What a worker runs: the task's kind executes its identity."""
+    return kind_module(task.kind).execute(task.identity)
+
+
+@dataclass
+class RunReport:
+    """What a run did: tasks in the campaign, skipped (already done), ran here, failed [(Task, error)],
+    wall time [s], each task's own time where it ran [s], and the summary of everything stored."""
+
+    total: int
+    skipped: int
+    ran: int
+    failed: list = field(default_factory=list)
+    wall_s: float = 0.0
+    task_seconds: list = field(default_factory=list)
+    summary: dict = field(default_factory=dict)
+
+
+def run_campaign(campaign: Campaign, out_dir: str | Path, scheduler: str = "none", stream=None,
+                 bar: bool | None = None, interval: float = 5.0) -> RunReport:
+    """Run what `campaign` still needs into `out_dir` on `scheduler`, then summarise (see summarise)."""
+    stream = sys.stderr if stream is None else stream
+    kind = kind_module(campaign.kind)
+    tasks = kind.tasks(campaign)
+    store = ResultStore(out_dir)
+    with store:
+        done = store.done_ids()
+        todo = [t for t in tasks if t.id not in done]
+        report = RunReport(total=len(tasks), skipped=len(tasks) - len(todo), ran=0)
+        print(f"campaign {campaign.source}: {len(tasks)} tasks, {report.skipped} already done, "
+              f"{len(todo)} to run on {scheduler}", file=stream, flush=True)
+        started = datetime.now(timezone.utc).isoformat(timespec="seconds")
+        t0 = time.perf_counter()
+        workers = 0
+        if todo:
+            with open_scheduler(scheduler) as sched, \
+                    Progress(len(todo), "campaign", stream, bar=bar, interval=interval) as progress:
+                for task, outcome in sched.run(execute_task, todo):
+                    if outcome.ok:
+                        store.save(task, outcome.value)
+                    else:
+                        store.save_failure(task, outcome.error, outcome.traceback)
+                        report.failed.append((task, outcome.error))
+                        progress.note(f"task failed: {task.label}: {outcome.error}")
+                    report.ran += 1
+                    report.task_seconds.append(outcome.seconds)
+                    progress.update(outcome.ok)
+                workers = sched.workers
+        report.wall_s = time.perf_counter() - t0
+        secs = report.task_seconds
+        store.log_run({"started_utc": started, "scheduler": scheduler, "workers": workers,
+                       "tasks": report.total, "skipped": report.skipped, "ran": report.ran,
+                       "failed": len(report.failed), "wall_s": round(report.wall_s, 3),
+                       "task_s_sum": round(sum(secs), 3),
+                       "task_s_mean": round(sum(secs) / len(secs), 4) if secs else None})
+        report.summary = summarise(campaign, store, stream)
+    return report
+
+
+def summarise(campaign: Campaign, store: ResultStore, stream=None) -> dict:
+    """The kind's summary of the stored results plus the task counts and failures; written to
+    DIR/summary.json (sorted keys) and DIR/summary.txt, with the kind's plots and tables, and returned."""
+    stream = sys.stderr if stream is None else stream
+    kind = kind_module(campaign.kind)
+    tasks = kind.tasks(campaign)
+    done = store.done_ids()
+    unreadable = []
+
+    def load(task):
+        if task.id not in done:
+            return None
+        result = store.load(task)
+        if result is None:
+            unreadable.append(task)
+            store.forget(task)
+        return result
+
+    summary = kind.summarise(campaign, load)
+    finished = sum(t.id in done for t in tasks) - len(unreadable)
+    failed = [{"task": t.id, "label": t.label, "error": err} for t in tasks
+              if t.id not in done and (err := store.failure(t)) is not None]
+    for t in unreadable:
+        print(f"campaign: the stored result of {t.label} did not load; it will run again", file=stream)
+    summary["tasks"] = {"total": len(tasks), "done": finished, "failed": failed}
+    root = Path(store.root)
+    write_json(root / "summary.json", summary, sort_keys=True)
+    text = summary_text(campaign, summary)
+    atomic_write(root / "summary.txt", lambda tmp: tmp.write_text(text + "\n", encoding="utf-8"))
+    kind.write_outputs(summary, root)
+    return summary
+
+
+def summary_text(campaign: Campaign, summary: dict) -> str:
+    """The kind's table with the task counts and any failures under it."""
+    t = summary["tasks"]
+    lines = [kind_module(campaign.kind).table(summary), "",
+             f"tasks: {t['done']} of {t['total']} done, {len(t['failed'])} failed"]
+    lines += [f"  failed: {f['label']}: {f['error']}" for f in t["failed"]]
+    return "\n".join(lines)
