@@ -40,6 +40,9 @@ def register(subparsers) -> None:
     p.add_argument("--robot-rate", type=positive_float, default=500.0, help="robot process rate [Hz] (default 500)")
     p.add_argument("--robot-rt", type=rt_priority, default=45,
                    help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
+    from teleop.commands.session import add_live_arguments
+
+    add_live_arguments(p)
     p.add_argument("--find-max-rate", action="store_true",
                    help="run --seconds at increasing rates; report the highest with <= 0.1 %% misses")
     p.set_defaults(func=run)
@@ -58,8 +61,10 @@ def bench_once(args, rate: float) -> dict:
                             mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
         res = run_session(args.haptic, args.robot, args.seconds, record=record, params=params,
                           spin_us=args.spin_us, realtime=not args.no_realtime, robot_rt_priority=args.robot_rt or None,
-                          robot_process_hz=args.robot_rate)
+                          robot_process_hz=args.robot_rate,
+                          live=(args.live_host, args.live) if args.live is not None else None)
     out = dict(res.timing)
+    out["live"] = res.live or {"on": False}
     out["recording"] = {"on": record is not None, "drops": res.drops, "alarm": res.alarm}
     out["final_state"] = res.final_state
     out["fault_reason"] = res.fault_reason
@@ -121,6 +126,10 @@ def run(args) -> int:
               f"final state {out['final_state']}")
         for name, st in out["stages_us"].items():
             print(f"  {name:9s} p50 {st['p50']:8.1f} us  p99 {st['p99']:8.1f} us")
+        res_live = out["live"]
+        if res_live.get("port") is not None:
+            print(f"live view: {res_live['frames_sent']} frames sent, {res_live['frames_dropped']} dropped, "
+                  f"{res_live['rows_skipped']} ticks skipped, {res_live['viewers']} viewers at the end")
         pe = out["period_us"]
         print(f"period mean {pe['mean']} us, p99 {pe['p99']} us, p99.9 {pe['p999']} us, max {pe['max']} us, "
               f"min {pe['min']} us")
