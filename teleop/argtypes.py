@@ -34,12 +34,37 @@ def seed_int(text: str) -> int:
     return v
 
 
+def finite_float(text: str) -> float:
+    """A finite number (no nan or inf)."""
+    return _number(text, float)
+
+
 def positive_float(text: str) -> float:
     """A finite number > 0 (durations [s], rates [Hz])."""
     v = _number(text, float)
     if v <= 0:
         raise argparse.ArgumentTypeError(f"expected a number > 0, got {text}")
     return v
+
+
+def float_in(lo: float, hi: float, unit: str = ""):
+    """An argparse type: a finite number in [lo, hi] (`unit` is shown in the message)."""
+    def check(text: str) -> float:
+        v = _number(text, float)
+        if not lo <= v <= hi:
+            raise argparse.ArgumentTypeError(f"expected a number from {lo:g} to {hi:g}{unit}, got {text}")
+        return v
+
+    check.__name__ = f"float_in_{lo:g}_{hi:g}"
+    return check
+
+
+# The loop and robot-link rates the estimator's Kalman filter is designed for (a steady-state gain
+# exists for frame periods of 0.1 to 20 ms) and a haptic loop can keep.
+LOOP_RATE_HZ = float_in(100.0, 10_000.0, " Hz")
+ROBOT_RATE_HZ = float_in(50.0, 10_000.0, " Hz")
+# A session's length: the timing log holds 80 bytes per tick (4 h at 1 kHz: 1.2 GB).
+SESSION_SECONDS = float_in(0.001, 4 * 3600.0, " s")
 
 
 def nonnegative_float(text: str) -> float:

@@ -71,7 +71,9 @@ ARGPARSE_ERRORS = [
     (["--bogus"], "teleop", ["--bogus"]),
     # range checks (teleop.argtypes)
     (["bench", "link", "--stream-seconds", "-1"], "teleop bench link", ["--stream-seconds", "> 0", "-1"]),
-    (["session", "--robot-rate", "0"], "teleop session", ["--robot-rate", "> 0"]),
+    (["session", "--robot-rate", "0"], "teleop session", ["--robot-rate", "50 to 10000 Hz", "got 0"]),
+    (["session", "--robot-rate", "3"], "teleop session", ["--robot-rate", "50 to 10000 Hz"]),  # no Kalman gain
+    (["blind-test", "--jnd", "5"], "teleop blind-test", ["--jnd", "5%"]),  # 500 %: not a person
     (["bench", "loop", "--spin-us", "-1"], "teleop bench loop", ["--spin-us", ">= 0"]),
     (["session", "--robot-rt", "200"], "teleop session", ["--robot-rt", "1-99", "200"]),
     (["session", "--seconds", "nan"], "teleop session", ["--seconds", "finite", "nan"]),
@@ -127,3 +129,48 @@ def test_help_and_version_exit_0_on_stdout(capsys, argv):
     assert err == "" and out.strip()
     if argv[-1] == "--help":
         assert out.startswith(f"usage: teleop {' '.join(argv[:-1])}".rstrip())
+
+
+def test_ctrl_c_during_a_recorded_session_exit_130_recording_closed_and_marked(tmp_path):
+    """Ctrl-C reaches every process of the session (as a terminal sends it): the loop stops, the recording
+    is closed whole, the JSON says interrupted, exit 130."""
+    import os
+    import signal
+    import time
+
+    from teleop.recording import read_session
+
+    rec, out = tmp_path / "s.mcap", tmp_path / "s.json"
+    p = subprocess.Popen([sys.executable, "-m", "teleop.cli", "session", "--seconds", "600", "--no-realtime",
+                          "--record", str(rec), "--json", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120  # a bound on a hang, not a timing check
+        while not (rec.exists() and rec.stat().st_size > 50_000) and p.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.2)
+        os.killpg(p.pid, signal.SIGINT)
+        stdout, stderr = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+    assert p.returncode == 130, stderr
+    assert "INTERRUPTED" in stdout and "interrupted" in stderr and "Traceback" not in stderr, (stdout, stderr)
+    doc = json.loads(out.read_text())
+    assert doc["interrupted"] is True and 0 < doc["timing"]["ticks"] < 600_000
+    s = read_session(rec)
+    assert not s.damage and "session" in s.metadata
+
+
+def test_results_follow_the_umask(tmp_path):
+    """JSON (and every atomic result) gets the mode a new file gets under the umask, not mkstemp's 0600."""
+    import os
+
+    old = os.umask(0o022)
+    try:
+        assert main(["geometry", "--json", str(tmp_path / "a.json")]) == 0
+        os.umask(0o077)
+        assert main(["geometry", "--json", str(tmp_path / "b.json")]) == 0
+    finally:
+        os.umask(old)
+    assert (tmp_path / "a.json").stat().st_mode & 0o777 == 0o644
+    assert (tmp_path / "b.json").stat().st_mode & 0o777 == 0o600

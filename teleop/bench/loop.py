@@ -16,7 +16,8 @@ from __future__ import annotations
 import os
 import tempfile
 
-from teleop.argtypes import nonnegative_float, positive_float, rt_priority
+from teleop.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, nonnegative_float, positive_float,
+                             rt_priority)
 from teleop.errors import InputError
 
 MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (RELIABILITY.md)
@@ -24,8 +25,8 @@ MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (RELIABILITY.md
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("loop", help="loop timing: lateness, tick and per-stage times (recording on)")
-    p.add_argument("--seconds", type=positive_float, default=10.0)
-    p.add_argument("--rate", type=positive_float, default=1000.0)
+    p.add_argument("--seconds", type=SESSION_SECONDS, default=10.0)
+    p.add_argument("--rate", type=LOOP_RATE_HZ, default=1000.0)
     p.add_argument("--json", metavar="F", help="write the DESIGN.md loop JSON")
     p.add_argument("--plot", metavar="F", help="write the period histogram as a PNG")
     p.add_argument("--haptic", default="sim://?script=pokes")
@@ -37,7 +38,7 @@ def register(subparsers) -> None:
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO")
-    p.add_argument("--robot-rate", type=positive_float, default=500.0, help="robot process rate [Hz] (default 500)")
+    p.add_argument("--robot-rate", type=ROBOT_RATE_HZ, default=500.0, help="robot process rate [Hz] (default 500)")
     p.add_argument("--robot-rt", type=rt_priority, default=45,
                    help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
     from teleop.commands.session import add_live_arguments

@@ -15,8 +15,13 @@ import sys
 DEFAULT_STATE = "blind_test_state.json"
 
 
+# A person's stiffness JND as a Weber fraction: a participant who cannot tell two stiffnesses 2x apart
+# (above 100 %) or who tells 1 % apart is not a person; values outside are a typo (`--jnd 5` for 5 %).
+JND_RANGE = (0.01, 1.0)
+
+
 def parse_fraction(text: str) -> float:
-    """'0.23' or '23%' -> 0.23 (argparse type for --jnd)."""
+    """'0.23' or '23%' -> 0.23 (argparse type for --jnd), within JND_RANGE."""
     import argparse
     import math
 
@@ -25,8 +30,12 @@ def parse_fraction(text: str) -> float:
         v = float(s[:-1]) / 100.0 if s.endswith("%") else float(s)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a fraction like 0.23 or a percentage like 23%, got '{text}'")
-    if not (math.isfinite(v) and 0 < v <= 5):
-        raise argparse.ArgumentTypeError(f"expected a JND in (0, 5] (0.23 = 23 %), got '{text}'")
+    lo, hi = JND_RANGE
+    if not (math.isfinite(v) and lo <= v <= hi):
+        hint = f"; for {s} % write {s}%" if math.isfinite(v) and v > hi and not s.endswith("%") else ""
+        raise argparse.ArgumentTypeError(
+            f"expected a stiffness JND a person can have, {lo:g} to {hi:g} as a Weber fraction "
+            f"({lo:.0%} to {hi:.0%}; Jones & Hunter 1990: 0.23), got '{text}'{hint}")
     return v
 
 

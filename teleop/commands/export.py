@@ -75,10 +75,11 @@ def run(args) -> int:
     if not 1 <= args.cable <= 6:
         raise InputError(f"--cable must be 1..6, got {args.cable}")
     s = read_session(args.file)
+    if "session" not in s.metadata:
+        damage = f" ({s.damage})" if s.damage else ""
+        raise InputError(f"{args.file}: no session metadata (is this a teleop session recording?){damage}")
     if s.damage:
         print(f"teleop: warning: {args.file}: {s.damage}; exporting the intact prefix", file=sys.stderr)
-    if "session" not in s.metadata:
-        raise InputError(f"{args.file}: no session metadata (is this a teleop session recording?)")
     header, rows = export_rows(s, args.cable)
     if not rows:
         raise InputError(f"{args.file}: no robot readings to export")

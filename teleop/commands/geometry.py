@@ -4,19 +4,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from teleop.argtypes import input_file
+from teleop.argtypes import finite_float, input_file
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("geometry", help="check a geometry TOML and show kinematics at a pose")
     p.add_argument("--geometry", type=input_file, metavar="TOML", help="geometry file (default: the seed robot)")
-    p.add_argument("--pose-mm-deg", nargs=6, type=float, default=[0, 0, 0, 0, 0, 0],
+    p.add_argument("--pose-mm-deg", nargs=6, type=finite_float, default=[0, 0, 0, 0, 0, 0],
                    metavar=("X", "Y", "Z", "ALPHA", "BETA", "GAMMA"), help="pose in mm and deg (Z-Y-X Euler)")
     p.add_argument("--json", metavar="PATH", help="write the result as JSON")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    from teleop.errors import InputError
     from teleop.geometry import default_geometry, load_geometry
     from teleop.kinematics import bending_angles, pose2cables, pose2lengths_checked, structure_matrix
     from teleop.outputs import write_json
@@ -25,7 +26,10 @@ def run(args) -> int:
     geom = load_geometry(args.geometry) if args.geometry else default_geometry()
     v = np.asarray(args.pose_mm_deg, dtype=float)
     pose = np.r_[v[:3] * 1e-3, np.deg2rad(v[3:])]
-    lengths = pose2lengths_checked(pose, geom)
+    try:
+        lengths = pose2lengths_checked(pose, geom)
+    except InputError as exc:
+        raise InputError(f"--pose-mm-deg {' '.join(f'{x:g}' for x in v)}: {exc}") from None
     theta = bending_angles(pose2cables(pose, geom), geom)
     t = wrench2tensions(np.zeros(6), structure_matrix(pose, geom), geom.t_min, geom.t_max)
     result = {"pose_mm_deg": v.tolist(), "lengths_mm": (lengths * 1e3).tolist(),

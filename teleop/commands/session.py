@@ -90,11 +90,14 @@ def run(args) -> int:
     cal = load_fsr_calibration(args.fsr_calibration) if args.fsr_calibration else None
     robot_hz = None if args.robot_inline else args.robot_rate
     estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
-    res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params, estimator=estimator,
-                      robot_process_hz=robot_hz, realtime=not args.no_realtime,
-                      robot_rt_priority=args.robot_rt or None,
-                      live=(args.live_host, args.live) if args.live is not None else None)
+    with _CtrlC() as ctrl_c:
+        res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
+                          estimator=estimator, robot_process_hz=robot_hz, realtime=not args.no_realtime,
+                          robot_rt_priority=args.robot_rt or None,
+                          live=(args.live_host, args.live) if args.live is not None else None)
     t = res.timing
+    if ctrl_c.pressed:
+        print(f"session: INTERRUPTED (Ctrl-C) after {t['ticks'] / t['rate_hz']:.3f} s of {args.seconds:g} s")
     print(f"session: {t['ticks']} ticks at {t['rate_hz']:g} Hz, lateness p50/p99/max "
           f"{t['lateness_us']['p50']:.0f}/{t['lateness_us']['p99']:.0f}/{t['lateness_us']['max']:.0f} us, "
           f"{t['deadline_misses']} misses; final state {res.final_state}"
@@ -113,5 +116,48 @@ def run(args) -> int:
         write_json(args.json, {"timing": t, "events": res.events, "final_state": res.final_state,
                                "scheduling": res.scheduling,
                                "fault_reason": res.fault_reason, "drops": res.drops, "alarm": res.alarm,
-                               "live": res.live})
+                               "live": res.live, "interrupted": ctrl_c.pressed})
+    if ctrl_c.pressed:
+        closed = f"; {args.record} is closed and readable up to there" if args.record else ""
+        print(f"teleop: interrupted (Ctrl-C) after {t['ticks']} of {round(args.seconds * t['rate_hz'])} ticks"
+              f"{closed}", file=sys.stderr)
+        return 130
     return 0
+
+
+class _CtrlC:
+    """While active, Ctrl-C (SIGINT) is remembered in `.pressed` and stops the loop as KeyboardInterrupt
+    does (the loop ends its run, stops the devices and closes the recording); the caller then reports
+    the session as interrupted and exits 130.
+
+    A terminal sends Ctrl-C to every process of the session; the robot and recorder processes forked
+    while this is active inherit the handler and ignore it there, so they keep serving until this
+    process stops them in order (the recording is closed by its writer, not cut by the signal).
+    """
+
+    def __init__(self):
+        import os
+
+        self.pressed = False
+        self._old = None
+        self._pid = os.getpid()
+
+    def _handler(self, signum, frame):
+        import os
+
+        if os.getpid() != self._pid:  # a forked child: the parent shuts it down
+            return
+        self.pressed = True
+        raise KeyboardInterrupt
+
+    def __enter__(self):
+        import signal
+
+        self._old = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def __exit__(self, *exc):
+        import signal
+
+        signal.signal(signal.SIGINT, self._old)
+        return False
