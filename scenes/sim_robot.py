@@ -25,12 +25,15 @@ from numpy.polynomial.polynomial import polyval
 
 from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes.pads import Pad, z_test_pad
-from scenes.pose_follow import PoseFollower, pose_terms
+from scenes.pose_follow import PoseFollower
 from scenes.world import PadWorld, WorldParams
 from teleop.errors import InputError
 from teleop.geometry import Geometry, default_geometry
-from teleop.kinematics import bending_angles, check_lengths, poses2lengths
-from teleop.physics.capstan import CapstanStep, tip2motor_transitions
+from teleop.kernels import sim as KS
+from teleop.kernels import tension as KT
+from teleop.kernels.friction import capstan_play_run, capstan_play_step
+from teleop.kinematics import FREE_AXIAL, check_lengths, poses2lengths
+from teleop.robot_status import robot_status
 from teleop.sensors import FsrBranchLag, FsrCalibration, default_fsr_calibration
 from teleop.tension import TensionSolver, wrench2tensions
 
@@ -116,76 +119,51 @@ def home_pose() -> np.ndarray:
 # pure helpers (batched over samples)
 # --------------------------------------------------------------------------------------------------------
 
-_FREE = [0, 1, 2, 4, 5]  # axial geometry: roll alpha is not set by the cables
+def lengths2poses(L, geom: Geometry, guess=None, iters: int = 12, tol: float = 1e-12) -> np.ndarray:
+    """(n, 6) poses for (n, 6) cable lengths [m] (axial geometry, alpha = 0): each sample by the forward
+    kinematics kernel from the previous one (the first from `guess`); raises InputError if any sample misses
+    by more than 1 um."""
+    L = np.ascontiguousarray(np.atleast_2d(np.asarray(L, dtype=float)))
+    q0 = np.zeros(6) if guess is None else np.array(guess, dtype=float).reshape(6)
+    out = np.empty((len(L), 6))
+    worst = KS.forward_kinematics_batch(L, q0, FREE_AXIAL, geom.r, geom.B, tol, iters, out)
+    if not worst <= 1e-6:
+        raise InputError(f"sim robot: no pose reproduces the commanded lengths (residual {worst:.3g} m)")
+    return out
 
 
-def lengths2poses(L, geom: Geometry, guess=None, iters: int = 6, tol: float = 1e-9) -> np.ndarray:
-    """(n, 6) poses for (n, 6) cable lengths [m]: batched Gauss-Newton on poses2lengths (axial geometry,
-    alpha = 0), forward-difference Jacobian; raises InputError if any sample misses by more than 1 um."""
-    L = np.atleast_2d(np.asarray(L, dtype=float))
-    n = len(L)
-    q = np.zeros((n, 6)) if guess is None else np.array(np.broadcast_to(guess, (n, 6)), dtype=float)
-    h = 1e-7
-    for _ in range(iters):
-        # one poses2lengths call per iteration: the poses and their 5 perturbations stacked
-        Q = np.repeat(q[:, None, :], 6, axis=1)
-        Q[:, np.arange(1, 6), _FREE] += h
-        Lq = poses2lengths(Q.reshape(-1, 6), geom).reshape(n, 6, 6)
-        r = Lq[:, 0] - L
-        if np.abs(r).max() < tol:
-            break
-        J = np.swapaxes((Lq[:, 1:] - Lq[:, :1]) / h, 1, 2)  # (n, 6 lengths, 5 free coordinates)
-        JT = np.swapaxes(J, 1, 2)
-        step = np.linalg.solve(JT @ J, (JT @ r[:, :, None]))[:, :, 0]
-        q[:, _FREE] -= step
-    r = poses2lengths(q, geom) - L
-    if np.abs(r).max() > 1e-6:
-        raise InputError(f"sim robot: no pose reproduces the commanded lengths (residual {np.abs(r).max():.3g} m)")
-    return q
-
-
-def cable_vectors_batch(poses, geom: Geometry) -> tuple[np.ndarray, np.ndarray]:
-    """((n, 6, 3) cable vectors l_i = p + R r_i - B_i [m], (n, 6, 3) R r_i [m]) for (n, 6) poses (eqs 4-5)."""
-    q = np.atleast_2d(np.asarray(poses, dtype=float))
-    Rr = np.einsum("nij,kj->nki", _rotations(q), geom.r)
-    return q[:, None, :3] + Rr - geom.B[None], Rr
+def pose_terms_batch(poses, geom: Geometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """((n, 6, 6) structure matrices A (eq 8), (n, 6) wraps Theta = theta (eq 6) + theta0 [rad], (n, 3) tool
+    offsets R tip [m]) for (n, 6) poses (kernel sim.pose_terms)."""
+    q = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, dtype=float)))
+    m, c = len(q), len(geom.B)
+    A, theta, tip = np.empty((m, 6, c)), np.empty((m, c)), np.empty((m, 3))
+    KS.pose_terms_batch(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
+                        np.asarray(geom.tip, dtype=float), A, theta, tip)
+    return A, theta, tip
 
 
 def capstan_angles_batch(poses, geom: Geometry) -> np.ndarray:
     """(n, 6) total wrap Theta = theta (eq 6) + theta0 [rad] between each FSR and the end effector."""
-    l, _ = cable_vectors_batch(poses, geom)
-    return bending_angles(l.reshape(-1, 3), geom).reshape(-1, 6) + geom.theta0
+    return pose_terms_batch(poses, geom)[1]
 
 
 def structure_matrices(poses, geom: Geometry) -> np.ndarray:
     """(n, 6, 6) structure matrices A of eq 8 (as teleop.kinematics.structure_matrix, batched)."""
-    l, Rr = cable_vectors_batch(poses, geom)
-    u = l / np.linalg.norm(l, axis=2)[:, :, None]
-    return np.concatenate([-np.swapaxes(u, 1, 2), -np.swapaxes(np.cross(Rr, u), 1, 2)], axis=1)
+    return pose_terms_batch(poses, geom)[0]
 
 
 def wrenches2tensions(f, A, t_min: float, t_max: float, t_ref: float) -> np.ndarray:
     """(n, 6) tensions for wrenches f (n, 6) and structure matrices A (n, 6, 6): teleop.tension's
     distribution (A t + f = 0, the one-dimensional null space n > 0, closest to t_ref, clipped to the
-    feasible interval), batched. Samples the batch cannot decide (rank != 5) go to wrench2tensions."""
-    f = np.asarray(f, dtype=float)
-    U, s, Vt = np.linalg.svd(A)
-    rank5 = (s[:, 4] > 1e-9 * s[:, 0]) & (s[:, 5] < 1e-9 * np.maximum(1.0, s[:, 0]))
-    # t_p = -A^+ f over the first five singular directions
-    c = np.einsum("nji,nj->ni", U[:, :, :5], f) / s[:, :5]
-    t_p = -np.einsum("nij,ni->nj", Vt[:, :5, :], c)
-    nvec = Vt[:, 5, :]
-    nvec = nvec * np.where(nvec.sum(axis=1) < 0, -1.0, 1.0)[:, None]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = (t_min - t_p) / nvec
-        b = (t_max - t_p) / nvec
-    lo = np.max(np.where(np.abs(nvec) > 1e-12, np.minimum(a, b), -np.inf), axis=1)
-    hi = np.min(np.where(np.abs(nvec) > 1e-12, np.maximum(a, b), np.inf), axis=1)
-    lam = np.clip(np.einsum("ni,ni->n", nvec, t_ref - t_p) / np.einsum("ni,ni->n", nvec, nvec), lo, hi)
-    t = np.clip(t_p + lam[:, None] * nvec, t_min, t_max)
-    resid = np.abs(np.einsum("nij,nj->ni", A, t_p) + f).max(axis=1)
-    odd = ~rank5 | (lo > hi + 1e-12) | (resid > 1e-7 * np.maximum(1.0, np.abs(f).max(axis=1)))
-    for k in np.flatnonzero(odd):  # the reference implementation decides (and raises if infeasible)
+    feasible interval; kernel tension.null1_tensions per sample). Samples it cannot decide (rank != 5,
+    infeasible) go to wrench2tensions (which raises with the reason, or solves a wider null space)."""
+    f = np.ascontiguousarray(f, dtype=float)
+    A = np.ascontiguousarray(A, dtype=float)
+    t = np.empty(f.shape)
+    status = np.empty(len(f), dtype=np.int64)
+    KT.tensions_batch(f, A, float(t_min), float(t_max), float(t_ref), t, status)
+    for k in np.flatnonzero(status != KT.OK):  # the reference implementation decides (and raises if infeasible)
         t[k] = wrench2tensions(f[k], A[k], t_min, t_max, t_ref)
     return t
 
@@ -269,8 +247,12 @@ class SimRobot(ContextDevice):
         self.seq = 0
         self.boot_id = (self.seed * 2654435761) % 2 ** 31
         self.stopped = False
-        self._capstan = [CapstanStep({"mu": self.geom.mu, "theta": self.geom.theta0, "k": p.capstan_k})
-                         for _ in range(6)]
+        n = len(self.geom.B)
+        self._cap = np.full((2, n), np.nan)  # capstan state per cable: motor-side force [N], motor position [m]
+        self._A, self._theta, self._tip_off = np.empty((6, n)), np.empty(n), np.empty(3)
+        self._off = np.empty((n, 6))
+        self._v, self._tip = np.asarray(self.geom.v, dtype=float), np.asarray(self.geom.tip, dtype=float)
+        self._f = np.empty(6)
         self._lag = FsrBranchLag(self.cal)
         self.is_open = True
 
@@ -289,9 +271,9 @@ class SimRobot(ContextDevice):
         self._require_open()
         L = check_lengths(lengths, self.geom)
         if not self.stopped:
-            pose = np.array(self._fk.solve(L))
+            pose = self._fk.solve_into(np.ascontiguousarray(L))
             if not np.array_equal(pose, self.pose):
-                self.pose, self._terms = pose, None
+                self.pose, self._terms = pose.copy(), None
             self.L_cmd = L.copy()
 
     def set_pad_offset(self, xy) -> None:
@@ -305,35 +287,40 @@ class SimRobot(ContextDevice):
         self.stopped = True
 
     def _pose_terms(self) -> tuple:
-        """(tool offset R tip (3,) [m], tip target (3,) [m], TensionSolver at the pose, capstan wrap (6,) [rad])
-        of the commanded pose, computed once per pose."""
+        """(tool offset R tip (3,) [m], tip target (3,) [m]) of the commanded pose, computed once per pose
+        with its structure matrix and capstan wraps (kernel sim.pose_terms, held in _A, _theta)."""
         if self._terms is None:
             g = self.geom
-            A, theta, tip_offset = pose_terms(self.pose.tolist(), g)
-            solver = TensionSolver(A, g.t_min, g.t_max, self.params.pretension)
-            self._terms = (tip_offset, self.pose[:3] + tip_offset, solver, theta)
+            KS.pose_terms(self.pose, g.r, g.B, self._v, float(g.theta0), self._tip, self._off, self._A,
+                          self._theta, self._tip_off)
+            self._terms = (self._tip_off, self.pose[:3] + self._tip_off)
         return self._terms
 
     def _physics(self) -> tuple[np.ndarray, np.ndarray]:
         """Advance `substeps` steps toward the commanded pose; (tip (3,), wrench (6,))."""
         w = self.world
-        tip_offset, target, _, _ = self._pose_terms()
+        tip_offset, target = self._pose_terms()
         for _ in range(self.params.substeps):
             w.step(target)
-        F = w.contact_force()
-        o = tip_offset
-        moment = [o[1] * F[2] - o[2] * F[1], o[2] * F[0] - o[0] * F[2], o[0] * F[1] - o[1] * F[0]]
-        return w.tip(), np.concatenate([F, moment])  # force at the tool tip, moments about p
+        # force at the tool tip, moments about p
+        return w.tip(), KS.contact_moment(tip_offset, np.asarray(w.contact_force(), dtype=float), np.empty(6))
 
     def read(self) -> RobotReading:
         """Advance one reading period and return the raw reading."""
         self._require_open()
-        p = self.params
+        p, g = self.params, self.geom
         tip, f = self._physics()
-        _, _, solver, theta = self._pose_terms()
-        t_tip = solver.solve(f)
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
-        t_fsr = np.array([cs.step(x=x[i], load=t_tip[i], theta=theta[i]) for i, cs in enumerate(self._capstan)])
+        t_tip, t_fsr = np.empty(len(x)), np.empty(len(x))
+        if KS.cable_sensor(f, self._A, float(g.mu), self._theta, x, float(g.t_min), float(g.t_max),
+                           float(p.pretension), float(p.capstan_k), self._cap, t_tip, t_fsr) != KT.OK:
+            # not the one-dimensional null space, or infeasible: teleop.tension decides (raises with the reason)
+            t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
+            for i in range(len(x)):
+                F0, x0 = (t_tip[i], x[i]) if np.isnan(self._cap[1, i]) else self._cap[:, i]
+                t_fsr[i] = capstan_play_step(float(F0), float(x[i] - x0), float(t_tip[i]),
+                                             float(g.mu * self._theta[i]), float(p.capstan_k))
+                self._cap[:, i] = t_fsr[i], x[i]
         u = self._lag.step(t_fsr)
         noise = self.rng.normal(0.0, p.noise_counts, 6) if p.noise_counts > 0 else np.zeros(6)
         counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
@@ -341,7 +328,8 @@ class SimRobot(ContextDevice):
         self.seq += 1
         steps = np.rint((self.L_home - self.L_cmd) * self.spec.steps_per_m).astype(np.int64)
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
-                            commanded_lengths=self.L_cmd.copy(), status=1 | (2 if self.stopped else 0),
+                            commanded_lengths=self.L_cmd.copy(), status=robot_status(homed=True,
+                                                                                     stopped=self.stopped),
                             boot_id=self.boot_id, wrench_truth=f,
                             extras={"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy()})
 
@@ -359,7 +347,7 @@ class SimRobot(ContextDevice):
         tips = np.empty((n, 3))
         F = np.empty((n, 3))
         w = self.world
-        R_tip = np.einsum("nij,j->ni", _rotations(poses), g.tip)
+        A, theta, R_tip = pose_terms_batch(poses, g)
         targets = poses[:, :3] + R_tip
         sub = p.substeps
         for k in range(n):
@@ -371,19 +359,17 @@ class SimRobot(ContextDevice):
             if progress is not None and k % 1000 == 999:
                 progress(1000)
         f = np.concatenate([F, np.cross(R_tip, F)], axis=1)
-        t_tip = wrenches2tensions(f, structure_matrices(poses, g), g.t_min, g.t_max, p.pretension)
-        theta = capstan_angles_batch(poses, g)
+        t_tip = wrenches2tensions(f, A, g.t_min, g.t_max, p.pretension)
         x = -L  # motor positions: hauling in (shortening) is +
         t_fsr = np.empty((n, 6))
         for i in range(6):
-            cs = self._capstan[i]
-            if cs.x_prev is None:  # fresh: starts on the tip tension, like CapstanStep
-                t_fsr[:, i] = tip2motor_transitions(x[:, i], t_tip[:, i], g.mu, theta[:, i], p.capstan_k)
-            else:  # continue from the stored state: a leading sample at (x_prev, F) inside its own band
-                y = tip2motor_transitions(np.r_[cs.x_prev, x[:, i]], np.r_[cs.F, t_tip[:, i]], g.mu,
-                                          np.r_[theta[0, i], theta[:, i]], p.capstan_k, F0=cs.F)
-                t_fsr[:, i] = y[1:]
-            cs.x_prev, cs.F = float(x[-1, i]), float(t_fsr[-1, i])
+            F0, x0 = self._cap[:, i]
+            if np.isnan(x0):  # fresh: starts on the tip tension, as read()
+                F0, x0 = t_tip[0, i], x[0, i]
+            capstan_play_run(np.ascontiguousarray(x[:, i]), np.ascontiguousarray(t_tip[:, i]),
+                             np.ascontiguousarray(g.mu * theta[:, i]), float(p.capstan_k), float(F0), float(x0),
+                             t_fsr[:, i])
+            self._cap[:, i] = t_fsr[-1, i], x[-1, i]
         u = self._lag.run(t_fsr)
         noise = self.rng.normal(0.0, p.noise_counts, (n, 6)) if p.noise_counts > 0 else np.zeros((n, 6))
         counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
@@ -392,19 +378,9 @@ class SimRobot(ContextDevice):
         self.seq += n
         self.L_cmd = L[-1].copy()
         self.pose, self._terms = poses[-1].copy(), None
-        self._fk.q = self.pose.tolist()
+        self._fk.q = self.pose
         return SimTrace(t=t, lengths=L, poses=poses, tip=tips, wrench_truth=f, t_tip=t_tip, t_fsr=t_fsr,
                         counts=counts, theta=theta)
-
-
-def _rotations(poses: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) R = Rz(alpha) Ry(beta) Rx(gamma) for (n, 6) poses (teleop.kinematics.rotation_zyx, batched)."""
-    q = np.atleast_2d(poses)
-    ca, sa, cb, sb = np.cos(q[:, 3]), np.sin(q[:, 3]), np.cos(q[:, 4]), np.sin(q[:, 4])
-    cg, sg = np.cos(q[:, 5]), np.sin(q[:, 5])
-    return np.stack([np.stack([ca * cb, ca * sb * sg - sa * cg, ca * sb * cg + sa * sg], axis=1),
-                     np.stack([sa * cb, sa * sb * sg + ca * cg, sa * sb * cg - ca * sg], axis=1),
-                     np.stack([-sb, cb * sg, cb * cg], axis=1)], axis=1)
 
 
 def from_url(parsed, options: dict) -> SimRobot:

@@ -3,28 +3,29 @@
 Pose convention: a 6-vector ``pose = [x, y, z, alpha, beta, gamma]`` in {B}: the end effector's reference
 point p [m] and Z-Y-X Euler angles [rad], R = Rz(alpha) Ry(beta) Rx(gamma) (eq 5: p_i = p + R r_i).
 Cable vector l_i = B_i P_i = p_i - B_i (eq 4), pointing from the scaffold to the end effector.
-Pure numpy; no devices, no pybullet.
+The formulas are the kernels of teleop.kernels.geometry; this module is their numpy face. No devices, no
+pybullet.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from teleop.errors import InfeasibleError, InputError
 from teleop.geometry import Geometry
+from teleop.kernels import geometry as K
 
 
 def rotation_zyx(alpha: float, beta: float, gamma: float) -> np.ndarray:
-    """(3, 3) rotation R = Rz(alpha) Ry(beta) Rx(gamma) mapping {P} to {B} (angles in rad)."""
-    ca, sa = np.cos(alpha), np.sin(alpha)
-    cb, sb = np.cos(beta), np.sin(beta)
-    cg, sg = np.cos(gamma), np.sin(gamma)
-    return np.array([
-        [ca * cb, ca * sb * sg - sa * cg, ca * sb * cg + sa * sg],
-        [sa * cb, sa * sb * sg + ca * cg, sa * sb * cg - ca * sg],
-        [-sb, cb * sg, cb * cg],
-    ])
+    """(3, 3) rotation R = Rz(alpha) Ry(beta) Rx(gamma) mapping {P} to {B} (angles in rad; kernel
+    geometry.rotation_zyx)."""
+    return np.array(K.rotation_zyx(float(alpha), float(beta), float(gamma))).reshape(3, 3)
+
+
+def _offsets(pose, geom: Geometry) -> np.ndarray:
+    """(6, 6) per cable (R r_i - B_i, R r_i) at the pose's orientation (kernel geometry.platform_offsets)."""
+    q = np.asarray(pose, dtype=float)
+    return K.platform_offsets(float(q[3]), float(q[4]), float(q[5]), geom.r, geom.B, np.empty((len(geom.B), 6)))
 
 
 def check_pose(pose) -> np.ndarray:
@@ -39,31 +40,24 @@ def check_pose(pose) -> np.ndarray:
 
 def pose2anchors(pose, geom: Geometry) -> np.ndarray:
     """(6, 3) platform anchors p_i = p + R r_i in {B} [m] (eq 5)."""
-    q = np.asarray(pose, dtype=float)
-    return q[:3] + geom.r @ rotation_zyx(q[3], q[4], q[5]).T
+    return np.asarray(pose, dtype=float)[:3] + _offsets(pose, geom)[:, 3:]
 
 
 def pose2cables(pose, geom: Geometry) -> np.ndarray:
-    """(6, 3) cable vectors l_i = p_i - B_i [m] (eq 4)."""
-    return pose2anchors(pose, geom) - geom.B
+    """(6, 3) cable vectors l_i = p_i - B_i = p + (R r_i - B_i) [m] (eq 4)."""
+    return np.asarray(pose, dtype=float)[:3] + _offsets(pose, geom)[:, :3]
 
 
 def pose2lengths(pose, geom: Geometry) -> np.ndarray:
-    """(6,) cable lengths |l_i| [m]."""
-    return np.linalg.norm(pose2cables(pose, geom), axis=1)
+    """(6,) cable lengths |l_i| [m] (kernel geometry.pose2lengths_into)."""
+    n = len(geom.B)
+    return K.pose2lengths_into(np.asarray(pose, dtype=float), geom.r, geom.B, np.empty((n, 6)), np.empty(n))
 
 
 def poses2lengths(poses, geom: Geometry) -> np.ndarray:
-    """(N, 6) cable lengths [m] for (N, 6) poses (vectorised over a trajectory)."""
-    q = np.atleast_2d(np.asarray(poses, dtype=float))
-    a, b, g = q[:, 3], q[:, 4], q[:, 5]
-    ca, sa, cb, sb, cg, sg = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(g), np.sin(g)
-    R = np.empty((len(q), 3, 3))
-    R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = ca * cb, ca * sb * sg - sa * cg, ca * sb * cg + sa * sg
-    R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = sa * cb, sa * sb * sg + ca * cg, sa * sb * cg - ca * sg
-    R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = -sb, cb * sg, cb * cg
-    P = q[:, None, :3] + np.einsum("nij,kj->nki", R, geom.r)
-    return np.linalg.norm(P - geom.B[None], axis=2)
+    """(N, 6) cable lengths [m] for (N, 6) poses (a compiled loop over a trajectory)."""
+    q = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, dtype=float)))
+    return K.poses2lengths_batch(q, geom.r, geom.B, np.empty((len(q), len(geom.B))))
 
 
 def bending_angles(l: np.ndarray, geom: Geometry) -> np.ndarray:
@@ -74,8 +68,10 @@ def bending_angles(l: np.ndarray, geom: Geometry) -> np.ndarray:
     capstan angle is |theta|.
     """
     l = np.asarray(l, dtype=float)
-    s = (l @ geom.v) / np.linalg.norm(l, axis=-1)
-    return np.abs(np.arcsin(np.clip(s, -1.0, 1.0)))
+    vx, vy, vz = (float(c) for c in geom.v)
+    flat = np.ascontiguousarray(l.reshape(-1, 3))
+    out = K.bending_loop(flat, vx, vy, vz, np.empty(len(flat)))  # kernel geometry.wrap_angle
+    return out.reshape(l.shape[:-1]) if l.ndim > 1 else float(out[0])
 
 
 def capstan_angles(pose, geom: Geometry) -> np.ndarray:
@@ -90,11 +86,8 @@ def structure_matrix(pose, geom: Geometry) -> np.ndarray:
     of cable i (a cable pulls P_i towards B_i). Moments are taken about the reference point p.
     f = [F (N), tau (N m)].
     """
-    q = np.asarray(pose, dtype=float)
-    Rr = geom.r @ rotation_zyx(q[3], q[4], q[5]).T
-    l = q[:3] + Rr - geom.B
-    u = l / np.linalg.norm(l, axis=1)[:, None]
-    return np.vstack([-u.T, -np.cross(Rr, u).T])
+    n = len(geom.B)
+    return K.structure_matrix_into(np.asarray(pose, dtype=float), geom.r, geom.B, np.empty((n, 6)), np.empty((6, n)))
 
 
 def is_axial(geom: Geometry) -> bool:
@@ -147,8 +140,13 @@ def is_tensionable(pose, geom: Geometry, tol: float = 1e-9) -> bool:
     return bool(res.status == 0)
 
 
+FREE_ALL = np.arange(6)
+FREE_AXIAL = np.array([0, 1, 2, 4, 5])  # an axial geometry: the roll alpha is not set by the cables
+
+
 def lengths2pose(lengths, geom: Geometry, guess=None, tol: float = 1e-14) -> np.ndarray:
-    """Forward kinematics: the pose whose cable lengths match `lengths` [m] (least squares).
+    """Forward kinematics: the pose whose cable lengths match `lengths` [m] within tol [m] (Gauss-Newton from
+    `guess`, default the zero pose; kernel geometry.forward_kinematics).
 
     For an axial geometry (anchors on the shaft axis) alpha is not observable from the lengths and is
     returned as 0 (the instrument's roll); the pose is then [x, y, z, 0, beta, gamma].
@@ -157,28 +155,14 @@ def lengths2pose(lengths, geom: Geometry, guess=None, tol: float = 1e-14) -> np.
     L = np.asarray(lengths, dtype=float)
     if L.shape != (6,) or not np.isfinite(L).all():
         raise InputError(f"cable lengths must be 6 finite numbers, got {np.asarray(lengths).tolist()}")
-    axial = is_axial(geom)
-    x0 = np.zeros(6) if guess is None else np.asarray(guess, dtype=float).copy()
-    free = [0, 1, 2, 4, 5] if axial else [0, 1, 2, 3, 4, 5]
-    if axial:
-        x0[3] = 0.0
-
-    def residual(z):
-        q = x0.copy()
-        q[free] = z
-        return pose2lengths(q, geom) - L
-
-    def jac(z):
-        q = x0.copy()
-        q[free] = z
-        return length_jacobian(q, geom)[:, free]
-
-    sol = least_squares(residual, x0[free], jac=jac, method="lm", xtol=tol, ftol=tol, gtol=tol, max_nfev=200)
-    q = x0.copy()
-    q[free] = sol.x
-    if np.max(np.abs(sol.fun)) > 1e-6:
+    q = np.zeros(6) if guess is None else np.array(guess, dtype=float).reshape(6)
+    free = FREE_AXIAL if is_axial(geom) else FREE_ALL
+    if free is FREE_AXIAL:
+        q[3] = 0.0
+    worst = K.forward_kinematics(L, q, free, geom.r, geom.B, tol, 100)
+    if not worst <= 1e-6:
         raise InfeasibleError(f"no pose reproduces cable lengths {np.round(L * 1e3, 4).tolist()} mm "
-                              f"(residual {np.max(np.abs(sol.fun)) * 1e3:.3g} mm)")
+                              f"(residual {worst * 1e3:.3g} mm)")
     return q
 
 

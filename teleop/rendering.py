@@ -95,6 +95,12 @@ def is_small(x: float, y: float, z: float, limit: float) -> bool:
     return m < limit and math.sqrt(x * x + y * y + z * z) < limit
 
 
+def engage_count(n: int, x: float, y: float, z: float, limit: float) -> int:
+    """The engage rule (CHAI3D: 0.2 N for 3 ticks): consecutive ticks, this one included, whose force
+    (x, y, z) [N] stayed below `limit`; force may engage once the count reaches the required ticks."""
+    return n + 1 if is_small(x, y, z, limit) else 0
+
+
 def clamp_norm(x: float, y: float, z: float, limit: float) -> tuple:
     """(x, y, z) scaled down to norm <= limit (direction kept); non-finite input gives (0, 0, 0)."""
     if x * 0.0 + y * 0.0 + z * 0.0 != 0.0:  # any nan/inf (max() would skip a nan that is not first)
@@ -167,7 +173,7 @@ class Renderer:
             return 0.0, 0.0, 0.0
         if state != ENGAGED:
             if state == WAITING:
-                self.small_ticks = self.small_ticks + 1 if is_small(x, y, z, p.engage_N) else 0
+                self.small_ticks = engage_count(self.small_ticks, x, y, z, p.engage_N)
                 if self.small_ticks < p.engage_ticks:
                     return 0.0, 0.0, 0.0
                 self.state, self.ramp = RAMPING, 0.0

@@ -3,16 +3,16 @@
 With six cables and five cable-controlled degrees of freedom, A has a one-dimensional null space n > 0:
 t = t_p + lambda n, where t_p is the minimum-norm particular solution. Among feasible tensions the one
 closest to a reference pretension level t_ref is chosen (closed form for one null direction, a small QP
-otherwise). Used by the simulated robot and for pretension; pure numpy/scipy.
+otherwise; the closed form is the kernel teleop.kernels.tension). Used by the simulated robot and for
+pretension.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from teleop.errors import InfeasibleError
+from teleop.kernels import tension as K
 
 
 class TensionSolver:
@@ -31,9 +31,8 @@ class TensionSolver:
         if self.N.shape[1] == 1:
             # the CDPR's one-dimensional null space: solved on floats (numpy's per-call cost dominates at six
             # cables). P = -A^+, n the null direction with positive sum.
-            P = -(self.Vr @ (self.Ur / self.sr[:, None]))
-            n = self.N[:, 0] * np.sign(self.N[:, 0].sum() or 1.0)
-            self._null1 = (P.tolist(), self.A.tolist(), n.tolist(), float(n @ n))
+            P, n, _ = K.null1_terms(self.A)
+            self._null1 = (P, n)
 
     def solve(self, f) -> np.ndarray:
         """(6,) cable tensions [N] that balance the external wrench f (6,) [N, N m]: A t + f = 0.
@@ -45,7 +44,7 @@ class TensionSolver:
         if f.shape != (6,) or not np.isfinite(f).all():
             raise InfeasibleError(f"wrench must be 6 finite numbers, got {np.asarray(f).tolist()}")
         if self._null1 is not None:
-            return np.array(self._solve_null1(f.tolist()))
+            return self._solve_null1(f)
         t_min, t_max, t_ref, N = self.t_min, self.t_max, self.t_ref, self.N
         # t_p = -A^+ f (minimum norm), N = null-space basis (6 x k)
         t_p = -(self.Vr @ ((self.Ur @ f) / self.sr))
@@ -72,30 +71,19 @@ class TensionSolver:
     def _solve_null1(self, f: list) -> list:
         """`solve` for a one-dimensional null space n: t = t_p + lambda n, t_p = -A^+ f the minimum-norm
         particular solution, lambda closest to t_ref and clipped to the interval where every tension lies in
-        [t_min, t_max]; on floats."""
-        P, A, n, nn = self._null1
-        t_min, t_max, t_ref = self.t_min, self.t_max, self.t_ref
-        f0, f1, f2, f3, f4, f5 = f
-        t_p = [r[0] * f0 + r[1] * f1 + r[2] * f2 + r[3] * f3 + r[4] * f4 + r[5] * f5 for r in P]
-        resid = max(abs(sum(a * b for a, b in zip(row, t_p)) + fi) for row, fi in zip(A, f))
-        if resid > 1e-7 * max(1.0, max(abs(v) for v in f)):
+        [t_min, t_max] (kernel tension.null1_tensions)."""
+        P, n = self._null1
+        t = np.empty(len(n))
+        status, resid = K.null1_tensions(P, self.A, n, np.asarray(f, dtype=float), self.t_min, self.t_max,
+                                         self.t_ref, t)
+        if status == K.OUT_OF_RANGE:
             raise InfeasibleError(
                 f"wrench {np.round(f, 6).tolist()} has a component no cable tensions can produce "
                 f"(residual {resid:.3g}); for this robot that is a moment about the shaft axis")
-        lo, hi = -math.inf, math.inf
-        for ti, ni in zip(t_p, n):
-            if abs(ni) < 1e-12:
-                if not (t_min - 1e-9 <= ti <= t_max + 1e-9):
-                    lo, hi = math.inf, -math.inf
-                continue
-            a, b = (t_min - ti) / ni, (t_max - ti) / ni
-            lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
-        if lo > hi + 1e-12:
+        if status == K.INFEASIBLE:
             raise InfeasibleError(f"wrench {np.round(f, 6).tolist()} outside the wrench-feasible set for "
-                                  f"tensions in [{t_min:g}, {t_max:g}] N")
-        lam = sum(ni * (t_ref - ti) for ni, ti in zip(n, t_p)) / nn
-        lam = lo if lam < lo else (hi if lam > hi else lam)
-        return [min(t_max, max(t_min, ti + lam * ni)) for ti, ni in zip(t_p, n)]
+                                  f"tensions in [{self.t_min:g}, {self.t_max:g}] N")
+        return t
 
 
 def wrench2tensions(f, A: np.ndarray, t_min: float, t_max: float, t_ref: float | None = None,

@@ -19,6 +19,7 @@ from enum import IntEnum
 import numpy as np
 
 from devices.arduino.framing import CRC_SIZE
+from teleop.robot_status import RobotStatus
 
 PROTOCOL_VERSION = 1
 N_CHANNELS = 6
@@ -40,15 +41,7 @@ class MsgType(IntEnum):
     DIAG_REPLY = 10
 
 
-class Status(IntEnum):
-    """Bits of the firmware status byte."""
-
-    HOMED = 1 << 0
-    WATCHDOG_STOP = 1 << 1
-    STOPPED = 1 << 2      # host STOP latch (RobotReading: "fault")
-    MOVING = 1 << 3
-    REJECTED = 1 << 4     # the answered host frame was refused (stale seq, not homed, latched, range)
-    LINK_ERRORS = 1 << 5  # an error counter changed since the last DIAG
+Status = RobotStatus  # bits of the firmware status byte: one definition in teleop.robot_status
 
 
 class MessageError(ValueError):

@@ -127,12 +127,13 @@ def dahl_run(x, sigma, Fc, F0, out):
 
 
 @njit
-def capstan_play_run(x, F_tip, mu_theta, k, F0, out):
+def capstan_play_run(x, F_tip, mu_theta, k, F0, x0, out):
     """out (n,): motor force [N] with stick transitions for motor positions x (n,) [m], tip forces F_tip
-    (n,) [N] and wraps mu_theta (n,); from F0 clamped into the first band."""
+    (n,) [N] and wraps mu_theta (n,), continuing from motor force F0 at position x0 (x0 = x[0]: F0 clamped
+    into the first band)."""
     F = F0
     for j in range(x.shape[0]):
-        F = capstan_play_step(F, 0.0 if j == 0 else x[j] - x[j - 1], F_tip[j], mu_theta[j], k)
+        F = capstan_play_step(F, x[j] - (x0 if j == 0 else x[j - 1]), F_tip[j], mu_theta[j], k)
         out[j] = F
     return out
 

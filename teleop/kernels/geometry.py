@@ -138,3 +138,24 @@ def forward_kinematics(L, q, free, r, B, tol, max_iter):
             worst = max(worst, abs(res[i]))
             sse += res[i] * res[i]
     return worst
+
+
+@njit
+def structure_matrix_into(q, r, B, off, A):
+    """A (6, n): structure matrix of eq 8 at pose q (column i = structure_column of cable i); off (n, 6)
+    scratch. Returns A."""
+    platform_offsets(q[3], q[4], q[5], r, B, off)
+    for i in range(r.shape[0]):
+        _, ux, uy, uz = cable(q[0], q[1], q[2], off, i)
+        A[0, i], A[1, i], A[2, i], A[3, i], A[4, i], A[5, i] = structure_column(ux, uy, uz, off[i, 3], off[i, 4],
+                                                                                off[i, 5])
+    return A
+
+
+@njit
+def bending_loop(l, vx, vy, vz, out):
+    """out (m,): |theta| [rad] (eq 6) of cable vectors l (m, 3) for the base-plane normal v."""
+    for k in range(l.shape[0]):
+        L = math.sqrt(l[k, 0] * l[k, 0] + l[k, 1] * l[k, 1] + l[k, 2] * l[k, 2])
+        out[k] = wrap_angle(l[k, 0] / L, l[k, 1] / L, l[k, 2] / L, vx, vy, vz, 0.0)
+    return out

@@ -17,10 +17,13 @@ OK, OUT_OF_RANGE, INFEASIBLE = 0, 1, 2  # status codes of `null1_tensions`
 
 
 @njit
-def null1_terms(A):
-    """(P = -A^+ (n, n) over the rank-(n-1) part, null direction n (n,) with a positive sum) of A (n, n)."""
+def null1_terms(A, tol=1e-9):
+    """(P = -A^+ (n, n) over the rank-(n-1) part, null direction n (n,) with a positive sum, is_null1) of A
+    (n, n); is_null1: the singular values say rank n - 1 at relative tolerance tol (else P, n are not
+    meaningful)."""
     U, s, Vt = np.linalg.svd(A)
     m = A.shape[0] - 1
+    ok = s[m - 1] > tol * max(1.0, s[0]) and s[m] <= tol * max(1.0, s[0])
     P = np.zeros((A.shape[1], A.shape[0]))
     for j in range(m):
         for a in range(A.shape[1]):
@@ -30,7 +33,20 @@ def null1_terms(A):
     nv = Vt[m].copy()
     if nv.sum() < 0.0:
         nv = -nv
-    return P, nv
+    return P, nv, ok
+
+
+@njit
+def tensions_batch(f, A, t_min, t_max, t_ref, out, status):
+    """Per sample k of wrenches f (m, n) and structure matrices A (m, n, n): out[k] tensions [N] and
+    status[k] (OK, OUT_OF_RANGE, INFEASIBLE, or -1: not a one-dimensional null space)."""
+    for k in range(f.shape[0]):
+        P, nv, ok = null1_terms(A[k])
+        if not ok:
+            status[k] = -1
+            continue
+        status[k] = null1_tensions(P, A[k], nv, f[k], t_min, t_max, t_ref, out[k])[0]
+    return out
 
 
 @njit

@@ -24,10 +24,11 @@ from teleop.loop.params import LoopParams
 from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
 from teleop.loop.states import BEHAVIOURS, State
 from teleop.mapping import platform_offsets, position2lengths
-from teleop.rendering import DISABLED, Renderer, is_small
+from teleop.rendering import DISABLED, Renderer, engage_count
+from teleop.robot_status import RobotStatus, stop_reason
 
 STAGES = ("read", "map", "robot", "estimate", "render", "write", "record")
-HOMED, WATCHDOG_STOP, FIRMWARE_FAULT = 1, 2, 4
+HOMED, WATCHDOG_STOP, STOPPED = RobotStatus.HOMED, RobotStatus.WATCHDOG_STOP, RobotStatus.STOPPED
 
 
 @dataclass
@@ -292,9 +293,8 @@ class Teleop:
                 elif r.boot_id != self.boot_id and self.state != State.FAULT:
                     self.robot_status &= ~HOMED
                     self.fault(f"firmware reset: boot id {self.boot_id} -> {r.boot_id}; re-home before motion")
-                if r.status & (WATCHDOG_STOP | FIRMWARE_FAULT) and self.state != State.FAULT:
-                    self.fault(f"robot status 0x{int(r.status):02x}: "
-                               + ("watchdog stop" if r.status & WATCHDOG_STOP else "firmware fault"))
+                if r.status & (WATCHDOG_STOP | STOPPED) and self.state != State.FAULT:
+                    self.fault(f"robot status 0x{int(r.status):02x}: {stop_reason(r.status)}")
                 self.robot_fresh.update(now, r.seq)
                 if r.seq != self._est_seq:  # a new frame: estimate (a repeated frame changes nothing)
                     dt = r.t - self._est_t if self._est_seq is not None and r.t > self._est_t else \
@@ -332,9 +332,8 @@ class Teleop:
             if rd.fault:
                 self.fault(f"render: {rd.fault_reason}")
             x.F_raw = rd.mapped  # device frame, scaled, -z zeroed: the force that would be rendered
-            if self.state == State.ALIGNING:
-                small = is_small(*x.F_raw, p.render.engage_N)
-                self.small_force_ticks = self.small_force_ticks + 1 if small else 0
+            if self.state == State.ALIGNING:  # the engage rule, counted on the force that would be rendered
+                self.small_force_ticks = engage_count(self.small_force_ticks, *x.F_raw, p.render.engage_N)
             x.ramp = rd.ramp if rd.state != DISABLED else 0.0
             x.F = np.array(F)
         except Exception as exc:  # noqa: BLE001

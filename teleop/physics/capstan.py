@@ -76,7 +76,7 @@ def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
     F_tip = np.ascontiguousarray(np.broadcast_to(np.asarray(F_tip, dtype=float), x.shape))
     mt = np.ascontiguousarray(np.broadcast_to(_mu_theta(mu, theta), x.shape))
     y0 = float(F_tip.ravel()[0]) if F0 is None else float(F0)
-    return capstan_play_run(x, F_tip, mt, float(k), y0, np.empty(x.shape[0]))
+    return capstan_play_run(x, F_tip, mt, float(k), y0, float(x[0]), np.empty(x.shape[0]))
 
 
 def motor2tip_transitions(F_motor, mu, theta, F0=None):

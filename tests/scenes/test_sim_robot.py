@@ -11,6 +11,7 @@ from scenes.world import WorldParams
 from teleop.errors import InfeasibleError, InputError
 from teleop.geometry import default_geometry
 from teleop.kinematics import (bending_angles, lengths2pose, pose2cables, poses2lengths, structure_matrix)
+from teleop.robot_status import RobotStatus
 from teleop.tension import wrench2tensions
 
 GEOM = default_geometry()
@@ -47,7 +48,9 @@ def test_conforms_to_robot_protocol():
         r.stop()
         L = r.L_cmd.copy()
         r.command_lengths(_poke()[5])
-        assert np.array_equal(r.L_cmd, L) and r.read().status & 2
+        # a host stop is the STOPPED bit (the firmware's bit 2), not the watchdog's
+        status = r.read().status
+        assert np.array_equal(r.L_cmd, L) and status & RobotStatus.STOPPED and not status & RobotStatus.WATCHDOG_STOP
     assert not robot.is_open
 
 
@@ -133,7 +136,7 @@ def test_from_url():
         open_device("sim://robot?colour=red")
 
 
-def test_pose_follower_and_float_pose_terms_match_the_batched_math():
+def test_forward_kinematics_recovers_the_commanded_poses():
     from scenes.pose_follow import PoseFollower, pose_terms
     from scenes.sim_robot import capstan_angles_batch, lengths2poses, structure_matrices
     from teleop.kinematics import rotation_zyx
@@ -148,9 +151,10 @@ def test_pose_follower_and_float_pose_terms_match_the_batched_math():
     fk = PoseFollower(GEOM, q)
     got = np.array([fk.solve(Lk) for Lk in L])
     ref = lengths2poses(L, GEOM, guess=q)
-    # both stop at a 1e-9 m length residual: positions agree to 1e-9 m, angles to ~1e-9 m / 15 mm
-    assert np.abs(poses2lengths(got, GEOM) - L).max() < 1e-9
-    assert np.abs(got[:, :3] - ref[:, :3]).max() < 1e-8 and np.abs(got[:, 3:] - ref[:, 3:]).max() < 1e-7
+    # both stop at a 1e-12 m length residual: the poses that made the lengths, to 1e-12 m / ~2.5 mm levers
+    for poses in (got, ref):
+        assert np.abs(poses2lengths(poses, GEOM) - L).max() < 1e-12
+        assert np.abs(poses[:, :3] - qs[:, :3]).max() < 1e-10 and np.abs(poses[:, 4:] - qs[:, 4:]).max() < 1e-8
     A, theta, tip = pose_terms(got[-1].tolist(), GEOM)
     assert np.allclose(A, structure_matrices(got[-1:], GEOM)[0], atol=1e-12)
     assert np.allclose(theta, capstan_angles_batch(got[-1:], GEOM)[0], atol=1e-12)

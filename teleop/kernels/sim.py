@@ -1,0 +1,89 @@
+"""Kernels of the simulated robot's per-reading physics (scenes.sim_robot): the geometry terms at a pose and
+the cable chain tip tensions -> FSR-side tensions, built from the shared kernels (one definition each).
+
+    pose_terms: structure matrix A (eq 8), wraps Theta_i = |theta_i| (eq 6) + theta0, tool offset R tip
+    cable_sensor: tension distribution at A (A t + f = 0, one-dimensional null space closest to t_ref),
+        then per cable the capstan with stick transitions along the motor position x = -length
+"""
+
+from __future__ import annotations
+
+
+import numpy as np
+
+from teleop.kernels.friction import capstan_play_step
+from teleop.kernels.geometry import cable, forward_kinematics, platform_offsets, rotation_zyx, structure_column, \
+    wrap_angle
+from teleop.kernels.jit import njit
+from teleop.kernels.tension import OK, null1_terms, null1_tensions
+
+
+@njit
+def pose_terms(q, r, B, v, theta0, tip, off, A, theta, tip_off):
+    """At pose q (6,): A (6, n), theta (n,) [rad], tip_off (3,) = R tip [m]; off (n, 6) scratch."""
+    platform_offsets(q[3], q[4], q[5], r, B, off)
+    for i in range(r.shape[0]):
+        _, ux, uy, uz = cable(q[0], q[1], q[2], off, i)
+        A[0, i], A[1, i], A[2, i], A[3, i], A[4, i], A[5, i] = structure_column(ux, uy, uz, off[i, 3], off[i, 4],
+                                                                                off[i, 5])
+        theta[i] = wrap_angle(ux, uy, uz, v[0], v[1], v[2], theta0)
+    R00, R01, R02, R10, R11, R12, R20, R21, R22 = rotation_zyx(q[3], q[4], q[5])
+    tip_off[0] = R00 * tip[0] + R01 * tip[1] + R02 * tip[2]
+    tip_off[1] = R10 * tip[0] + R11 * tip[1] + R12 * tip[2]
+    tip_off[2] = R20 * tip[0] + R21 * tip[1] + R22 * tip[2]
+
+
+@njit
+def pose_terms_batch(q, r, B, v, theta0, tip, A, theta, tip_off):
+    """pose_terms for poses q (m, 6): A (m, 6, n), theta (m, n), tip_off (m, 3)."""
+    off = np.empty((r.shape[0], 6))
+    for k in range(q.shape[0]):
+        pose_terms(q[k], r, B, v, theta0, tip, off, A[k], theta[k], tip_off[k])
+
+
+@njit
+def forward_kinematics_batch(L, q0, free, r, B, tol, max_iter, out):
+    """out (m, 6): poses for lengths L (m, n), each solved from the previous one (the first from q0);
+    returns the largest residual [m]."""
+    q = q0.copy()
+    worst = 0.0
+    for k in range(L.shape[0]):
+        worst = max(worst, forward_kinematics(L[k], q, free, r, B, tol, max_iter))
+        out[k] = q
+    return worst
+
+
+@njit
+def cable_sensor(f, A, mu, theta, x, t_min, t_max, t_ref, k, cap, t_tip, t_fsr):
+    """One reading: tip tensions t_tip (n,) [N] balancing the wrench f (6,) at A, then the FSR-side tensions
+    t_fsr (n,) [N] through each cable's capstan (wrap theta (n,) [rad], friction mu, stick stiffness k
+    [N/m]) at motor positions x (n,) [m]; cap (2, n) the capstan state (motor force [N], previous position
+    [m], NaN: none yet). Returns tension.OK, or the tension kernel's status (-1: A is not of rank n - 1),
+    and then changes nothing."""
+    P, nv, ok = null1_terms(A)
+    if not ok:
+        return -1
+    status = null1_tensions(P, A, nv, f, t_min, t_max, t_ref, t_tip)[0]
+    if status != OK:
+        return status
+    for i in range(t_tip.shape[0]):
+        mt = mu * theta[i]
+        if cap[1, i] != cap[1, i]:  # first reading: starts on the tip tension
+            F = capstan_play_step(t_tip[i], 0.0, t_tip[i], mt, k)
+        else:
+            F = capstan_play_step(cap[0, i], x[i] - cap[1, i], t_tip[i], mt, k)
+        cap[0, i], cap[1, i] = F, x[i]
+        t_fsr[i] = F
+    return OK
+
+
+@njit
+def contact_moment(o, F, out):
+    """out (6,) = (F, o x F): the contact force at the tool tip and its moment about p (tip offset o)."""
+    out[0], out[1], out[2] = F[0], F[1], F[2]
+    out[3] = o[1] * F[2] - o[2] * F[1]
+    out[4] = o[2] * F[0] - o[0] * F[2]
+    out[5] = o[0] * F[1] - o[1] * F[0]
+    return out
+
+
