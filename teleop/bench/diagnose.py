@@ -24,12 +24,11 @@ def speed_case(seed: int = 0):
 
 
 def run(args) -> int:
-    import sys
     import tempfile
     import time
     from pathlib import Path
 
-    from tqdm import tqdm
+    from teleop.progress import progress
 
     from teleop.diagnosis.diagnose import diagnose
     from teleop.diagnosis.generator import GenConfig, case_plan, make_case
@@ -45,8 +44,10 @@ def run(args) -> int:
     cfg = GenConfig(args.rate, args.seconds, args.noise)
     rows = []
     plan = case_plan(args.cases)
-    for i, (effect, setup) in enumerate(tqdm(plan, desc="cases", file=sys.stderr, disable=not sys.stderr.isatty())):
-        rows.append(run_case(make_case(i, effect, setup, args.seed, cfg)))
+    with progress(len(plan), "bench diagnose", unit="cases") as bar:
+        for i, (effect, setup) in enumerate(plan):
+            rows.append(run_case(make_case(i, effect, setup, args.seed, cfg)))
+            bar.update()
     summary = summarise(rows)
     print(confusion_text(summary))
     for key in ("cases", "effect_cases", "clean_cases", "named_first_rate", "none_rate",

@@ -44,7 +44,7 @@ def _summary(doc: dict) -> str:
 def run(args) -> int:
     import sys
 
-    from tqdm import tqdm
+    from teleop.progress import progress
 
     from teleop.diagnosis.diagnose import diagnose
     from teleop.diagnosis.identify import applicable
@@ -57,8 +57,7 @@ def run(args) -> int:
     recs = [read_recording(p, args.map) for p in args.recordings]
     total = sum(3 * len(applicable(link_data(r, L))) for r in recs for L in find_links(r))
     docs, diags = [], []
-    with tqdm(total=total, desc="diagnose", unit="fit", file=sys.stderr,
-              disable=not sys.stderr.isatty(), leave=False) as bar:
+    with progress(total, "diagnose", unit="fits", leave=False) as bar:
         for rec in recs:
             diag = diagnose(rec, args.holdout, progress=bar.update, seed=args.seed)
             diags.append(diag)

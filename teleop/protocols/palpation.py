@@ -536,12 +536,9 @@ class _NoBar:
 def _progress_bar(enabled: bool, total: int, desc: str):
     if not enabled:
         return _NoBar()
-    import sys
+    from teleop.progress import progress
 
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc=desc, unit="tick", file=sys.stderr, disable=not sys.stderr.isatty(),
-                mininterval=0.5)
+    return progress(total, desc, unit="ticks", mininterval=0.5)
 
 
 def summarise(rows) -> dict:
