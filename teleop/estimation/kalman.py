@@ -48,6 +48,12 @@ class KalmanNoise:
     bandwidth_hz: float = 8.0
     sigma_t: float = 0.02
 
+    @classmethod
+    def for_loop(cls, params, **kw) -> "KalmanNoise":
+        """The noise model of a loop's estimator (teleop.loop.LoopParams `params`): its gain designed for the
+        period of the robot frames it sees, one every robot_every ticks of dt: dt * robot_every [s]."""
+        return cls(dt=float(params.dt * params.robot_every), **kw)
+
 
 def axis_matrices(dt: float, q: float, r: float):
     """(F, H, Q, R) of one axis: (2,2), (1,2), (2,2), (1,1)."""

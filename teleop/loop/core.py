@@ -83,8 +83,7 @@ class Teleop:
             from teleop.estimation.reading import ReadingEstimator
 
             # the Kalman gain is designed for the period the estimator runs at: one robot frame
-            estimator = ReadingEstimator(self.geom, "dynamic",
-                                         kalman=KalmanNoise(dt=self.params.dt * self.params.robot_every))
+            estimator = ReadingEstimator(self.geom, "dynamic", kalman=KalmanNoise.for_loop(self.params))
         self.estimator = estimator
         self.on_event = on_event
         p, m = self.params, self.params.mapping
