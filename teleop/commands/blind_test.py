@@ -139,6 +139,9 @@ def run_transparency(args) -> int:
 
     if args.haptic != "sim://" or args.robot != "sim://robot":
         raise InputError("blind-test --transparency runs on the simulated stylus and robot only")
+    if args.plot:
+        raise InputError(f"--plot {args.plot}: blind-test --transparency draws no figure (its table is printed; "
+                         f"--json PATH saves it)")
     params = participant_params(args)
     if params.force is None:
         raise InputError("blind-test --transparency presses to a force: --press-force must be > 0")
@@ -172,7 +175,6 @@ def _progress(total: int, desc: str):
 
 def run_sim(args) -> int:
     from teleop.errors import InputError
-    from teleop.outputs import write_json
     from teleop.protocols.blind.rig import SimRig
     from teleop.protocols.blind.study import run_simulated_study
 
@@ -197,11 +199,23 @@ def run_sim(args) -> int:
     print("\n(seed 000 Table 3 beside the simulated ratings; 'transparent chain': force scale x motion scale x the pad"
           " in series with the simulated robot's own stiffness, scenes.sim_robot tip_stiffness)")
     print(rig.attribution)
+    _write_results(args, result)
+    return 0
+
+
+def _write_results(args, result) -> None:
+    """Write --json and --plot and say where; without either, say what they would write."""
+    from teleop.outputs import write_json
+
     if args.json:
         write_json(args.json, result.to_dict())
+        print(f"wrote {args.json}")
     if args.plot:
         result.plot(args.plot)
-    return 0
+        print(f"wrote {args.plot}")
+    if not (args.json or args.plot):
+        print("no file written: --json PATH saves the results (each participant's order and ratings, means, "
+              "ranking rates), --plot PATH the figure")
 
 
 def _asdict(obj) -> dict:
@@ -211,7 +225,6 @@ def _asdict(obj) -> dict:
 
 
 def run_human(args) -> int:
-    from teleop.outputs import write_json
     from teleop.protocols.blind.human import Coordinator, run_human_study
     from teleop.protocols.blind.rig import blind_areas
 
@@ -251,8 +264,5 @@ def run_human(args) -> int:
         return 1
     print()
     print(result.table())
-    if args.json:
-        write_json(args.json, result.to_dict())
-    if args.plot:
-        result.plot(args.plot)
+    _write_results(args, result)
     return 0

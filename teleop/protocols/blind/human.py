@@ -118,12 +118,16 @@ class Coordinator:
 
 
 def run_human_study(state_path, seed: int, participants: int, areas, coordinator: Coordinator,
-                    station: Callable[[tuple, int], str] | None = None) -> StudyResult | None:
+                    station: Callable[[tuple, int], str] | None = None,
+                    on_step: Callable[[dict], None] | None = None) -> StudyResult | None:
     """Guide the coordinator through the study; returns the result when every participant is done.
 
     station(layout, slot) -> str, optional: pokes a slot on a rehearsal rig and says what the stylus felt.
+    on_step(event), optional: told each step (the experimenter's live view, teleop.live.study): kind
+    "participant" (layout, order_slots), "compare" (zones and slots), "answer", "ratings".
     Returns None when input ends early (everything answered so far is saved in `state_path`).
     """
+    tell = on_step or (lambda event: None)
     path = Path(state_path)
     areas = tuple(areas)
     n = len(areas)
@@ -149,22 +153,31 @@ def run_human_study(state_path, seed: int, participants: int, areas, coordinator
             where = f"{path}: records[{p - 1}]"
             answers = replay(rec, n, where)
             say(f"\n== Participant {p} of {participants} ==\n")
+            tell({"kind": "participant", "participant": p, "of": participants, "layout": list(layout),
+                  "order_slots": list(order), "answers": [list(a) for a in rec["answers"]]})
             say("Coordinator: lay out the pad as " + ", ".join(
                 f"slot {SLOT_NAMES[i]} = {labels[name]}" for i, name in enumerate(layout)) + ".\n")
             say("Zones (coordinator only): " + ", ".join(
                 f"zone {z + 1} = slot {SLOT_NAMES[s]}" for z, s in enumerate(order)) + ".\n")
             step = next_step(n, answers)
             while isinstance(step, Compare):
+                tell({"kind": "compare", "participant": p, "question": len(answers) + 1, "new_zone": step.new + 1,
+                      "ref_zone": step.ref + 1, "new_slot": order[step.new], "ref_slot": order[step.ref],
+                      "repeat": step.repeat})
                 _announce(step, answers, layout, order, say, station)
                 answer = coordinator.comparison(step)
                 rec["answers"].append([step.new + 1, step.ref + 1, answer])
                 save_state(path, state)
+                tell({"kind": "answer", "participant": p, "new_zone": step.new + 1, "ref_zone": step.ref + 1,
+                      "answer": answer, "answers": [list(a) for a in rec["answers"]]})
                 answers.append((step, answer))
                 step = next_step(n, answers)
             assert isinstance(step, Rate)
             rec["ratings"] = coordinator.ratings(step.ranking)
             rec["ranking_zones"] = [z + 1 for z in step.ranking]
             save_state(path, state)
+            tell({"kind": "ratings", "participant": p, "ratings": rec["ratings"],
+                  "ranking_zones": rec["ranking_zones"]})
             say(f"Participant {p} saved.\n")
     except EOFError:
         say(f"\nInput ended: every answer so far is saved in {path}; run the same command again to resume.\n")
