@@ -84,6 +84,9 @@ def register(subparsers) -> None:
                    help="instead of the study: press each area 3 times at 10, 20 and 30 mm/s and compare the "
                         "stiffness rendered on the stylus with the unfiltered estimate and the robot's "
                         "ground-truth contact force (what limits the rendered ratios)")
+    from teleop.commands.session import add_live_arguments
+
+    add_live_arguments(p)  # --operator human: the experimenter's screen (trial, pad, force, answers)
     p.set_defaults(func=run)
 
 
@@ -118,6 +121,11 @@ def rig_options(args):
 
 
 def run(args) -> int:
+    if args.live is not None and args.operator != "human":
+        from teleop.errors import InputError
+
+        raise InputError("--live serves the experimenter's screen of --operator human (the simulated study runs "
+                         "faster than real time; watch a session with `teleop session --live`)")
     if args.operator == "human":
         return run_human(args)
     if getattr(args, "transparency", False):
@@ -224,6 +232,27 @@ def _asdict(obj) -> dict:
     return asdict(obj)
 
 
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _study_live_view(args, areas, relay_port):
+    """The experimenter's live screen (teleop.live.study) on --live-host:--live."""
+    from scenes.pads import blind_area_centres
+    from teleop.errors import InputError
+    from teleop.live.study import StudyLiveView
+
+    try:
+        return StudyLiveView(args.live_host, args.live, blind_area_centres(), {a.name: a.label for a in areas},
+                             relay_port=relay_port).start()
+    except OSError as exc:
+        raise InputError(f"--live {args.live} --live-host {args.live_host}: {exc}") from None
+
+
 def run_human(args) -> int:
     from teleop.protocols.blind.human import Coordinator, run_human_study
     from teleop.protocols.blind.rig import blind_areas
@@ -239,7 +268,7 @@ def run_human(args) -> int:
         return line
 
     coordinator = Coordinator(read, write)
-    station, rig = None, None
+    station, rig, view, relay_port = None, None, None, None
     try:
         if args.haptic == "sim://" and args.robot == "sim://robot":
             from teleop.protocols.blind.rig import RehearsalStation
@@ -254,10 +283,20 @@ def run_human(args) -> int:
             from teleop.protocols.blind.rig import BackgroundSession
 
             rig = BackgroundSession(args.haptic, args.robot, rig_options(args))
+            if args.live is not None:  # the loop's own live view, relayed to the experimenter's screen
+                relay_port = _free_port()
+                rig.argv += ["--live", str(relay_port)]
             rig.open()
             areas = blind_areas()
-        result = run_human_study(args.state, args.seed, args.participants, areas, coordinator, station)
+        if args.live is not None:
+            view = _study_live_view(args, areas, relay_port)
+            print(f"live view: ws://{args.live_host}:{view.port} (Foxglove WebSocket; the experimenter's screen)",
+                  flush=True)
+        result = run_human_study(args.state, args.seed, args.participants, areas, coordinator, station,
+                                 on_step=view.on_step if view is not None else None)
     finally:
+        if view is not None:
+            view.close()
         if rig is not None:
             rig.close()
     if result is None:
