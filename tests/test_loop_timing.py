@@ -32,18 +32,79 @@ class Stub:
         self.k += 1
 
 
-def test_run_paced_absolute_schedule_and_summary():
-    tp = Stub()
+class FakeTime:
+    """A controlled clock for teleop.loop.timing: sleep() advances it, each perf_counter_ns() call advances
+    it by `spin_ns` (one turn of the spin loop), and ticks advance it by their cost."""
+
+    def __init__(self, spin_ns=1_000):
+        self.now, self.spin_ns = 5_000_000_000, spin_ns
+
+    def perf_counter_ns(self):
+        self.now += self.spin_ns
+        return self.now
+
+    def sleep(self, s):
+        self.now += int(s * 1e9)
+
+    def time_ns(self):
+        return self.now + 1_700_000_000_000_000_000
+
+
+class CostlyStub(Stub):
+    def __init__(self, clock, cost_ns):
+        super().__init__()
+        self.clock, self.cost_ns = clock, cost_ns
+
+    def tick(self, now):
+        super().tick(now)
+        self.clock.now += self.cost_ns(self.k - 1)
+
+
+def test_run_paced_absolute_schedule_and_summary(monkeypatch):
+    """30 ticks of 100 us at 1 kHz on a controlled clock: tick k starts k periods after the start, within
+    one spin turn; the summary has the DESIGN.md keys and the period histogram counts every period."""
+    import teleop.loop.timing as timing
+
+    clock = FakeTime()
+    monkeypatch.setattr(timing, "time", clock)
+    tp = CostlyStub(clock, lambda k: 100_000)
     t0 = []
     log = run_paced(tp, 0.03, 1000.0, on_start=t0.append)
-    assert log.n == 30 and len(tp.times) == 30 and t0 and tp.started == 0.0
-    assert np.all(np.diff(tp.times) > 0) and np.all(log.lateness[:30] >= 0)
-    assert tp.times[-1] >= 0.029  # tick k does not start before k periods
+    assert log.n == 30 and len(tp.times) == 30 and t0 and tp.started == 0.0 and log.skipped == 0
+    np.testing.assert_allclose(tp.times, np.arange(30) * 1e-3, atol=2e-6)  # within 2 spin turns
+    assert np.all(log.lateness[:30] >= 0) and np.all(log.lateness[:30] < 2_000)
     s = log.summary(1000.0)
     assert {"rate_hz", "ticks", "tick_us", "lateness_us", "deadline_misses", "stages_us"} <= set(s)  # DESIGN.md
     assert list(s["stages_us"]) == list(STAGES)
     assert sum(s["period_histogram"]["counts"]) + s["period_histogram"]["overflow"] == 29  # 30 starts
-    assert 900.0 <= s["period_us"]["p50"] <= 1100.0
+    assert abs(s["period_us"]["p50"] - 1000.0) <= 2.0 and s["deadline_misses"] == 0
+    assert abs(s["tick_us"]["p50"] - 100.0) <= 2.0
+
+
+def test_run_paced_skips_missed_deadlines_and_keeps_the_absolute_schedule(monkeypatch):
+    """Tick 5 takes 2.7 periods: deadline 6 is skipped (counted), tick 6 starts 0.7 ms late on deadline 7,
+    and the ticks after it are back on the original grid."""
+    import teleop.loop.timing as timing
+
+    clock = FakeTime()
+    monkeypatch.setattr(timing, "time", clock)
+    tp = CostlyStub(clock, lambda k: 2_700_000 if k == 5 else 50_000)
+    log = run_paced(tp, 0.02, 1000.0)
+    assert log.skipped == 1 and len(tp.times) == 20
+    np.testing.assert_allclose(tp.times[6], 7.7e-3, atol=5e-6)  # clock turns: a few us
+    np.testing.assert_allclose(tp.times[7:], (np.arange(7, 20) + 1) * 1e-3, atol=3e-6)
+    assert abs(log.lateness[6] - 700_000) < 5_000
+    assert log.summary(1000.0)["deadline_misses"] == 2  # the late tick and the skipped deadline
+
+
+def test_run_paced_stops_when_asked(monkeypatch):
+    import teleop.loop.timing as timing
+
+    clock = FakeTime()
+    monkeypatch.setattr(timing, "time", clock)
+    tp = CostlyStub(clock, lambda k: 10_000)
+    log = run_paced(tp, 1.0, 1000.0, should_stop=lambda: tp.k >= 7)
+    assert log.n == 7 and tp.k == 7
 
 
 def test_summary_counts_misses_and_skips():

@@ -103,19 +103,47 @@ def test_state_of_another_study_is_refused_with_one_line(tmp_path):
     assert r.returncode == 2 and "not a blind-test state file" in r.stderr
 
 
-@pytest.mark.parametrize("delay", [0.35, 0.5, 0.65, 0.8])
-def test_killed_at_any_moment_the_state_file_is_whole(tmp_path, delay):
+ACCEPTED = {"h", "s", "r", "10 7 4 2", "9 6 4 1"}  # the answers of ANSWERS that are saved (others are refused)
+
+
+def saved_items(state: dict) -> int:
+    """Answers plus accepted ratings in a state file."""
+    return sum(len(r["answers"]) + (r["ratings"] is not None) for r in state["records"])
+
+
+@pytest.fixture(scope="module")
+def reference_state(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ref")
+    r = subprocess.run(command(d / "s.json", d / "o.json"), input="\n".join(ANSWERS) + "\n", capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    return json.loads((d / "s.json").read_text())
+
+
+@pytest.mark.parametrize("k", [2, 5, 9, 12, 16, len(ANSWERS)])
+def test_killed_while_saving_the_state_file_is_whole(tmp_path, reference_state, k):
+    """SIGKILL right after the k-th answer is sent (while it is being saved): the state file exists, is
+    whole JSON, holds every answer before the k-th and at most the k-th too, each one the reference's."""
     state, out = tmp_path / "s.json", tmp_path / "o.json"
-    proc = subprocess.Popen(command(state, out), stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+    proc = subprocess.Popen(command(state, out), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                             stderr=subprocess.DEVNULL)
-    proc.stdin.write(("\n".join(ANSWERS) + "\n").encode())
-    proc.stdin.flush()
-    time.sleep(delay)
-    proc.send_signal(signal.SIGKILL)
-    proc.wait(timeout=10)
-    if state.exists():
-        saved = json.loads(state.read_text())  # never half-written
-        assert saved["study"] == "blind-test"
+    buf = ""
+    try:
+        for i in range(k):
+            buf = read_until_prompts(proc, i + 1, buf)
+            proc.stdin.write((ANSWERS[i] + "\n").encode())
+            proc.stdin.flush()
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=10)
+    saved = json.loads(state.read_text())  # exists (the answers before the k-th were saved) and is whole
+    assert saved["study"] == "blind-test" and not out.exists()
+    lo = sum(a in ACCEPTED for a in ANSWERS[:k - 1])
+    hi = sum(a in ACCEPTED for a in ANSWERS[:k])
+    assert lo <= saved_items(saved) <= hi
+    for rec, ref in zip(saved["records"], reference_state["records"]):
+        assert rec["answers"] == ref["answers"][:len(rec["answers"])]
+        assert rec["ratings"] in (None, ref["ratings"])
 
 
 def test_rehearsal_on_the_simulated_stylus_pokes_through_the_chain(tmp_path):
