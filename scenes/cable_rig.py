@@ -47,6 +47,7 @@ class RigRecording:
     columns: tuple
     trajectory: str
     load: str
+    setup: dict = field(default_factory=dict)   # the simulation's own parameters (mu, k_stick, spring)
 
     def write(self, path) -> None:
         from pathlib import Path
@@ -85,6 +86,26 @@ def _trajectory(rng: np.random.Generator, t: np.ndarray, fs: float) -> tuple[str
     return kind, x
 
 
+def observable(effect: str, columns, load: str) -> bool:
+    """True when `effect` switched on in the bench shows in a recording with `columns` and `load`: the
+    channel it acts on is recorded, and a second channel it can be compared against."""
+    cols = set(columns)
+    forces = {"motor_force_N", "tip_force_N"} <= cols
+    if effect == "backlash":
+        return {"motor_pos_mm", "tip_pos_mm"} <= cols or (load == "spring" and {"motor_pos_mm", "tip_force_N"} <= cols)
+    if effect in ("coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis",
+                  "eccentric_pulley"):
+        return forces and "motor_pos_mm" in cols
+    if effect in ("sensor_hysteresis", "thermal_drift"):
+        return forces and "motor_pos_mm" in cols and (effect != "thermal_drift" or "temperature_C" in cols)
+    if effect == "stiffening_spring":
+        return load == "spring" and "tip_force_N" in cols and bool({"motor_pos_mm", "tip_pos_mm"} & cols)
+    if effect == "sensor_delay":
+        return "tip_force_N" in cols and (load == "spring" and bool({"motor_pos_mm", "tip_pos_mm"} & cols)
+                                          or "motor_force_N" in cols)
+    return False
+
+
 def _apply(name: str, params: dict, **channels) -> np.ndarray:
     from teleop.physics import Signals
     return get_effect(name).apply(Signals(**channels), params)
@@ -103,11 +124,12 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     traj, x = _trajectory(rng, t, fs_hz)
     A = float(np.ptp(x)) / 2
     v = np.gradient(x, t)
+    v[np.abs(v) < 1e-9] = 0.0          # at rest (round-off of the smoothing is not motion)
     vmax = float(np.percentile(np.abs(v), 99))
-    v25 = float(np.percentile(np.abs(v), 25))
+    v25 = float(np.percentile(np.abs(v[v != 0]), 25))      # a slow stroke's speed (moving samples)
     truth: dict = {}
     # sheath bend: constant, or stepped between a few angles as in the seed's bend-angle experiments
-    if rng.random() < 0.5:
+    if rng.random() < 0.5 or "bend_angle_deg" not in columns:   # a bend nobody records is fixed
         theta = np.full(t.shape, rng.uniform(math.pi / 2, 2 * math.pi))
     else:
         levels = rng.uniform(math.pi / 3, 2 * math.pi, 4)
@@ -165,9 +187,9 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     readings = {"motor_force": rng.uniform(0.9, 1.1) * F_m + rng.uniform(-0.5, 0.5),
                 "tip_force": rng.uniform(0.95, 1.05) * F_tip + rng.uniform(-0.3, 0.3)}
     sensor_channel = "motor_force" if rng.random() < 0.5 else "tip_force"
-    if "motor_force" not in columns:
+    if "motor_force_N" not in columns:
         sensor_channel = "tip_force"
-    if "tip_force" not in columns:
+    if "tip_force_N" not in columns or load != "spring":   # a tip sensor's own effect needs the spring law
         sensor_channel = "motor_force"
     F = readings[sensor_channel]
     if "sensor_hysteresis" in effects:
@@ -197,4 +219,6 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     lines = [f"# load = {load}", "# source = scenes.cable_rig (simulated single-cable bench)",
              ",".join(names)]
     lines += [",".join(f"{v:.9g}" for v in row) for row in data]
-    return RigRecording(truth, "\n".join(lines) + "\n", tuple(names[1:]), traj, load)
+    setup = {"mu": mu, "k_stick": k_stick, "theta_mean": float(np.mean(theta)),
+             "spring_N_per_m": ks if load == "spring" else None}
+    return RigRecording(truth, "\n".join(lines) + "\n", tuple(names[1:]), traj, load, setup)

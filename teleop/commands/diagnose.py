@@ -19,11 +19,15 @@ def register(subparsers) -> None:
     p.add_argument("--plot", metavar="PATH", help="write the figure as PNG (one per recording: _<name>)")
     p.add_argument("--save-model", metavar="PATH", help="write the identified link models (JSON)")
     p.add_argument("--seed", type=int, default=0, help="seed of the fits' extra starts (0)")
+    p.add_argument("--baseline", metavar="EFFECTS", default="default",
+                   help="what your simulation already contains: 'default' (the project's simulation: capstan "
+                        "friction over the bend, the spring load), 'lossless' (ideal links), or a comma list "
+                        "of catalogue effects; findings are what lies beyond it")
     p.set_defaults(func=run)
 
 
 def _summary(doc: dict) -> str:
-    lines = [f"{doc['recording']}"]
+    lines = [f"{doc['recording']}", f"  baseline: {doc['baseline']['model']}"]
     for ch, rm in doc["baseline"]["rmse"].items():
         info = doc["channels"][ch]
         peer = doc["peer"][ch]
@@ -46,7 +50,7 @@ def run(args) -> int:
 
     from teleop.progress import progress
 
-    from teleop.diagnosis.diagnose import diagnose
+    from teleop.diagnosis.diagnose import baseline_effects, diagnose
     from teleop.diagnosis.identify import applicable
     from teleop.diagnosis.links import find_links, link_data
     from teleop.diagnosis.model_io import save_model
@@ -54,12 +58,13 @@ def run(args) -> int:
     from teleop.diagnosis.recording_io import read_recording
     from teleop.outputs import save_figure, write_json
 
+    baseline = baseline_effects(args.baseline)
     recs = [read_recording(p, args.map) for p in args.recordings]
     total = sum(3 * len(applicable(link_data(r, L))) for r in recs for L in find_links(r))
     docs, diags = [], []
     with progress(total, "diagnose", unit="fits", leave=False) as bar:
         for rec in recs:
-            diag = diagnose(rec, args.holdout, progress=bar.update, seed=args.seed)
+            diag = diagnose(rec, args.holdout, progress=bar.update, seed=args.seed, baseline=baseline)
             diags.append(diag)
             docs.append(diag.as_dict())
     for doc in docs:

@@ -39,7 +39,10 @@ def baseline_effects(spec: str | None) -> tuple[str, ...]:
         return ()
     names = tuple(n.strip() for n in spec.split(",") if n.strip())
     for n in names:
-        get_effect(n)   # InputError naming the known effects
+        try:
+            get_effect(n)
+        except InputError as exc:
+            raise InputError(f"--baseline: {exc} (or 'default', 'lossless')") from None
     return names
 
 
@@ -70,7 +73,7 @@ def si_unit(spec_unit: str, pos_unit: str, force_unit: str) -> str:
 def _link_units(rec: Recording, d: LinkData) -> tuple[str, str]:
     L = d.link
     if L.kind == "position":
-        pos = rec.units[L.output]
+        pos = rec.units[L.input if L.through_spring else L.output]
         force = rec.units.get(L.load, "N") if L.load else "N"
     elif L.kind == "force":
         pos = rec.units.get(L.drive, "m") if L.drive else "m"
@@ -122,7 +125,7 @@ class Diagnosis:
                 loc = locate(d, d.y - y0, d.y, index=self.hold, change=y1 - y1_without)
                 params = dict(after.model.effects)[name]
                 block = _param_block(self.rec, d, name, params, after.stderr.get(name, {}))
-                if name == "backlash":  # also in input (motor) units: the play seen at the motor
+                if name == "backlash" and not d.link.through_spring:  # also in motor units
                     g = abs(after.model.gain)
                     w = block["width"]
                     block["width_input"] = {"value": w["value"] / g,

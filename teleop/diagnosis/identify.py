@@ -114,6 +114,9 @@ def _target_signals(d: LinkData, m: LinkModel, name: str):
         return sig.replace(force=predict(d, m)), d.y
     if d.link.kind == "position":
         z = predict(d, m)
+        if d.link.through_spring:   # effects act on the tip travel, in the input's units
+            g = m.gain if m.gain != 0 else 1.0
+            return sig.replace(x=(z - m.offset) / g), (d.y - m.offset) / g
         return sig.replace(x=z), d.y
     if d.link.kind == "force":
         z = predict(d, m) - m.offset
@@ -253,24 +256,27 @@ class LinkResult:
 MAX_DELAY_S = 0.25
 
 
-def delay_fit(d: LinkData, fit_idx: slice, hold_idx: slice) -> tuple[float, float]:
-    """(tau [s], held-out RMSE) of the ideal link with a pure delay, y(t) = g u(t - tau) + c, |tau| <=
-    MAX_DELAY_S: the uncatalogued alternative a lag-like effect must beat (a sensor or transport delay
-    is not backlash or friction)."""
+def delay_fit(d: LinkData, fit_idx: slice, hold_idx: slice, base: LinkModel | None = None) -> tuple[float, float]:
+    """(tau [s], held-out RMSE) of the baseline link with a pure delay of its output, y(t) = sim(u)(t - tau)
+    refitted affinely, |tau| <= MAX_DELAY_S: the uncatalogued alternative a lag-like effect must beat (a
+    sensor or transport delay is not backlash or friction)."""
     dt = float(np.median(np.diff(d.t[:100])))
-    u = np.maximum(d.u, 0.0) if d.link.kind == "contact" else d.u
+    if base is None or not base.effects:
+        sim = np.maximum(d.u, 0.0) if d.link.kind == "contact" else d.u
+    else:
+        sim = predict(d, base)
     stride = max(1, (fit_idx.stop - (fit_idx.start or 0)) // FIT_SAMPLES)
     fi = np.arange(fit_idx.start or 0, fit_idx.stop, stride)
     best = (0.0, math.inf, 0.0, 0.0)
     for tau in np.linspace(-MAX_DELAY_S, MAX_DELAY_S, 2 * int(MAX_DELAY_S / max(dt, 2e-3)) + 1):
-        us = np.interp(d.t - tau, d.t, u)
+        us = np.interp(d.t - tau, d.t, sim)
         A = np.column_stack([us[fi], np.ones(fi.size)])
         (g, c), *_ = np.linalg.lstsq(A, d.y[fi], rcond=None)
         r = rms(d.y[fi] - A @ np.array([g, c]))
         if r < best[1]:
             best = (float(tau), r, float(g), float(c))
     tau, _, g, c = best
-    us = np.interp(d.t - tau, d.t, u)
+    us = np.interp(d.t - tau, d.t, sim)
     return tau, rms((d.y - (g * us + c))[hold_idx])
 
 
@@ -326,7 +332,7 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 pass
         if round_ == 0 and d.link.kind != "contact":
-            tau, r_delay = delay_fit(d, fit_idx, hold_idx)
+            tau, r_delay = delay_fit(d, fit_idx, hold_idx, base.model)
             if abs(tau) > 0 and r_delay * ACCEPT <= base.rmse_hold and (
                     pick is None or r_delay * (1 + PARSIMONY) < pick.rmse_hold):
                 delay = (tau, r_delay)   # a plain delay explains it better: name nothing

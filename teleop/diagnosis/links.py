@@ -65,6 +65,12 @@ class Link:
         return f"{self.kind} link ({self.input} -> {self.output})"
 
     @property
+    def through_spring(self) -> bool:
+        """A position link observed through a spring: its output is the tip force, F = g z + c with z the
+        tip's travel; position effects act on z in the input's units, the gain is the spring's."""
+        return self.kind == "position" and self.output.endswith("force")
+
+    @property
     def effect_kinds(self) -> tuple:
         """Physics link kinds whose effects can be added on this link: a position link whose output is a
         force (the tip pulling a spring: the spring turns the tip's travel into force) also carries that
@@ -86,8 +92,10 @@ def find_links(rec: Recording) -> list[Link]:
     if "motor_pos" in ch and "tip_pos" in ch:
         load = "tip_force" if "tip_force" in ch else ("motor_force" if "motor_force" in ch else None)
         links.append(Link("position", "tip_pos", "motor_pos", "motor_pos", load))
-    elif "motor_pos" in ch and "tip_force" in ch and rec.metadata.get("load") == "spring":
-        links.append(Link("position", "tip_force", "motor_pos", "motor_pos"))
+    if "tip_force" in ch and rec.metadata.get("load") == "spring" and ("tip_pos" in ch or "motor_pos" in ch):
+        # the spring law: tip force against the tip's travel (the motor's, where the tip is not recorded)
+        travel = "tip_pos" if "tip_pos" in ch else "motor_pos"
+        links.append(Link("position", "tip_force", travel, "motor_pos" if "motor_pos" in ch else travel))
     if "motor_force" in ch:
         drive = "motor_pos" if "motor_pos" in ch else ("tip_pos" if "tip_pos" in ch else None)
         if "tip_force" in ch:
@@ -268,8 +276,11 @@ def _template(d: LinkData, m: LinkModel) -> Signals:
 
 
 def effect_signals(d: LinkData, m: LinkModel) -> Signals:
-    """The physics Signals the link's effects see (input referred through the baseline gain)."""
+    """The physics Signals the link's effects see (input referred through the baseline gain; through a
+    spring the position effects see the input itself)."""
     sig = _template(d, m)
+    if d.link.through_spring:
+        return sig
     if d.link.kind == "position":
         return fast_replace(sig, x=m.gain * d.u + m.offset, v=m.gain * sig.v)
     if d.link.kind == "force":
@@ -304,7 +315,7 @@ def predict(d: LinkData, m: LinkModel) -> np.ndarray:
         for name, p in chain:
             z = get_effect(name).apply(sig, p)
             sig = sig.replace(x=z)
-        y = z
+        y = m.gain * z + m.offset if d.link.through_spring else z
     elif kind == "force":
         z = sig.load
         for name, p in chain:
