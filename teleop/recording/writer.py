@@ -1,7 +1,10 @@
 """One session's MCAP file, written with the `mcap` package's Writer.
 
 JSON messages per topic with a JSON schema each (Foxglove and PlotJuggler open them with no set-up), floats
-bit-exact (NaN/inf stored as null). Crash safety comes from the library's `Writer.flush()`, which closes the
+bit-exact (NaN/inf stored as null). Where one of Foxglove's well-known schemas fits, a view in it is written
+beside the JSON (protobuf, foxglove-sdk's encoders): every state change as foxglove.Log on /teleop/log, the
+end effector and stylus as foxglove.FrameTransforms on /tf at 100 Hz of session time (Foxglove's Log and
+3D panels); teleop.recording.reader counts these views and leaves them to Foxglove. Crash safety comes from the library's `Writer.flush()`, which closes the
 open chunk (zstd, with its CRC) and flushes the stream: the recorder calls it every `flush_interval`, so a
 SIGKILL loses at most that much. The data section has the library's CRC (`enable_data_crcs`), the summary
 (indexes, statistics) is written by `finish()` so Foxglove can seek a closed recording. Metadata records
@@ -24,6 +27,8 @@ from teleop.recording.layout import (PROFILE, TOPIC_EVENTS, TOPIC_TIMING, Layout
                                      metadata_record)
 
 LIBRARY = "cdpr-teleop recorder (mcap python)"
+TOPIC_LOG, TOPIC_TF = "/teleop/log", "/tf"
+TF_PERIOD = 0.01  # [s] of session time between /tf messages
 
 
 class SessionWriter:
@@ -41,9 +46,25 @@ class SessionWriter:
         for topic, schema in [(t, json_schema(layout, t)) for t in layout.topics()] + list(extra):
             sid = self.w.register_schema(topic, "jsonschema", schema)
             self.channels[topic] = self.w.register_channel(topic, "json", sid)
+        self._views(layout)
         self.event_seq = 0
         self.w.add_metadata("session", metadata_record(metadata))
         self.w.flush()
+
+    def _views(self, layout: Layout) -> None:
+        """Channels in Foxglove's schemas (protobuf): /teleop/log always, /tf when the row has the poses."""
+        from foxglove.messages import FrameTransforms, Log
+
+        from teleop.live.channels import RowMessages
+
+        for topic, cls in ((TOPIC_LOG, Log), (TOPIC_TF, FrameTransforms)):
+            sc = cls.get_schema()
+            sid = self.w.register_schema(sc.name, "protobuf", bytes(sc.data))
+            self.channels[topic] = self.w.register_channel(topic, "protobuf", sid)
+        names = {s.name for s in layout.signals}
+        self.tf = RowMessages(layout) if {"setpoint_cp", "measured_cp"} <= names else None
+        self.t_tf = -1e9
+        self.n_tf = self.n_log = 0
 
     def log_time(self, t: float) -> int:
         return max(0, self.t0_ns + int(round(t * 1e9)))
@@ -53,11 +74,21 @@ class SessionWriter:
         for topic, tick, t, payload in self.encoder.encode(row):
             lt = self.log_time(t)
             add(ch[topic], lt, payload, lt, tick & 0xFFFFFFFF)
+        if self.tf is not None and t - self.t_tf >= TF_PERIOD - 1e-9:
+            self.t_tf = t
+            self.n_tf += 1
+            lt = self.log_time(t)
+            add(ch[TOPIC_TF], lt, self.tf.transforms(row, lt), lt, self.n_tf)
 
     def write_json(self, topic: str, t: float, obj: dict) -> None:
         self.event_seq += 1
         lt = self.log_time(t)
         self.w.add_message(self.channels[topic], lt, json.dumps(obj, default=str).encode(), lt, self.event_seq)
+        if topic == TOPIC_EVENTS:
+            from teleop.live.channels import fault_log
+
+            self.n_log += 1
+            self.w.add_message(self.channels[TOPIC_LOG], lt, fault_log(obj, lt), lt, self.n_log)
 
     def flush(self) -> None:
         """Close the open chunk and flush the stream: everything written so far survives a crash."""
