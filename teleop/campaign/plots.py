@@ -79,7 +79,16 @@ def findings_heatmap(recordings: list, columns: list, matrix: np.ndarray, title:
     ax.set_yticks(range(n_r), recordings, fontsize=8)
     ax.set_xlabel("effect on channel")
     ax.set_ylabel("recording")
-    fig.colorbar(im, ax=ax, label="held-out improvement: RMSE before / after [-]")
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
+
+    cb = fig.colorbar(im, ax=ax, label="held-out improvement: RMSE before / after [-]")
+    ticks = [t for t in (1, 1.5, 2, 3, 5, 10, 20, 50, 100, 1000) if t <= vmax]
+    cb.ax.yaxis.set_major_locator(FixedLocator(ticks))
+    cb.ax.yaxis.set_minor_locator(NullLocator())
+    cb.ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"x{v:g}"))
+    if np.isnan(matrix).any():
+        ax.text(1.0, -0.02, "blank: effect not found", transform=ax.transAxes, ha="right", va="top",
+                fontsize=7)
     ax.set_title(title)
     fig.tight_layout()
     return fig

@@ -16,6 +16,7 @@ report of a file is the one `teleop diagnose FILE --seed S` gives.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import glob
 import hashlib
 import io
@@ -111,6 +112,39 @@ def execute(identity: dict) -> dict:
 
     rec = read_recording(identity["recording"], identity["map"])
     return diagnose(rec, identity["holdout"], seed=identity["seed"]).as_dict()
+
+
+def _diagnose_file(item):
+    """Read and diagnose one file where the scheduler runs it: item = (path, map, holdout, seed)."""
+    from teleop.diagnosis.diagnose import diagnose
+    from teleop.diagnosis.recording_io import read_recording
+
+    path, cmap, holdout, seed = item
+    return diagnose(read_recording(path, cmap), holdout, seed=seed)
+
+
+def diagnose_files(paths: list, column_map, holdout: float, seed: int, scheduler: str) -> list:
+    """Diagnosis of each of `paths` (in that order), each file read and diagnosed where `scheduler` runs
+    tasks (`teleop diagnose REC... --scheduler`), as `diagnose(read_recording(path, map), holdout, seed)`
+    would give here. Workers get absolute paths; each Diagnosis comes back with the path as given. The
+    first file that fails is an InputError naming it."""
+    from teleop.campaign.progress import Progress
+    from teleop.campaign.scheduler import open_scheduler
+
+    cmap = column_map
+    if cmap is not None and str(cmap).endswith(".toml"):
+        cmap = str(Path(cmap).absolute())
+    items = [(str(Path(p).absolute()), cmap, holdout, seed) for p in paths]
+    done = {}
+    with open_scheduler(scheduler) as sched, Progress(len(items), "diagnose") as progress:
+        for item, outcome in sched.run(_diagnose_file, items):
+            if not outcome.ok:  # a malformed file's InputError already names it
+                err = outcome.error
+                raise InputError(err.split(": ", 1)[1] if err.startswith("InputError: ") else f"{item[0]}: {err}")
+            done[item[0]] = outcome.value
+            progress.update()
+    return [dataclasses.replace(d, rec=dataclasses.replace(d.rec, path=str(Path(p))))
+            for p, d in zip(paths, (done[i[0]] for i in items))]
 
 
 def findings_matrix(reports: list) -> tuple:

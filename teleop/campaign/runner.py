@@ -24,13 +24,16 @@ def execute_task(task):
 @dataclass
 class RunReport:
     """What a run did: tasks in the campaign, skipped (already done), ran here, failed [(Task, error)],
-    wall time [s], each task's own time where it ran [s], and the summary of everything stored."""
+    wall time [s] (of which start_s starting or connecting to the scheduler), each task's own time where it
+    ran [s], worker threads at the end, and the summary of everything stored."""
 
     total: int
     skipped: int
     ran: int
     failed: list = field(default_factory=list)
     wall_s: float = 0.0
+    start_s: float = 0.0
+    workers: int = 0
     task_seconds: list = field(default_factory=list)
     summary: dict = field(default_factory=dict)
 
@@ -50,10 +53,10 @@ def run_campaign(campaign: Campaign, out_dir: str | Path, scheduler: str = "none
               f"{len(todo)} to run on {scheduler}", file=stream, flush=True)
         started = datetime.now(timezone.utc).isoformat(timespec="seconds")
         t0 = time.perf_counter()
-        workers = 0
         if todo:
             with open_scheduler(scheduler) as sched, \
                     Progress(len(todo), "campaign", stream, bar=bar, interval=interval) as progress:
+                report.start_s = time.perf_counter() - t0
                 for task, outcome in sched.run(execute_task, todo):
                     if outcome.ok:
                         store.save(task, outcome.value)
@@ -64,10 +67,11 @@ def run_campaign(campaign: Campaign, out_dir: str | Path, scheduler: str = "none
                     report.ran += 1
                     report.task_seconds.append(outcome.seconds)
                     progress.update(outcome.ok)
-                workers = sched.workers
+                report.workers = sched.workers
         report.wall_s = time.perf_counter() - t0
         secs = report.task_seconds
-        store.log_run({"started_utc": started, "scheduler": scheduler, "workers": workers,
+        store.log_run({"started_utc": started, "scheduler": scheduler, "workers": report.workers,
+                       "start_s": round(report.start_s, 3),
                        "tasks": report.total, "skipped": report.skipped, "ran": report.ran,
                        "failed": len(report.failed), "wall_s": round(report.wall_s, 3),
                        "task_s_sum": round(sum(secs), 3),

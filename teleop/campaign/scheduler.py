@@ -3,9 +3,11 @@ processes, one thread each) or `tcp://HOST:PORT` / `tls://HOST:PORT` (a running 
 started by hand with `dask scheduler` / `dask worker`, or by dask-jobqueue on SLURM/PBS).
 
 All three run the same function on each task, `guarded`, which times it and turns an exception into a
-failed Outcome (so one failing task never sinks the others), with the BLAS/OpenMP thread pools at one thread
-(threadpoolctl): Dask's nannies start workers so (OMP/MKL/OPENBLAS_NUM_THREADS=1), and a threaded BLAS may
-sum in another order, so the in-process run does the same and a result is the same bytes wherever it ran.
+failed Outcome (so one failing task never sinks the others). Tasks run with the BLAS/OpenMP thread pools at
+one thread (threadpoolctl): Dask's nannies start workers so (OMP/MKL/OPENBLAS_NUM_THREADS=1), and a threaded
+BLAS may sum in another order, so the in-process run does the same for its duration, and a worker process
+sets it once on its first task (for workers started without a nanny); a result is the same bytes wherever
+it ran.
 """
 
 from __future__ import annotations
@@ -35,17 +37,26 @@ class Outcome:
 
 
 def guarded(fn: Callable, item) -> Outcome:
-    """fn(item) as an Outcome, timed, with the BLAS/OpenMP pools at one thread (see the module docstring)."""
-    from threadpoolctl import threadpool_limits
-
+    """fn(item) as an Outcome, timed."""
     t0 = time.perf_counter()
     try:
-        with threadpool_limits(limits=1):
-            value = fn(item)
+        value = fn(item)
     except Exception as exc:  # noqa: BLE001 - any task failure is reported, never raised into the others
         return Outcome(False, error=f"{type(exc).__name__}: {' '.join(str(exc).split())}",
                        traceback=traceback.format_exc(), seconds=time.perf_counter() - t0)
     return Outcome(True, value=value, seconds=time.perf_counter() - t0)
+
+
+_WORKER_POOLS = []  # holds the limiter of this worker process once set (never restored: a worker only runs tasks)
+
+
+def guarded_on_worker(fn: Callable, item) -> Outcome:
+    """`guarded` in a Dask worker: the BLAS/OpenMP pools of this process at one thread from its first task."""
+    if not _WORKER_POOLS:
+        from threadpoolctl import threadpool_limits
+
+        _WORKER_POOLS.append(threadpool_limits(limits=1))
+    return guarded(fn, item)
 
 
 def parse_scheduler(text: str) -> tuple:
@@ -74,9 +85,12 @@ class InProcess:
         pass
 
     def run(self, fn: Callable, items: Iterable) -> Iterator[tuple]:
-        """(item, Outcome) for each item, as each finishes."""
-        for item in items:
-            yield item, guarded(fn, item)
+        """(item, Outcome) for each item, as each finishes, the BLAS/OpenMP pools at one thread meanwhile."""
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1):
+            for item in items:
+                yield item, guarded(fn, item)
 
 
 class DaskScheduler:
@@ -94,8 +108,12 @@ class DaskScheduler:
         from distributed import Client, LocalCluster
 
         if self.address is None:
-            self.cluster = LocalCluster(n_workers=self.n_workers, threads_per_worker=1, processes=True,
-                                        dashboard_address=None, silence_logs=logging.ERROR)
+            try:
+                self.cluster = LocalCluster(n_workers=self.n_workers, threads_per_worker=1, processes=True,
+                                            dashboard_address=None, silence_logs=logging.ERROR)
+            except Exception as exc:  # noqa: BLE001 - no workers (memory, a broken install): say so in a line
+                raise InputError(f"--scheduler {self.name}: the Dask LocalCluster did not start "
+                                 f"({type(exc).__name__}: {exc})") from None
             self.client = Client(self.cluster)
         else:
             try:
@@ -129,7 +147,7 @@ class DaskScheduler:
             item = next(items, _END)
             if item is _END:
                 return False
-            fut = self.client.submit(guarded, fn, item, pure=False)
+            fut = self.client.submit(guarded_on_worker, fn, item, pure=False)
             pending[fut] = item
             done.add(fut)
             return True

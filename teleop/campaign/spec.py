@@ -1,11 +1,11 @@
 """The campaign file (TOML): which study kind, its seed, and what to run.
 
     [campaign]
-    kind = "blind-jnd"     # or "diagnose"
+    kind = "blind-jnd"     # or "diagnose" (or "noop": empty tasks, to measure the overhead per task)
     seed = 0               # every task's random streams derive from it (and the task's identity)
 
-The other tables belong to the kind: `teleop.campaign.blind` (a grid of simulated blind studies) and
-`teleop.campaign.recordings` (recordings to diagnose) document theirs. Unknown tables and keys raise, with
+The other tables belong to the kind: `teleop.campaign.blind` (a grid of simulated blind studies),
+`teleop.campaign.recordings` (recordings to diagnose) and `teleop.campaign.noop` document theirs. Unknown tables and keys raise, with
 the file and key named; relative paths are relative to the campaign file.
 """
 
@@ -31,9 +31,9 @@ class Campaign:
 
 def kinds() -> dict:
     """kind name -> module with parse(doc, where, base_dir), tasks(campaign), execute(task), summarise(...)."""
-    from teleop.campaign import blind, recordings
+    from teleop.campaign import blind, noop, recordings
 
-    return {blind.KIND: blind, recordings.KIND: recordings}
+    return {blind.KIND: blind, recordings.KIND: recordings, noop.KIND: noop}
 
 
 def kind_module(name: str):

@@ -67,6 +67,10 @@ def run(args) -> int:
             print(f"campaign: ran {report.ran} tasks in {report.wall_s:.1f} s on {args.scheduler} "
                   f"({sum(secs) / len(secs):.2f} s per task where it ran)", file=sys.stderr)
     else:
+        from pathlib import Path
+
+        if not (Path(args.out) / "tasks").is_dir():
+            raise InputError(f"--out {args.out}: holds no campaign results (run `teleop campaign run` first)")
         with ResultStore(args.out) as store:
             summary = summarise(campaign, store)
     print(summary_text(campaign, summary))

@@ -54,7 +54,7 @@ def test_grid_points_tasks_and_identities(tmp_path):
 
 @pytest.mark.parametrize("change, message", [
     (("seed = 5", "seed = -1"), "[campaign]: key 'seed' must be >= 0"),
-    (('kind = "blind-jnd"', 'kind = "blind"'), "kind 'blind': expected one of: blind-jnd, diagnose"),
+    (('kind = "blind-jnd"', 'kind = "blind"'), "kind 'blind': expected one of: blind-jnd, diagnose, noop"),
     (("[rig]", "[rigg]"), "unknown key 'rigg'"),
     (("robot_substeps = 4", "robot_substeps = 4.5"), "[rig] robot_substeps: expected a whole number"),
     (("force = 0.25", "forse = 0.25"), "[participant]: unknown key 'forse'"),
@@ -104,7 +104,9 @@ def test_cli_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
             (["campaign", "run", str(tmp_path / "c.toml"), "--out", "out", "--scheduler", "local:0"],
              "expected none, local:N"),
             (["campaign", "run", str(tmp_path / "missing.toml"), "--out", "out"], "file not found"),
-            (["bench", "blind-jnd", "--scheduler", "udp://x:1"], "expected none, local:N")):
+            (["bench", "blind-jnd", "--scheduler", "udp://x:1"], "expected none, local:N"),
+            (["campaign", "summary", str(write(tmp_path, GOOD, "g.toml")), "--out", "out"],
+             "holds no campaign results")):
         r = run_cli(*args, cwd=tmp_path)
         assert r.returncode == 2, r.stderr
         assert len(r.stderr.strip().splitlines()) == 1 and needle in r.stderr, r.stderr
