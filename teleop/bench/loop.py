@@ -118,6 +118,10 @@ def run(args) -> int:
 
     if not args.seconds > 0 or not args.rate > 0:
         raise InputError("--seconds and --rate must be > 0")
+    if args.live is not None:
+        from teleop.live.server import check_port
+
+        check_port(args.live_host, args.live)
     if not args.find_max_rate:
         out = bench_once(args, args.rate)
         la = out["lateness_us"]

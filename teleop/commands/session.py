@@ -74,6 +74,10 @@ def run(args) -> int:
         raise InputError(f"--seconds must be > 0, got {args.seconds}")
     if args.record and not args.record.endswith(".mcap"):
         raise InputError(f"--record {args.record}: expected a file name ending in .mcap")
+    if args.live is not None:
+        from teleop.live.server import check_port
+
+        check_port(args.live_host, args.live)
     from teleop.loop.params import LOOP_RENDER
     from teleop.mapping import POKE_WORKSPACE_MAX, MappingParams
 

@@ -30,6 +30,19 @@ MESSAGE_DATA = 0x01
 SEND_BUFFER = 1 << 16  # kernel send buffer per viewer [bytes]: ~0.3 s of the live stream
 
 
+def check_port(host: str, port: int) -> None:
+    """Raise InputError (one line naming --live / --live-host) when the live view could not listen there."""
+    from teleop.errors import InputError
+
+    try:
+        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM) as s:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            s.bind((host, port))
+    except OSError as exc:
+        raise InputError(f"--live {port} --live-host {host}: cannot listen there ({exc.strerror or exc}); "
+                         f"pick another port (--live 0: any free one)") from None
+
+
 @dataclass
 class ChannelInfo:
     """One advertised channel: id, topic, encoding ("json" | "protobuf"), schema name, schema bytes."""

@@ -65,3 +65,19 @@ def test_a_slow_viewer_costs_dropped_frames_not_loop_time(tmp_path):
     assert s.complete and len(s.messages("/loop")) == timing["ticks"]
     # the loop did not wait for the viewer: a loop held back by it would be late for the whole stall
     assert timing["deadline_misses"] <= 0.25 * timing["ticks"], timing
+
+
+def test_a_port_in_use_is_one_line_exit_2(tmp_path):
+    import socket
+    import subprocess
+    import sys
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        for cmd in (["session", "--seconds", "1"], ["bench", "loop", "--seconds", "1"]):
+            r = subprocess.run([sys.executable, "-m", "teleop.cli", *cmd, "--live", str(port), "--record",
+                                str(tmp_path / "x.mcap")], capture_output=True, text=True, timeout=60)
+            assert r.returncode == 2 and r.stderr.count("\n") == 1 and f"--live {port}" in r.stderr, r.stderr
+            assert not (tmp_path / "x.mcap").exists()  # nothing started, nothing written
