@@ -12,14 +12,14 @@ are then limited so that no cable leaves [l_min, l_max] and no cable moves more 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from teleop.errors import InputError
 from teleop.geometry import Geometry, _frozen
-from teleop.kinematics import rotation_zyx
+from teleop.kernels import mapping as KM
+from teleop.kinematics import pose2cables
 
 
 @dataclass(frozen=True)
@@ -76,8 +76,7 @@ def stylus2target(p_stylus, p_stylus_anchor, p_robot_anchor, params: MappingPara
 
 def platform_offsets(geom: Geometry, orientation) -> np.ndarray:
     """(6, 3) R r_i - B_i for a fixed orientation [alpha, beta, gamma] (rad): lengths = |p + offsets|."""
-    a, b, g = np.asarray(orientation, dtype=float)
-    return geom.r @ rotation_zyx(a, b, g).T - geom.B
+    return pose2cables(np.r_[0.0, 0.0, 0.0, np.asarray(orientation, dtype=float)], geom)
 
 
 def position2lengths(p, offsets: np.ndarray) -> np.ndarray:
@@ -85,8 +84,9 @@ def position2lengths(p, offsets: np.ndarray) -> np.ndarray:
 
     Same as kinematics.pose2lengths for that orientation (eq 4-5), without rebuilding R every tick.
     """
-    v = offsets + p
-    return np.sqrt(np.einsum("ij,ij->i", v, v))
+    p = np.asarray(p, dtype=float)
+    return KM.position_lengths(float(p[0]), float(p[1]), float(p[2]), np.ascontiguousarray(offsets, dtype=float),
+                               np.empty(len(offsets)))
 
 
 def limit_lengths(L_target, L_prev, geom: Geometry, dt: float) -> np.ndarray:
@@ -123,8 +123,8 @@ def is_aligned(orientation, params: MappingParams) -> bool:
 
 
 class Follower:
-    """The per-tick mapping on plain floats (the loop's hot path; at six cables numpy's per-call overhead
-    would dominate). Same numbers as `stylus2target`, `position2lengths` and `limit_lengths`:
+    """The per-tick mapping, one compiled call (kernel mapping.follow_step; the loop's hot path). Same numbers
+    as `stylus2target`, `position2lengths` and `limit_lengths`:
 
         pos, L = Follower(params, geom, dt).step(p_stylus, anchor_stylus, anchor_robot, pos_prev, L_prev)
 
@@ -136,55 +136,29 @@ class Follower:
     """
 
     def __init__(self, params: MappingParams, geom: Geometry, dt: float):
-        sR = (params.motion_scale * params.R_reg).tolist()
-        self.sR = tuple(v for row in sR for v in row)
-        self.lo = tuple(params.workspace_min.tolist())
-        self.hi = tuple(params.workspace_max.tolist())
-        self.offsets = tuple(tuple(row) for row in platform_offsets(geom, params.home[3:]).tolist())
-        self.dmax = float(geom.v_max * dt)
-        self.dmax_hard = float(geom.v_max * (self.dmax / geom.v_max))  # limit_lengths(..., dt=dmax / v_max)
-        self.l_min, self.l_max = float(geom.l_min), float(geom.l_max)
+        dmax = float(geom.v_max * dt)
+        self.c = np.array([*(params.motion_scale * params.R_reg).ravel(), *params.workspace_min,
+                           *params.workspace_max, dmax, geom.v_max * (dmax / geom.v_max), geom.l_min, geom.l_max],
+                          dtype=float)
+        self.offsets = np.ascontiguousarray(platform_offsets(geom, params.home[3:]))
+        self.dmax = dmax
+        self._p, self._anchor = np.zeros(3), np.zeros(6)
+        self._pos, self._L = np.zeros(3), np.zeros(len(geom.B))
 
     def lengths(self, x: float, y: float, z: float) -> list:
         """Cable lengths [m] at position (x, y, z) [m] (`position2lengths` with the held orientation)."""
-        sqrt = math.sqrt
-        return [sqrt((ox + x) ** 2 + (oy + y) ** 2 + (oz + z) ** 2) for ox, oy, oz in self.offsets]
+        return KM.position_lengths(float(x), float(y), float(z), self.offsets, np.empty(len(self.offsets))).tolist()
+
+    def step_into(self, p: np.ndarray, anchor: np.ndarray, pos: np.ndarray, L: np.ndarray) -> None:
+        """The step on float64 arrays: p (3,) stylus [m], anchor (6,) stylus and robot anchors [m]; pos (3,)
+        and L (n,) hold the previous target and lengths [m] and are updated (kernel mapping.follow_step)."""
+        KM.follow_step(p, anchor, self.c, self.offsets, pos, L)
 
     def step(self, p_stylus, anchor_stylus, anchor_robot, pos_prev, L_prev) -> tuple[list, list]:
         """(target position [x, y, z] [m], commanded lengths [6] [m]) for this tick (see the class docstring)."""
-        s00, s01, s02, s10, s11, s12, s20, s21, s22 = self.sR
-        dx = p_stylus[0] - anchor_stylus[0]
-        dy = p_stylus[1] - anchor_stylus[1]
-        dz = p_stylus[2] - anchor_stylus[2]
-        lo, hi = self.lo, self.hi
-        x = anchor_robot[0] + (s00 * dx + s01 * dy + s02 * dz)
-        y = anchor_robot[1] + (s10 * dx + s11 * dy + s12 * dz)
-        z = anchor_robot[2] + (s20 * dx + s21 * dy + s22 * dz)
-        x = hi[0] if x > hi[0] else (lo[0] if x < lo[0] else x)  # np.minimum(np.maximum(p, lo), hi)
-        y = hi[1] if y > hi[1] else (lo[1] if y < lo[1] else y)
-        z = hi[2] if z > hi[2] else (lo[2] if z < lo[2] else z)
-        dmax, l_min, l_max, sqrt = self.dmax, self.l_min, self.l_max, math.sqrt
-        # one pass: lengths (position2lengths), their largest step, the clipped lengths and their largest step
-        L, step, step_c = [], 0.0, 0.0
-        for (ox, oy, oz), lp in zip(self.offsets, L_prev):
-            vx, vy, vz = ox + x, oy + y, oz + z
-            v = sqrt(vx * vx + vy * vy + vz * vz)
-            d = v - lp if v > lp else lp - v
-            if d > step:
-                step = d
-            v = l_max if v > l_max else (l_min if v < l_min else v)
-            d = v - lp if v > lp else lp - v
-            if d > step_c:
-                step_c = d
-            L.append(v)
-        if step > dmax:  # move along the straight line as far as the cable speed allows this tick
-            f = dmax / step
-            x0, y0, z0 = pos_prev[0], pos_prev[1], pos_prev[2]
-            x, y, z = x0 + (x - x0) * f, y0 + (y - y0) * f, z0 + (z - z0) * f
-            L = [l_max if v > l_max else (l_min if v < l_min else v) for v in self.lengths(x, y, z)]
-            step_c = max([abs(a - b) for a, b in zip(L, L_prev)])
-        if step_c > dmax:  # second-order residue of the line step: limit_lengths' hard limit
-            f = self.dmax_hard / step_c if step_c > self.dmax_hard else 1.0
-            L = [b + (a - b) * f for a, b in zip(L, L_prev)]
-            L = [l_max if v > l_max else (l_min if v < l_min else v) for v in L]
-        return [x, y, z], L
+        self._p[:] = p_stylus
+        self._anchor[:3], self._anchor[3:] = anchor_stylus, anchor_robot
+        self._pos[:] = pos_prev
+        self._L[:] = L_prev
+        self.step_into(self._p, self._anchor, self._pos, self._L)
+        return self._pos.tolist(), self._L.tolist()

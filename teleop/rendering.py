@@ -1,6 +1,7 @@
 """Wrench -> stylus force: frame map, force scale, blind-test -z zeroing, ramp-in, passivity, clamp.
 
-Pure functions on plain floats (the loop calls them every tick) and a small stateful `Renderer`.
+Pure functions on plain floats (the kernels of teleop.kernels.render, re-exported here) and a small
+stateful `Renderer` holding the kernel's state.
 Order in one tick (`Renderer.render_xyz`):
   1. the force part of the wrench in {B}; any NaN/inf -> zero force and a latched fault;
   2. frame map f_dev = scale * R_dev_B f_B;
@@ -25,8 +26,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from teleop.errors import InputError
+from teleop.kernels import render as KR
+from teleop.kernels.render import clamp_norm, engage_count, frame_map, is_finite3, is_small, render_step
 
 DISABLED, WAITING, RAMPING, ENGAGED = "disabled", "waiting", "ramping", "engaged"
+_STATES = (DISABLED, WAITING, RAMPING, ENGAGED)  # by the kernel's state code
+_TRIPS = {KR.TRIP_FORCE: "non-finite force", KR.TRIP_VELOCITY: "non-finite stylus velocity or dt"}
 
 
 def _identity():
@@ -76,45 +81,6 @@ class RenderParams:
         return cls(max_force=float(spec.max_force_continuous), **kw)
 
 
-def is_finite3(x: float, y: float, z: float) -> bool:
-    """True when all three numbers are finite."""
-    return math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
-
-
-def frame_map(R, scale: float, x: float, y: float, z: float) -> tuple:
-    """scale * R (x, y, z) with R 3x3 nested tuples."""
-    r0, r1, r2 = R
-    return (scale * (r0[0] * x + r0[1] * y + r0[2] * z),
-            scale * (r1[0] * x + r1[1] * y + r1[2] * z),
-            scale * (r2[0] * x + r2[1] * y + r2[2] * z))
-
-
-def is_small(x: float, y: float, z: float, limit: float) -> bool:
-    """True when |(x, y, z)| < limit (the engage test); huge or non-finite components give False."""
-    m = max(abs(x), abs(y), abs(z))  # m < limit first: no overflow in the squares
-    return m < limit and math.sqrt(x * x + y * y + z * z) < limit
-
-
-def engage_count(n: int, x: float, y: float, z: float, limit: float) -> int:
-    """The engage rule (CHAI3D: 0.2 N for 3 ticks): consecutive ticks, this one included, whose force
-    (x, y, z) [N] stayed below `limit`; force may engage once the count reaches the required ticks."""
-    return n + 1 if is_small(x, y, z, limit) else 0
-
-
-def clamp_norm(x: float, y: float, z: float, limit: float) -> tuple:
-    """(x, y, z) scaled down to norm <= limit (direction kept); non-finite input gives (0, 0, 0)."""
-    if x * 0.0 + y * 0.0 + z * 0.0 != 0.0:  # any nan/inf (max() would skip a nan that is not first)
-        return 0.0, 0.0, 0.0
-    m = max(abs(x), abs(y), abs(z))
-    if m == 0.0:
-        return 0.0, 0.0, 0.0
-    n = m * math.sqrt((x / m) ** 2 + (y / m) ** 2 + (z / m) ** 2)  # no overflow for huge components
-    if n <= limit:
-        return x, y, z
-    k = limit / n
-    return x * k, y * k, z * k
-
-
 class Renderer:
     """Stateful force renderer: `render(wrench, velocity, dt)` -> (3,) stylus force [N] in the device frame.
 
@@ -125,78 +91,52 @@ class Renderer:
 
     def __init__(self, params: RenderParams = RenderParams()):
         self.params = params
+        self.R = np.array(params.R_dev_B, dtype=float)
+        self.rp = np.array([params.max_force, params.scale, float(params.zero_negative_z), params.engage_N,
+                            params.engage_ticks, params.ramp_s, params.alpha_max], dtype=float)
+        self.rs = np.zeros(5)  # the kernel's state: teleop.kernels.render
+        self.out = np.zeros(6)
         self.reset()
 
     def reset(self) -> None:
         """Back to DISABLED, fault cleared, passivity energy zero."""
-        self.state = DISABLED
-        self.fault = False
+        self.rs[:] = 0.0
+        self.out[:] = 0.0
         self.fault_reason = ""
-        self.small_ticks = 0
-        self.ramp = 0.0
-        self.energy = 0.0
-        self.mapped = (0.0, 0.0, 0.0)
+
+    state = property(lambda self: _STATES[int(self.rs[KR.STATE])], doc="disabled, waiting, ramping or engaged")
+    fault = property(lambda self: bool(self.rs[KR.FAULT]), doc="latched on non-finite input until reset()")
+    small_ticks = property(lambda self: int(self.rs[KR.SMALL]), doc="ticks the engage rule has counted")
+    ramp = property(lambda self: float(self.rs[KR.RAMP]), doc="ramp-in gain in [0, 1]")
+    energy = property(lambda self: float(self.rs[KR.ENERGY]), doc="passivity observer's energy [J]")
+    mapped = property(lambda self: tuple(self.out[3:6].tolist()),
+                      doc="last finite input after the frame map, scale and -z zeroing (device frame) [N]")
 
     def enable(self) -> None:
         """Arm the ramp-in (no effect while faulted or already engaged)."""
-        if not self.fault and self.state == DISABLED:
-            self.state = WAITING
-            self.small_ticks = 0
-            self.ramp = 0.0
+        if not self.fault and self.rs[KR.STATE] == KR.DISABLED:
+            self.rs[KR.STATE], self.rs[KR.SMALL], self.rs[KR.RAMP] = KR.WAITING, 0.0, 0.0
 
     def disable(self) -> None:
         """Zero force from now on; `enable()` restarts the ramp-in."""
-        self.state = DISABLED
+        self.rs[KR.STATE] = KR.DISABLED
 
     def _trip(self, reason: str) -> tuple:
-        self.mapped = (0.0, 0.0, 0.0)
-        self.fault = True
+        self.out[:] = 0.0
+        self.rs[KR.FAULT], self.rs[KR.STATE] = 1.0, KR.DISABLED
         self.fault_reason = reason
-        self.state = DISABLED
         return 0.0, 0.0, 0.0
 
     def render_xyz(self, fx: float, fy: float, fz: float, dt: float,
                    vx: float = 0.0, vy: float = 0.0, vz: float = 0.0) -> tuple:
-        """The hot-path form: force (fx, fy, fz) [N] in {B}, stylus velocity [m/s] in the device frame."""
-        # finite * 0 == 0 exactly; inf * 0 and nan * 0 are nan: one test for all three, no overflow
-        if fx * 0.0 + fy * 0.0 + fz * 0.0 != 0.0:
-            return self._trip("non-finite force")
-        if vx * 0.0 + vy * 0.0 + vz * 0.0 + dt * 0.0 != 0.0:
-            return self._trip("non-finite stylus velocity or dt")
-        p = self.params
-        x, y, z = frame_map(p.R_dev_B, p.scale, fx, fy, fz)
-        if p.zero_negative_z and z < 0.0:
-            z = 0.0
-        self.mapped = (x, y, z)
-        state = self.state
-        if state == DISABLED or self.fault:
-            return 0.0, 0.0, 0.0
-        if state != ENGAGED:
-            if state == WAITING:
-                self.small_ticks = engage_count(self.small_ticks, x, y, z, p.engage_N)
-                if self.small_ticks < p.engage_ticks:
-                    return 0.0, 0.0, 0.0
-                self.state, self.ramp = RAMPING, 0.0
-            self.ramp = min(1.0, self.ramp + (dt / p.ramp_s if p.ramp_s > 0 else 1.0))
-            if self.ramp >= 1.0:
-                self.state = ENGAGED
-            x, y, z = x * self.ramp, y * self.ramp, z * self.ramp
-        limit = p.max_force
-        n2 = x * x + y * y + z * z
-        if not n2 <= limit * limit:  # also catches an overflowed n2
-            x, y, z = clamp_norm(x, y, z, limit)
-        if p.alpha_max > 0.0 and dt > 0.0:
-            v2 = vx * vx + vy * vy + vz * vz
-            e_next = self.energy - (x * vx + y * vy + z * vz) * dt
-            if e_next < 0.0 and v2 > 0.0:
-                # passivity controller: damper -alpha v that returns the observed energy to >= 0
-                alpha = min(-e_next / (v2 * dt), p.alpha_max)
-                x, y, z = clamp_norm(x - alpha * vx, y - alpha * vy, z - alpha * vz, limit)
-                if p.zero_negative_z and z < 0.0:  # the damper may not pull toward the pad either
-                    z = 0.0
-                e_next = self.energy - (x * vx + y * vy + z * vz) * dt
-            self.energy = e_next if e_next * 0.0 == 0.0 else 0.0
-        return x, y, z
+        """The hot-path form: force (fx, fy, fz) [N] in {B}, stylus velocity [m/s] in the device frame
+        (kernel render.render_step)."""
+        out = self.out
+        trip = render_step(self.rs, self.rp, self.R, float(fx), float(fy), float(fz), float(dt), float(vx), float(vy),
+                           float(vz), out)
+        if trip:
+            self.fault_reason = _TRIPS[trip]
+        return out[0], out[1], out[2]
 
     def render(self, wrench, dt: float, velocity=None) -> np.ndarray:
         """(3,) force [N] in the device frame from a wrench (6,) or force (3,) in {B}."""

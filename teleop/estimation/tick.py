@@ -126,10 +126,16 @@ class LoopTick:
 
     def _home_mapping(self) -> None:
         # compute()'s own mapping state; the loop keeps its own (Teleop.pose, L_last, anchors) and calls map()
-        self.pos = self.home[:3]
-        self.anchor_stylus = [0.0, 0.0, 0.0]
-        self.anchor_robot = self.home[:3]
-        self.L_last = None
+        self._anchor = np.zeros(6)  # stylus anchor (3,), robot anchor (3,) [m]
+        self._anchor[3:] = self.home[:3]
+        self._pos = np.array(self.home[:3], dtype=float)
+        self._L = np.zeros(len(self.estimator.geom.B))
+        self._pose = np.array(self.home, dtype=float)
+        self._engaged_L = False
+
+    pos = property(lambda self: self._pos.tolist(), doc="compute()'s robot target [m] (3 floats)")
+    L_last = property(lambda self: self._L.tolist() if self._engaged_L else None,
+                      doc="compute()'s last commanded lengths [m] (None before the first engagement)")
 
     def reset(self) -> None:
         """Back at home, not engaged; estimator and renderer reset."""
@@ -139,10 +145,11 @@ class LoopTick:
 
     def engage(self, p_stylus) -> None:
         """Anchor the incremental mapping at the stylus position (3,) [m] and the current robot target."""
-        self.anchor_stylus = [float(v) for v in p_stylus]
-        self.anchor_robot = list(self.pos)
-        if self.L_last is None:
-            self.L_last = self.follower.lengths(*self.pos)
+        self._anchor[:3] = p_stylus
+        self._anchor[3:] = self._pos
+        if not self._engaged_L:
+            self._L[:] = self.follower.lengths(*self._pos)
+            self._engaged_L = True
 
     def map(self, p_stylus, anchor_stylus, anchor_robot, pos, L_prev) -> tuple[list, list]:
         """(target position [3] [m], lengths [6] [m]): `Follower.step` (all arguments lists of floats)."""
@@ -157,11 +164,15 @@ class LoopTick:
         return self.renderer.render_xyz(fx, fy, fz, dt, vx, vy, vz)
 
     def compute(self, p_stylus, v_stylus, counts, dt: float):
-        """One full tick (see the class docstring): (L [6], tensions [6], wrench [6], force (3,))."""
-        pos, L = self.follower.step(p_stylus.tolist(), self.anchor_stylus, self.anchor_robot, self.pos,
-                                    self.L_last)
-        self.pos, self.L_last = pos, L
-        h = self.home
-        t, w = self.estimator.update_floats(counts.tolist(), [pos[0], pos[1], pos[2], h[3], h[4], h[5]], dt)
+        """One full tick (see the class docstring): (L [6], tensions [6], wrench [6], force (3,)); p_stylus,
+        v_stylus (3,) and counts (6,) float64 arrays. The same kernels as map, estimate and render, on this
+        object's arrays."""
+        self.follower.step_into(p_stylus, self._anchor, self._pos, self._L)
+        pose = self._pose
+        pose[:3] = self._pos
+        est = self.estimator
+        t = est.tensions_into(counts)
+        w = est.tick.estimate_into(pose, t, dt)[1]
         vx, vy, vz = v_stylus.tolist()
-        return L, t, w, self.renderer.render_xyz(w[0], w[1], w[2], dt, vx, vy, vz)
+        F = self.renderer.render_xyz(w[0], w[1], w[2], dt, vx, vy, vz)
+        return self._L.tolist(), t.tolist(), w[:6].tolist(), F

@@ -4,9 +4,9 @@ A kernel is written once, in the subset of Python numba compiles (floats, ints, 
 with numba installed it runs compiled (machine code cached on disk, see `teleop.kernels.warm`), without it
 the same source runs as Python (`kernel.py_func` is that source in both cases). There is no second copy.
 
-Cache location: numba writes next to the sources (`__pycache__`), falls back to a per-user directory when
-the package directory is read-only, and `NUMBA_CACHE_DIR` overrides both; an unwritable cache only costs
-the compile time at start-up (numba warns and compiles in memory).
+Cache location: `NUMBA_CACHE_DIR` if set and writable, else next to the sources (`__pycache__`), else a
+per-user directory (~/.cache/numba). With none writable the kernels compile in memory at each start (one
+warning line; numba itself would refuse to import them).
 """
 
 from __future__ import annotations
@@ -23,12 +23,27 @@ except ImportError:  # pragma: no cover - exercised with TELEOP_NO_JIT=1
 COMPILED = _numba is not None
 
 
+_warned = []
+
+
 def njit(fn):
-    """Compile `fn` with numba (nopython, cached on disk, no GIL held); without numba return it as is."""
+    """Compile `fn` with numba (nopython, cached on disk, no GIL held); without numba return it as is.
+
+    With no writable cache location at all (read-only package, unwritable NUMBA_CACHE_DIR and home) numba
+    refuses `cache=True`; the kernel then compiles in memory at its first call (one warning line)."""
     if _numba is None:
         fn.py_func = fn
         return fn
-    return _numba.njit(cache=True, nogil=True)(fn)
+    try:
+        return _numba.njit(cache=True, nogil=True)(fn)
+    except RuntimeError as exc:  # "cannot cache function ...: no locator available"
+        if not _warned:
+            import sys
+
+            print(f"teleop: warning: numba cache unavailable ({exc}); set NUMBA_CACHE_DIR to a writable "
+                  "directory to keep compiled kernels between runs", file=sys.stderr)
+            _warned.append(True)
+        return _numba.njit(nogil=True)(fn)
 
 
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from teleop.geometry import Geometry, default_geometry
+from teleop.kernels.warm import warm_up
 from teleop.kinematics import lengths2pose
 from teleop.loop.params import LoopParams
 from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
@@ -85,6 +86,7 @@ class Teleop:
             # the Kalman gain is designed for the period the estimator runs at: one robot frame
             estimator = ReadingEstimator(self.geom, "dynamic", kalman=KalmanNoise.for_loop(self.params))
         self.estimator = estimator
+        warm_up(self.geom)  # compile or load the kernels now: no tick may pay for it (once per process)
         self.on_event = on_event
         p, m = self.params, self.params.mapping
         self.renderer = Renderer(replace(p.render, max_force=float(haptic.spec.max_force_continuous),

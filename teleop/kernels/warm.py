@@ -1,0 +1,88 @@
+"""Compile (or load from numba's on-disk cache) every kernel the loop and the simulated robot call, with the
+argument types they call them with, before the loop starts: the first tick must not pay for a compile.
+
+    seconds = warm_up(geom)        # once per process (later calls return 0.0 at once)
+
+A cold cache compiles each kernel (seconds, once per machine and source version); a warm one loads them
+(well under a second, most of it numba's own start-up).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+_done = []  # [True] once warmed (the argument types do not depend on the geometry's values)
+
+
+def kernels() -> list:
+    """Every compiled kernel (numba dispatcher) of teleop.kernels."""
+    from teleop.kernels import estimate, friction, geometry, kalman, mapping, render, sim, tension, ufuncs
+
+    out = []
+    for mod in (estimate, friction, geometry, kalman, mapping, render, sim, tension, ufuncs):
+        out += [v for v in vars(mod).values() if hasattr(v, "py_func") and getattr(v, "__module__", "") == mod.__name__]
+    return out
+
+
+def warm_up(geom=None) -> float:
+    """Run every hot-path kernel once with the loop's argument types (default geometry if None); seconds."""
+    from teleop.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
+    from teleop.estimation.kalman import KalmanNoise
+    from teleop.estimation.reading import ReadingEstimator
+    from teleop.estimation.tick import LoopTick
+    from teleop.estimation.turn import AxisTurnFit, TurnCompensation
+    from teleop.geometry import default_geometry
+    from teleop.kernels import sim as KS
+    from teleop.kernels import tension as KT
+    from teleop.kernels.geometry import forward_kinematics
+    from teleop.kinematics import FREE_AXIAL, lengths2pose, pose2lengths, poses2lengths, rotation_zyx, structure_matrix
+    from teleop.mapping import MappingParams
+    from teleop.rendering import Renderer, engage_count
+    from teleop.tension import TensionSolver
+
+    if _done:
+        return 0.0
+    geom = default_geometry() if geom is None else geom
+    t0 = time.perf_counter()
+    n = len(geom.B)
+    poly = tuple((0.0, 0.0) for _ in range(6))
+    turn = TurnCompensation((AxisTurnFit(axis=2, duration=0.1, forward=poly, backward=poly),))
+    dyn = DynamicParams(b=1.0, dahl_sigma=1e4, dahl_Fc=0.01)
+    for name in ESTIMATOR_NAMES:  # the loop's path: mapping, FSR counts, estimate + Kalman, render
+        for kal in (KalmanNoise(),):  # (no filter: the same array types)
+            est = ReadingEstimator(geom, name, turn=turn, dynamic=dyn, kalman=kal)
+            lt = LoopTick(geom, MappingParams(), est, Renderer())
+            lt.renderer.enable()
+            lt.engage(np.zeros(3))
+            for k in range(3):
+                lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.0 + k), 1e-3)
+                lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.5 + k), 1e-3)  # a non-table count
+                est.update_floats([400.0] * n, [0.0] * 6, 1e-3)
+            lt.map([0.0] * 3, [0.0] * 3, [0.0] * 3, [0.0] * 3, lt.follower.lengths(0.0, 0.0, 0.0))
+            lt.render(0.1, 0.0, 0.0, 1e-3, 0.0, 0.0, 0.0)
+            est.tick.estimate([0.0] * 6, [2.0] * n, 1e-3)
+    # the simulated robot's reading: forward kinematics, pose terms, tension distribution, capstan chain
+    q = np.zeros(6)
+    L = pose2lengths(q, geom)
+    forward_kinematics(np.ascontiguousarray(L), q.copy(), FREE_AXIAL, geom.r, geom.B, 1e-12, 12)
+    A, theta, tip = np.empty((6, n)), np.empty(n), np.empty(3)
+    KS.pose_terms(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
+                  np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip)
+    f = -structure_matrix(q, geom) @ np.full(n, 2.85)
+    cap = np.full((2, n), np.nan)
+    for _ in range(2):
+        KS.cable_sensor(f, A, float(geom.mu), theta, -L, float(geom.t_min), float(geom.t_max), 2.85, 5e3, cap,
+                        np.empty(n), np.empty(n))
+    KS.contact_moment(tip, np.zeros(3), np.empty(6))
+    TensionSolver(A, geom.t_min, geom.t_max, 2.85).solve(f)
+    # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's
+    # first-engagement forward kinematics and its engage rule
+    rotation_zyx(0.0, 0.0, 0.0)
+    poses2lengths(np.zeros((1, 6)), geom)
+    lengths2pose(L, geom, guess=q)
+    engage_count(0, 0.0, 0.0, 0.0, 0.2)
+    KT.OK  # noqa: B018 - imported for the sim robot's status check
+    _done.append(True)
+    return time.perf_counter() - t0

@@ -1,0 +1,89 @@
+"""The compiled kernels: warmed before the loop, cached or not, and the same source without numba."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _run(code: str, **env) -> subprocess.CompletedProcess:
+    e = dict(os.environ, **env)
+    return subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=e, capture_output=True, text=True,
+                          timeout=600)
+
+
+TICKS = """
+import json, numpy as np
+from teleop.bench.tick import make_ticks, _trajectory
+out = {}
+for name in ("single", "double", "dynamic"):
+    fast, _ = make_ticks(name)
+    p, v, c = _trajectory(300, 1e-3, 1)
+    out[name] = [fast.compute(p[k], v[k], c[k], 1e-3) for k in range(300)]
+print(json.dumps(out))
+"""
+
+
+def test_without_numba_the_same_source_gives_the_same_ticks():
+    compiled = _run(TICKS)
+    plain = _run(TICKS, TELEOP_NO_JIT="1")
+    assert compiled.returncode == 0 and plain.returncode == 0, compiled.stderr + plain.stderr
+    assert json.loads(compiled.stdout) == json.loads(plain.stdout)
+
+
+def test_the_loop_and_the_sim_robot_compile_nothing_after_the_warm_up():
+    code = """
+import json
+from teleop.kernels.warm import kernels, warm_up
+from teleop.bench.sim import bench_sim
+warm_up()
+before = {k.__name__: len(k.signatures) for k in kernels()}
+bench_sim(seconds=0.3, batch=False, stages=False)
+after = {k.__name__: len(k.signatures) for k in kernels()}
+print(json.dumps({k: after[k] - before[k] for k in after if after[k] != before[k]}))
+"""
+    r = _run(code)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout.strip().splitlines()[-1]) == {}
+
+
+def test_no_writable_cache_anywhere_compiles_in_memory_with_one_warning(tmp_path):
+    """A read-only package directory, an unwritable NUMBA_CACHE_DIR and home: numba refuses cache=True at
+    import; the kernels then compile in memory (numba's in-tree locator is switched off to stand for the
+    read-only package: the tests run as whoever owns the checkout)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    code = """
+import numba.core.caching as C
+C.InTreeCacheLocator.from_function = classmethod(lambda cls, f, p: None)
+import numpy as np
+from teleop.estimation.tick import TickComputer
+from teleop.geometry import default_geometry
+print(TickComputer(default_geometry(), "dynamic").estimate(np.zeros(6), np.full(6, 2.0), 1e-3)[1][2])
+"""
+    r = _run(code, NUMBA_CACHE_DIR=str(blocker / "c"), HOME=str(blocker), XDG_CACHE_HOME=str(blocker / "x"))
+    assert r.returncode == 0, r.stderr
+    assert abs(float(r.stdout.strip())) < 1e-9
+    assert r.stderr.count("numba cache unavailable") == 1
+
+
+def test_a_writable_numba_cache_dir_keeps_the_compiled_kernels(tmp_path):
+    code = "from teleop.kernels.friction import dahl_step; print(dahl_step(0.0, 1e-3, 1e4, 0.1))"
+    first = _run(code, NUMBA_CACHE_DIR=str(tmp_path))
+    assert first.returncode == 0, first.stderr
+    assert any(p.suffix == ".nbi" for p in tmp_path.rglob("*")), "no cache index written"
+    second = _run(code, NUMBA_CACHE_DIR=str(tmp_path))
+    assert second.stdout == first.stdout
+
+
+@pytest.mark.parametrize("fn", ["dahl_step", "capstan_play_step", "direction_step"])
+def test_py_func_is_the_kernel_source(fn):
+    from teleop.kernels import friction
+
+    k = getattr(friction, fn)
+    assert k.py_func.__code__.co_filename.endswith("friction.py")
