@@ -17,6 +17,7 @@ import time
 from teleop.live import channels as lc
 from teleop.live.server import ChannelInfo, FoxgloveServer
 from teleop.recording.layout import Layout
+from teleop.recording.recorder import drain_pipe, time_sharing
 from teleop.recording.ring import HEAD, T0_NS, Cursor, Ring
 from teleop.recording.stats import SecondStats
 
@@ -100,11 +101,7 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
                     send(topic, t_ns, json.dumps({"t": t, "rows_skipped": cursor.skipped,
                                                   "frames_dropped": server.dropped, "frames_sent": server.sent,
                                                   "viewers": len(server.viewers)}).encode())
-        while conn.poll():
-            try:
-                kind, obj = json.loads(conn.recv_bytes())
-            except (EOFError, OSError, ValueError):
-                break
+        for kind, obj in drain_pipe(conn):
             if kind == "event":
                 t_ns = t0_ns + int(round(float(obj.get("t", 0.0)) * 1e9))
                 payload = lc.fault_log(obj, t_ns)
@@ -124,23 +121,13 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
 
 def _live_main(layout_json: str, ring: Ring, conn, host: str, port: int, st, scene: dict, parent_pid: int,
                backlog: int) -> None:
-    try:
-        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
-    except (AttributeError, OSError):
-        pass
-    try:
-        os.nice(5)  # behind the loop, the robot process and the recorder
-    except OSError:
-        pass
+    time_sharing(5)  # behind the loop, the robot process and the recorder
     try:
         asyncio.run(_serve(Layout.from_json(layout_json), ring, conn, host, port, st, scene, parent_pid, backlog))
-    except OSError as exc:  # port taken, address not available: the session goes on without a live view
+    except OSError as exc:  # taken since the CLI checked it: the session goes on without a live view
+        print(f"teleop: warning: live view: cannot serve on {host}:{port}: {exc.strerror or exc}", flush=True)
         st[FAILED] = 1
-        try:
-            conn_err = f"live view: cannot serve on {host}:{port}: {exc.strerror or exc}"
-            print(f"teleop: warning: {conn_err}", flush=True)
-        finally:
-            st[READY] = 1
+        st[READY] = 1
 
 
 class LiveView:

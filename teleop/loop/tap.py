@@ -53,9 +53,7 @@ class RowTap:
     def __init__(self, layout: Layout, push, extras: dict | None = None):
         self.row = np.zeros(layout.width)
         self.push = push
-        self.sl = {name: slice(*ab) for (topic, name), ab in layout.slices().items()}
-        if len(self.sl) != len(layout.signals):
-            raise ValueError("RowTap needs signal names unique across topics")
+        self.sl = layout.columns()  # raises unless signal names are unique across topics
         self.stage_sl = slice(self.sl["read_us"].start, self.sl["record_us"].stop)
         self.extras = dict(extras or {})
 

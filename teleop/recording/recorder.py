@@ -30,19 +30,34 @@ from teleop.recording.stats import SecondStats
 from teleop.recording.writer import SessionWriter
 
 
+def time_sharing(nice: int) -> None:
+    """Leave any real-time policy inherited from the loop (a helper process must yield to it), at `nice`."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+    except (AttributeError, OSError):
+        pass
+    try:
+        os.nice(nice)
+    except OSError:
+        pass
+
+
+def drain_pipe(conn):
+    """Yield the (kind, obj) messages waiting on a loop-to-helper pipe (JSON [kind, obj]); never blocks."""
+    while conn.poll():
+        try:
+            kind, obj = json.loads(conn.recv_bytes())
+        except (EOFError, OSError, ValueError):
+            return
+        yield kind, obj
+
+
 def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict, t0_ns: int,
                    flush_interval: float, parent_pid: int, stream_factory=None) -> None:
     """Recorder process: drain the ring into the MCAP file until stopped or the loop process is gone."""
     layout = Layout.from_json(layout_json)
     ctrl = ring.ctrl
-    try:  # never inherit a real-time policy from the loop: the recorder must yield to it ...
-        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
-    except (AttributeError, OSError):
-        pass
-    try:  # ... but keep up with the other time-sharing processes where the OS lets us
-        os.nice(-10)
-    except OSError:
-        pass
+    time_sharing(-10)  # behind the loop, ahead of the other time-sharing processes where the OS lets us
     try:
         stream = stream_factory() if stream_factory is not None else open(path, "wb")
         writer = SessionWriter(stream, layout, metadata, t0_ns)
@@ -75,11 +90,7 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
                     ctrl[FLUSHES] += 1
                     ctrl[DURABLE] = ctrl[WRITTEN]
                     t_flushed, last_flush = t_row, time.monotonic()
-            while conn.poll():
-                try:
-                    kind, obj = json.loads(conn.recv_bytes())
-                except (EOFError, OSError, ValueError):
-                    break
+            for kind, obj in drain_pipe(conn):
                 if kind == "event":
                     writer.write_json(TOPIC_EVENTS, float(obj.get("t", 0.0)), obj)
                 elif kind == "end":
