@@ -288,10 +288,54 @@ def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tup
     if not names:
         return base
     start = base.model.with_effects(())
+    fits = []
     try:
-        fit = fit_chain(d, start, names, fit_idx, hold_idx, starts=2, seed=seed)
+        fits.append(fit_chain(d, start, names, fit_idx, hold_idx, starts=2, seed=seed))
     except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+        pass
+    if "capstan_friction" in names:
+        # the capstan's mu Theta and stick stiffness span decades: also start from a few typical sheaths
+        th = float(np.mean(d.theta)) if d.theta is not None else get_effect("capstan_friction").spec("theta").default
+        span = max(float(np.ptp(d.x)), 1e-12) if d.x is not None else 1.0
+        # within one direction of motion the capstan is proportional: F_m = g e^(+-mu Theta) F_t + c, so
+        # the pulling and releasing samples alone give the gain and mu Theta (the whole record's least
+        # squares can even turn the gain's sign when the hysteresis loop is fat)
+        idx = np.arange(fit_idx.start or 0, fit_idx.stop)
+        sgn = np.sign(np.gradient(d.x))[idx] * start.direction if d.x is not None else np.zeros(idx.size)
+        lines = []
+        for side in (1.0, -1.0):
+            sel = idx[sgn == side]
+            if sel.size > 20:
+                A = np.column_stack([d.u[sel], np.ones(sel.size)])
+                (g_side, c_side), *_ = np.linalg.lstsq(A, d.y[sel], rcond=None)
+                lines.append((g_side, c_side))
+        starts_ = [(abs(start.gain), start.offset)]
+        if len(lines) == 2:   # the pulling side carries the higher motor force: it sets the direction
+            ubar = float(np.mean(d.u[idx]))
+            if lines[0][0] * ubar + lines[0][1] < lines[1][0] * ubar + lines[1][1]:
+                start = LinkModel(start.link, start.gain, start.offset, -start.direction, start.load_sign)
+                lines = lines[::-1]
+        if len(lines) == 2 and lines[0][0] * lines[1][0] > 0:
+            g_mid = math.sqrt(lines[0][0] * lines[1][0]) * math.copysign(1.0, lines[0][0])
+            ratio = abs(lines[0][0] / lines[1][0])
+            mt = 0.5 * abs(math.log(ratio)) if ratio > 0 else 0.1
+            starts_ = [(g_mid, 0.5 * (lines[0][1] + lines[1][1]), mt)]
+        else:
+            starts_ = [(g, c, mt) for g, c in starts_ for mt in (0.1, 0.3)]
+        for g_s, c_s, mu_theta in starts_:
+            band = 2.0 * float(np.mean(np.abs(d.u))) * abs(g_s) * math.sinh(max(mu_theta, 0.02))
+            p0 = {"mu": min(mu_theta / th, 1.4), "theta": get_effect("capstan_friction").spec("theta").default,
+                  "k": max(band / (0.05 * span), 1.0)}
+            try:
+                seeded = LinkModel(start.link, float(g_s), float(c_s), start.direction, start.load_sign,
+                                   (("capstan_friction", p0),))
+                others = tuple(n for n in names if n != "capstan_friction")
+                fits.append(fit_chain(d, seeded, others, fit_idx, hold_idx, seed=seed))
+            except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+                pass
+    if not fits:
         return base
+    fit = min(fits, key=lambda f: f.rmse_fit)
     m = fit.model
     return Fit(LinkModel(m.link, m.gain, m.offset, m.direction, m.load_sign, m.effects, len(m.effects)),
                fit.stderr, fit.rmse_fit, fit.rmse_hold, fit.k, fit.n_eff, fit.at_bound)

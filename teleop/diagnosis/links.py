@@ -91,6 +91,8 @@ def find_links(rec: Recording) -> list[Link]:
     ch = rec.channels
     if "motor_pos" in ch and "tip_pos" in ch:
         load = "tip_force" if "tip_force" in ch else ("motor_force" if "motor_force" in ch else None)
+        if rec.metadata.get("load") == "spring":
+            load = None   # a spring's force is its travel: a stretch by it is a gain, not a finding
         links.append(Link("position", "tip_pos", "motor_pos", "motor_pos", load))
     if "tip_force" in ch and rec.metadata.get("load") == "spring" and ("tip_pos" in ch or "motor_pos" in ch):
         # the spring law: tip force against the tip's travel (the motor's, where the tip is not recorded)
