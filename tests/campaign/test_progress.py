@@ -1,4 +1,5 @@
-"""Progress without a terminal: a plain line every `interval` seconds of a controlled clock, and at the end."""
+"""Campaign progress without a terminal: teleop.progress's plain lines on a controlled clock, also while a
+long task runs (the ticker), failures noted as they happen; a tqdm bar on a terminal."""
 
 import io
 
@@ -6,38 +7,40 @@ from teleop.campaign.progress import Progress
 
 
 class Clock:
-    def __init__(self):
-        self.t = 100.0
+    t = 100.0
 
     def __call__(self):
         return self.t
 
 
-def test_plain_lines_every_interval_with_rate_and_eta():
+def test_plain_lines_also_between_tasks_and_a_last_line():
     clock, out = Clock(), io.StringIO()
     p = Progress(10, "campaign", out, bar=False, interval=5.0, clock=clock, ticker=False)
     clock.t += 2.0
     p.update()                   # 2 s: too soon for a line
     assert out.getvalue() == ""
     clock.t += 3.0
-    p.update(ok=False)           # 5 s: 2 tasks, one failed
-    assert out.getvalue() == "campaign: 2/10 tasks, 1 failed, 0.40 task/s, elapsed 0:05, ETA 0:20\n"
+    p.update(ok=False)           # 5 s: 2 tasks
+    p.note("task failed: x=1; participants 1-1: PressAborted: ...")
     clock.t += 1.0
-    p.tick()                     # a tick between tasks prints only when the interval has passed
-    assert out.getvalue().count("\n") == 1
+    p.tick()                     # 6 s: a tick prints only when the interval has passed
     clock.t += 5.0
-    p.tick()                     # a long task: the line comes anyway
-    assert out.getvalue().count("\n") == 2
+    p.tick()                     # 11 s: a long task, nothing finished: the line comes anyway
     p.close()
     p.close()
-    last = out.getvalue().splitlines()[-1]
-    assert last.startswith("campaign: 2/10 tasks, 1 failed") and out.getvalue().count("\n") == 3
+    assert out.getvalue().splitlines() == [
+        "campaign: 2/10 tasks (20 %), 5 s elapsed, about 20 s left",
+        "task failed: x=1; participants 1-1: PressAborted: ...",
+        "campaign: 2/10 tasks (20 %), 11 s elapsed, about 44 s left",
+        "campaign: done, 2 tasks in 11 s"]
+    assert p.failed == 1
 
 
-def test_bar_on_a_terminal_counts_tasks():
+def test_bar_on_a_terminal_counts_tasks_and_failures():
     out = io.StringIO()
     with Progress(3, "campaign", out, bar=True, ticker=False) as p:
         p.update()
+        p.update(ok=False)
         p.note("task failed: x")
     text = out.getvalue()
-    assert "1/3" in text and "task failed: x" in text
+    assert "2/3" in text and "failed=1" in text and "task failed: x" in text
