@@ -63,7 +63,7 @@ def run_campaign(campaign: Campaign, out_dir: str | Path, scheduler: str = "none
                     else:
                         store.save_failure(task, outcome.error, outcome.traceback)
                         report.failed.append((task, outcome.error))
-                        progress.note(f"task failed: {task.label}: {outcome.error}")
+                        progress.note(f"task failed: {task.label}: {shorten(outcome.error)}")
                     report.ran += 1
                     report.task_seconds.append(outcome.seconds)
                     progress.update(outcome.ok)
@@ -113,10 +113,22 @@ def summarise(campaign: Campaign, store: ResultStore, stream=None) -> dict:
     return summary
 
 
+SHOWN_FAILURES = 10  # failed tasks listed under the table (all of them are in DIR/failed/)
+
+
+def shorten(text: str, width: int = 200) -> str:
+    """`text` cut to `width` characters (the whole error and traceback are in DIR/failed/<task>.json)."""
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
 def summary_text(campaign: Campaign, summary: dict) -> str:
-    """The kind's table with the task counts and any failures under it."""
+    """The kind's table with the task counts and the first failures (parameters and error) under it."""
     t = summary["tasks"]
+    failed = t["failed"]
     lines = [kind_module(campaign.kind).table(summary), "",
-             f"tasks: {t['done']} of {t['total']} done, {len(t['failed'])} failed"]
-    lines += [f"  failed: {f['label']}: {f['error']}" for f in t["failed"]]
+             f"tasks: {t['done']} of {t['total']} done, {len(failed)} failed"
+             + (" (each with its parameters, error and traceback in DIR/failed/)" if failed else "")]
+    lines += [f"  failed: {f['label']}: {shorten(f['error'])}" for f in failed[:SHOWN_FAILURES]]
+    if len(failed) > SHOWN_FAILURES:
+        lines.append(f"  ... and {len(failed) - SHOWN_FAILURES} more")
     return "\n".join(lines)

@@ -36,14 +36,24 @@ class Outcome:
     seconds: float = 0.0
 
 
+_COLOUR = re.compile(r"\x1b\[[0-9;]*m")  # terminal colour codes
+
+
+def error_line(exc: BaseException) -> str:
+    """`Type: message` on one line, terminal colour codes (numba's) removed."""
+    text = _COLOUR.sub("", str(exc))
+    return f"{type(exc).__name__}: {' '.join(text.split())}"
+
+
+
 def guarded(fn: Callable, item) -> Outcome:
     """fn(item) as an Outcome, timed."""
     t0 = time.perf_counter()
     try:
         value = fn(item)
     except Exception as exc:  # noqa: BLE001 - any task failure is reported, never raised into the others
-        return Outcome(False, error=f"{type(exc).__name__}: {' '.join(str(exc).split())}",
-                       traceback=traceback.format_exc(), seconds=time.perf_counter() - t0)
+        return Outcome(False, error=error_line(exc), traceback=traceback.format_exc(),
+                       seconds=time.perf_counter() - t0)
     return Outcome(True, value=value, seconds=time.perf_counter() - t0)
 
 
@@ -160,7 +170,7 @@ class DaskScheduler:
             try:
                 outcome = fut.result()
             except Exception as exc:  # noqa: BLE001 - KilledWorker, CancelledError, ...: this task failed
-                outcome = Outcome(False, error=f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+                outcome = Outcome(False, error=error_line(exc))
             fut.release()
             yield item, outcome
             submit()
