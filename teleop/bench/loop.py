@@ -27,7 +27,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("loop", help="loop timing: lateness, tick and per-stage times (recording on)")
     p.add_argument("--seconds", type=SESSION_SECONDS, default=10.0)
     p.add_argument("--rate", type=LOOP_RATE_HZ, default=1000.0)
-    p.add_argument("--json", metavar="F", help="write the DESIGN.md loop JSON")
+    p.add_argument("--json", metavar="F", help="write the loop JSON (keys: docs/formats.md)")
     p.add_argument("--plot", metavar="F", help="write the period histogram as a PNG")
     p.add_argument("--haptic", default="sim://?script=pokes")
     p.add_argument("--robot", default="sim://robot?substeps=2",
@@ -36,7 +36,7 @@ def register(subparsers) -> None:
     p.add_argument("--no-record", action="store_true", help="benchmark without the recorder")
     p.add_argument("--spin-us", type=nonnegative_float, default=200.0, help="spin this long before each deadline [us]")
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
-                   help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
+                   help="telemetry older than this is a FAULT [ms] (default 20; docs/safety.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO")
     p.add_argument("--robot-rate", type=ROBOT_RATE_HZ, default=500.0, help="robot process rate [Hz] (default 500)")
     p.add_argument("--robot-rt", type=rt_priority, default=45,

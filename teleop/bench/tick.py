@@ -26,7 +26,7 @@ import numpy as np
 def register(subparsers) -> None:
     p = subparsers.add_parser("tick", help="time one full loop tick, devices excluded "
                                            "(project vs plain numpy/scipy/filterpy)")
-    p.add_argument("--json", metavar="F", help="write the DESIGN.md tick JSON here")
+    p.add_argument("--json", metavar="F", help="write the tick JSON here (keys: docs/formats.md)")
     p.add_argument("--ticks", type=int, default=20000, help="timed ticks of each kind (>= 1000; default 20000)")
     p.add_argument("--estimator", default="dynamic", help="estimator name (default: dynamic)")
     p.add_argument("--seed", type=int, default=0, help="seed of the tension noise")

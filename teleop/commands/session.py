@@ -35,7 +35,7 @@ def register(subparsers) -> None:
                    help="FSR calibration (columns tension_N, conductance_uS, branch) for the estimator "
                         "(default: the built-in synthetic calibration)")
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
-                   help="telemetry older than this is a FAULT [ms] (default 20, RELIABILITY.md)")
+                   help="telemetry older than this is a FAULT [ms] (default 20; docs/safety.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
     p.add_argument("--json", metavar="F", help="write the timing summary and events as JSON")
     add_live_arguments(p)
