@@ -59,7 +59,8 @@ class RowMessages:
     Args:
         layout: the session's row layout.
         geometry: {"B": (6, 3) base anchors [m], "r": (6, 3) platform anchors [m]} or None.
-        pads: [{"name", "center": (3,) [m], "size" [m], "outline": "disc" | "square", "color"?}] drawn in the scene.
+        pads: [{"name", "center": (3,) [m], "size": (2,) [m], "outline": "disc" | "square", "thickness" [m],
+            "color": (r, g, b, a)}] drawn in the scene (teleop.loop.session.pad_scene).
     """
 
     def __init__(self, layout: Layout, geometry: dict | None = None, pads: list | None = None):
@@ -117,11 +118,11 @@ class RowMessages:
                 color=Color(r=0.3, g=0.3, b=0.3, a=1.0))]))
         for pad in self.pads:
             x, y, z = pad["center"]
-            s = float(pad["size"])
+            sx, sy = pad["size"]
             col = pad.get("color") or (0.8, 0.5, 0.6, 0.8)
             color = Color(r=col[0], g=col[1], b=col[2], a=col[3])
             pose = Pose(position=Vector3(x=x, y=y, z=z), orientation=ident)
-            size = Vector3(x=s, y=s, z=float(pad.get("thickness", 0.01)))
+            size = Vector3(x=sx, y=sy, z=float(pad.get("thickness", 0.01)))
             shape = {"cylinders": [CylinderPrimitive(pose=pose, size=size, bottom_scale=1.0, top_scale=1.0,
                                                      color=color)]} if pad.get("outline") == "disc" else \
                 {"cubes": [CubePrimitive(pose=pose, size=size, color=color)]}

@@ -71,6 +71,33 @@ def session_metadata(tp: Teleop, haptic_url: str, robot_url: str, seconds: float
     }
 
 
+PAD_COLORS = ((0.85, 0.85, 0.8, 0.9), (0.9, 0.4, 0.4, 0.9), (0.4, 0.7, 0.9, 0.9), (0.5, 0.85, 0.5, 0.9),
+              (0.9, 0.75, 0.3, 0.9))
+
+
+def pad_scene(robot) -> list:
+    """The pad of a simulated robot (scenes.sim_robot.SimRobot: `.pad`, `.params.world.surface_z`) as the live
+    view's scene pads: the pad body (filling z in [surface_z, surface_z + thickness], scenes.world) and each
+    region as a thin patch on its surface, coloured by material. [] for a robot without a pad."""
+    pad = getattr(robot, "pad", None)
+    world = getattr(getattr(robot, "params", None), "world", None)
+    if pad is None or world is None:
+        return []
+    z = float(world.surface_z)
+    colors = {}
+
+    def color(material):
+        return colors.setdefault(material, PAD_COLORS[len(colors) % len(PAD_COLORS)])
+    out = [{"name": pad.name, "center": (0.0, 0.0, z + pad.thickness / 2), "size": (pad.size, pad.size),
+            "outline": pad.outline, "thickness": pad.thickness, "color": color(pad.background)}]
+    for i, r in enumerate(pad.regions):
+        size = (2 * r.size[0], 2 * r.size[0]) if r.shape == "disc" else (2 * r.size[0], 2 * r.size[1])
+        out.append({"name": f"{pad.name}/{r.label or i}", "center": (r.centre[0], r.centre[1], z - 0.0003),
+                    "size": size, "outline": "disc" if r.shape == "disc" else "square", "thickness": 0.0005,
+                    "color": color(r.material)})
+    return out
+
+
 def _start_live(tp, layout, extras, recorder, live: tuple, scene: dict | None):
     """Start the live view on the recorder's ring (or a ring of its own, overwritten when no one records)."""
     from teleop.live import LiveView
@@ -140,15 +167,16 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     if estimator is None:
         estimator = default_estimator(frame_period(params, robot_process_hz))
     haptic = haptic if haptic is not None else open_device(haptic_url)
+    built = robot  # the robot as built from its URL (a ProcessRobot runs it elsewhere): its pad for the scene
     if robot is None:
         if robot_process_hz:
             from devices.wrappers import ProcessRobot
 
-            open_device(robot_url)  # validates the URL here (one clear line) before forking
+            built = open_device(robot_url)  # validates the URL here (one clear line) before forking
             robot = ProcessRobot(robot_url, rate_hz=robot_process_hz,
                                  rt_priority=robot_rt_priority if realtime else None)
         else:
-            robot = open_device(robot_url)
+            robot = built = open_device(robot_url)
     recorder = live_view = None
     old = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
@@ -167,7 +195,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 tp.tap = RowTap(layout, recorder.push, extras)
                 tp.on_event = lambda ev: recorder.event(vars(ev))
             if live is not None:
-                live_view = _start_live(tp, layout, extras, recorder, live, live_scene)
+                live_view = _start_live(tp, layout, extras, recorder, live,
+                                        {"pads": pad_scene(built), **(live_scene or {})})
             log = TimingLog(int(round(seconds * params.rate_hz)))
             scheduling = set_realtime(50) if realtime else "SCHED_OTHER (not requested)"
             gc.collect()
