@@ -33,9 +33,13 @@ class Task:
 
     @property
     def id(self) -> str:
-        """`<kind>-<first 20 hex digits of sha256 of the canonical identity>`: a file name, stable across runs."""
-        digest = hashlib.sha256(canonical_json({"kind": self.kind, **self.identity}).encode()).hexdigest()
-        return f"{self.kind}-{digest[:20]}"
+        """`<kind>-<first 20 hex digits of sha256 of the canonical kind, package version and identity>`: a file
+        name, stable across runs of one version (a new version of the package computes its results afresh;
+        while the simulation's code is being edited within a version, use a fresh result directory)."""
+        from teleop import __version__
+
+        key = {"kind": self.kind, "teleop_version": __version__, **self.identity}
+        return f"{self.kind}-{hashlib.sha256(canonical_json(key).encode()).hexdigest()[:20]}"
 
 
 def stream(seed: int, *key: int) -> np.random.SeedSequence:

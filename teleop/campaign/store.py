@@ -1,8 +1,9 @@
 """The result store: a directory holding one JSON file per finished task, written atomically as it completes.
 
 Layout of DIR:
-    tasks/<task id>.json    {"task", "kind", "label", "identity", "result"}: a finished task (sorted keys,
-                            floats as shortest round-trip repr: the same result is the same bytes)
+    tasks/<task id>.json    {"task", "kind", "label", "identity", "teleop_version", "result"}: a finished
+                            task (sorted keys, floats as shortest round-trip repr: the same result is
+                            the same bytes)
     failed/<task id>.json   {"task", "kind", "label", "identity", "error"}: the last failure of a task not
                             yet finished (removed when it finishes)
     runs.jsonl              one line per run: scheduler, counts, wall and task times (not results)
@@ -92,8 +93,10 @@ class ResultStore:
 
     def save(self, task: Task, result) -> None:
         """Write `task`'s result atomically and forget an earlier failure of it."""
+        from teleop import __version__
+
         doc = {"task": task.id, "kind": task.kind, "label": task.label, "identity": task.identity,
-               "result": result}
+               "teleop_version": __version__, "result": result}
         _write_synced(self._path(task), dumps_json(doc, sort_keys=True))
         (self.failed_dir / f"{task.id}.json").unlink(missing_ok=True)
 
