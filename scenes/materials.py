@@ -90,10 +90,10 @@ class Material:
 
 
 def data_dir() -> Path:
-    """The materials data folder: $TELEOP_DATA_DIR/materials, else ../shared/data/materials of the repo."""
+    """The materials data folder: $TELEOP_DATA_DIR/materials, else the copy shipped in scenes/data/materials
+    (the shared data's files with their licences, so that a plain clone builds the pads)."""
     root = os.environ.get("TELEOP_DATA_DIR")
-    base = Path(root) if root else Path(__file__).resolve().parents[2] / "shared" / "data"
-    return base / "materials"
+    return Path(root) / "materials" if root else Path(__file__).resolve().parent / "data" / "materials"
 
 
 def read_tensile(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -101,7 +101,7 @@ def read_tensile(path: Path) -> tuple[np.ndarray, np.ndarray]:
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except FileNotFoundError:
-        raise InputError(f"{path}: file not found (set TELEOP_DATA_DIR to the shared data folder)") from None
+        raise InputError(f"{path}: file not found (TELEOP_DATA_DIR names a data folder holding materials/)") from None
     start = next((i for i, line in enumerate(lines) if line.startswith("Time (s)")), None)
     if start is None:
         raise InputError(f"{path}: no header row 'Time (s);True Strain;...' found")
@@ -138,7 +138,7 @@ def read_compression(path: Path) -> dict[str, float]:
                     raise InputError(f"{path}:{k}: expected sample_label and elastic_modulus_mean_kPa") from None
             return out
     except FileNotFoundError:
-        raise InputError(f"{path}: file not found (set TELEOP_DATA_DIR to the shared data folder)") from None
+        raise InputError(f"{path}: file not found (TELEOP_DATA_DIR names a data folder holding materials/)") from None
 
 
 @functools.lru_cache(maxsize=4)

@@ -13,7 +13,8 @@ from teleop.diagnosis.crossfile import cross_file
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.recording_io import read_recording
 
-MRDLAB = Path("/work/shared/data/mrdlab")
+MRDLAB = Path(__file__).resolve().parents[3] / "shared" / "data" / "mrdlab"  # beside the checkout
+pytestmark = pytest.mark.skipif(not MRDLAB.is_dir(), reason="the MRDLab runs (../shared/data/mrdlab) are absent")
 RUNS = ["tool4_left_00.TXT", "tool4_left_43.TXT"]   # slowest/lightest and fastest/heaviest
 FRICTION = {"coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis", "capstan_friction"}
 

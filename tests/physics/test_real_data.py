@@ -11,6 +11,7 @@ import pytest
 from teleop.physics import Signals, fit
 
 DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "mrdlab"
+pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="the MRDLab runs (../shared/data/mrdlab) are absent")
 
 
 @pytest.mark.parametrize("run", ["tool4_left_03.TXT", "tool4_left_43.TXT"])
