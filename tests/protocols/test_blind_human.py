@@ -37,6 +37,24 @@ def read_until_prompts(proc, count, buf, timeout=30.0):
     return buf
 
 
+def answer_then_kill(state, out, k, wait_next_prompt=False):
+    """Run the study, answer its first k prompts one by one (each after its prompt shows), optionally wait
+    for the next prompt (everything before it saved), then SIGKILL it."""
+    proc = subprocess.Popen(command(state, out), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL)
+    buf = ""
+    try:
+        for i in range(k):
+            buf = read_until_prompts(proc, i + 1, buf)
+            proc.stdin.write((ANSWERS[i] + "\n").encode())
+            proc.stdin.flush()
+        if wait_next_prompt:
+            read_until_prompts(proc, k + 1, buf)
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=10)
+
+
 def test_uninterrupted_and_killed_resumed_studies_give_the_same_results(tmp_path):
     # reference: every answer through a pipe in one go
     ref_state, ref_json = tmp_path / "ref_state.json", tmp_path / "ref.json"
@@ -54,19 +72,8 @@ def test_uninterrupted_and_killed_resumed_studies_give_the_same_results(tmp_path
 
     # interrupted: answer prompt by prompt, SIGKILL once participant 2 has given two answers
     state, out = tmp_path / "state.json", tmp_path / "out.json"
-    proc = subprocess.Popen(command(state, out), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
     n_before = len(P1) + 2
-    buf = ""
-    try:
-        for i in range(n_before):
-            buf = read_until_prompts(proc, i + 1, buf)
-            proc.stdin.write((ANSWERS[i] + "\n").encode())
-            proc.stdin.flush()
-        buf = read_until_prompts(proc, n_before + 1, buf)  # the next prompt: everything before is saved
-    finally:
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=10)
+    answer_then_kill(state, out, n_before, wait_next_prompt=True)  # the next prompt: everything before is saved
     saved = json.loads(state.read_text())
     assert saved["records"][0]["ratings"] == [10, 7, 4, 2]
     assert [a[2] for a in saved["records"][1]["answers"]] == ["softer", "softer"]
@@ -125,17 +132,7 @@ def test_killed_while_saving_the_state_file_is_whole(tmp_path, reference_state, 
     """SIGKILL right after the k-th answer is sent (while it is being saved): the state file exists, is
     whole JSON, holds every answer before the k-th and at most the k-th too, each one the reference's."""
     state, out = tmp_path / "s.json", tmp_path / "o.json"
-    proc = subprocess.Popen(command(state, out), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL)
-    buf = ""
-    try:
-        for i in range(k):
-            buf = read_until_prompts(proc, i + 1, buf)
-            proc.stdin.write((ANSWERS[i] + "\n").encode())
-            proc.stdin.flush()
-    finally:
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=10)
+    answer_then_kill(state, out, k)
     saved = json.loads(state.read_text())  # exists (the answers before the k-th were saved) and is whole
     assert saved["study"] == "blind-test" and not out.exists()
     lo = sum(a in ACCEPTED for a in ANSWERS[:k - 1])
