@@ -21,7 +21,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.polynomial.polynomial import polyval
 
 from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes.pads import Pad, z_test_pad
@@ -170,8 +169,10 @@ def wrenches2tensions(f, A, t_min: float, t_max: float, t_ref: float) -> np.ndar
 
 def fsr_conductance(u, cal: FsrCalibration) -> np.ndarray:
     """Conductance [S] of FSRs at equivalent tension u [N] (teleop.sensors.FsrBranchLag): the calibration's
-    loading branch (= cal.reading(u, LOADING), without building Polynomials)."""
-    return np.maximum(polyval(np.asarray(u, dtype=float), cal.loading), 0.0)
+    loading branch (= cal.reading(u, LOADING): its power series, clipped at 0; kernel linalg.horner)."""
+    u = np.asarray(u, dtype=float)
+    flat = np.ascontiguousarray(u.reshape(-1))
+    return KS.conductance_loop(flat, np.asarray(cal.loading, dtype=float), np.empty(flat.shape[0])).reshape(u.shape)
 
 
 def counts_from(g, cal: FsrCalibration, noise) -> np.ndarray:

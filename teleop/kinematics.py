@@ -98,6 +98,8 @@ def is_axial(geom: Geometry) -> bool:
 def check_lengths(lengths, geom: Geometry) -> np.ndarray:
     """Return finite (6,) lengths within [l_min, l_max] or raise InfeasibleError."""
     L = np.asarray(lengths, dtype=float)
+    if L.shape == (6,) and K.lengths_outside(np.ascontiguousarray(L), float(geom.l_min), float(geom.l_max)) < 0:
+        return L
     if L.shape != (6,) or not np.isfinite(L).all():
         raise InputError(f"cable lengths must be 6 finite numbers, got {np.asarray(lengths).tolist()}")
     if (L < geom.l_min).any() or (L > geom.l_max).any():

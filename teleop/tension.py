@@ -31,8 +31,8 @@ class TensionSolver:
         if self.N.shape[1] == 1:
             # the CDPR's one-dimensional null space: solved on floats (numpy's per-call cost dominates at six
             # cables). P = -A^+, n the null direction with positive sum.
-            P, n, _ = K.null1_terms(self.A)
-            self._null1 = (P, n)
+            LU, p, q, n, _ = K.null1_terms(self.A)
+            self._null1 = (LU, p, q, n)
 
     def solve(self, f) -> np.ndarray:
         """(6,) cable tensions [N] that balance the external wrench f (6,) [N, N m]: A t + f = 0.
@@ -72,9 +72,9 @@ class TensionSolver:
         """`solve` for a one-dimensional null space n: t = t_p + lambda n, t_p = -A^+ f the minimum-norm
         particular solution, lambda closest to t_ref and clipped to the interval where every tension lies in
         [t_min, t_max] (kernel tension.null1_tensions)."""
-        P, n = self._null1
+        LU, p, q, n = self._null1
         t = np.empty(len(n))
-        status, resid = K.null1_tensions(P, self.A, n, np.asarray(f, dtype=float), self.t_min, self.t_max,
+        status, resid = K.null1_tensions(LU, p, q, self.A, n, np.asarray(f, dtype=float), self.t_min, self.t_max,
                                          self.t_ref, t)
         if status == K.OUT_OF_RANGE:
             raise InfeasibleError(

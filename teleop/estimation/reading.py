@@ -81,6 +81,12 @@ class ReadingEstimator:
         self._counts[:] = counts
         return self.tensions_into(self._counts).tolist()
 
+    def update_arrays(self, counts: np.ndarray, pose: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """(tensions (n,) [N], wrench (6,) [N, N m] in {B}) from counts (n,) and pose (6,) float64 arrays: the
+        loop's hot path. The results are this estimator's buffers (overwritten by the next update)."""
+        t = self.tensions_into(np.ascontiguousarray(counts, dtype=float))
+        return t, self.tick.estimate_into(np.ascontiguousarray(pose, dtype=float), t, float(dt))[1, :6]
+
     def update_floats(self, counts, pose, dt: float) -> tuple[list, list]:
         """(tensions [N], wrench [N, N m] in {B}) as lists of 6 floats from counts and pose (sequences)."""
         self._counts[:] = counts

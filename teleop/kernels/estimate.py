@@ -25,6 +25,7 @@ from teleop.kernels.friction import capstan_hold, capstan_state_step, dahl_step,
 from teleop.kernels.geometry import cable, platform_offsets, wrap_angle
 from teleop.kernels.jit import njit
 from teleop.kernels.kalman import kalman_update
+from teleop.kernels.linalg import horner
 
 VX, VY, VZ, MU, THETA0, DEADBAND, B_VISC, DAHL_FC, DAHL_SIGMA, V_SMOOTH, STICK_K = range(11)
 DIR, EXT, L_PREV, VEL, F_DAHL, PHI, ORIENT = range(7)
@@ -63,12 +64,8 @@ def turn_correct(w, x, y, z, dt, turn, coefs):
         if d != 0.0 and 0.0 <= tau < dur:
             s = tau / dur
             cf = coefs[k, 0 if d > 0.0 else 1]
-            deg = cf.shape[1] - 1
             for j in range(w.shape[0]):
-                acc = cf[j, deg]  # Horner, as numpy.polynomial.polynomial.polyval
-                for m in range(deg - 1, -1, -1):
-                    acc = cf[j, m] + acc * s
-                w[j] -= acc
+                w[j] -= horner(cf[j], s)
 
 
 @njit

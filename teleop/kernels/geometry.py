@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from teleop.kernels.jit import njit
+from teleop.kernels.linalg import solve_into
 
 
 @njit
@@ -99,6 +100,9 @@ def forward_kinematics(L, q, free, r, B, tol, max_iter):
     Lh = np.empty(n)
     res = np.empty(n)
     J = np.empty((n, m))
+    JTJ = np.empty((m, m))
+    JTr = np.empty(m)
+    step = np.empty(m)
     qt = np.empty(6)
     pose2lengths_into(q, r, B, off, Lq)
     worst = 0.0
@@ -116,7 +120,17 @@ def forward_kinematics(L, q, free, r, B, tol, max_iter):
             pose2lengths_into(qt, r, B, off, Lh)
             for i in range(n):
                 J[i, j] = (Lh[i] - Lq[i]) / h
-        step = np.linalg.solve(J.T @ J, J.T @ res)
+        for a in range(m):  # normal equations J^T J step = J^T res
+            acc = 0.0
+            for i in range(n):
+                acc += J[i, a] * res[i]
+            JTr[a] = acc
+            for b in range(m):
+                acc = 0.0
+                for i in range(n):
+                    acc += J[i, a] * J[i, b]
+                JTJ[a, b] = acc
+        solve_into(JTJ, JTr, step)
         lam = 1.0
         for _half in range(30):  # accept the first step (halved as needed) that lowers the residual
             qt[:] = q
@@ -159,3 +173,12 @@ def bending_loop(l, vx, vy, vz, out):
         L = math.sqrt(l[k, 0] * l[k, 0] + l[k, 1] * l[k, 1] + l[k, 2] * l[k, 2])
         out[k] = wrap_angle(l[k, 0] / L, l[k, 1] / L, l[k, 2] / L, vx, vy, vz, 0.0)
     return out
+
+
+@njit
+def lengths_outside(L, l_min, l_max):
+    """Index of the first length [m] that is not finite or outside [l_min, l_max], -1 if none."""
+    for i in range(L.shape[0]):
+        if not (l_min <= L[i] <= l_max):
+            return i
+    return -1

@@ -15,6 +15,7 @@ from teleop.kernels.friction import capstan_play_step
 from teleop.kernels.geometry import cable, forward_kinematics, platform_offsets, rotation_zyx, structure_column, \
     wrap_angle
 from teleop.kernels.jit import njit
+from teleop.kernels.linalg import horner
 from teleop.kernels.tension import OK, null1_terms, null1_tensions
 
 
@@ -60,10 +61,10 @@ def cable_sensor(f, A, mu, theta, x, t_min, t_max, t_ref, k, cap, t_tip, t_fsr):
     [N/m]) at motor positions x (n,) [m]; cap (2, n) the capstan state (motor force [N], previous position
     [m], NaN: none yet). Returns tension.OK, or the tension kernel's status (-1: A is not of rank n - 1),
     and then changes nothing."""
-    P, nv, ok = null1_terms(A)
+    LU, p, q, nv, ok = null1_terms(A)
     if not ok:
         return -1
-    status = null1_tensions(P, A, nv, f, t_min, t_max, t_ref, t_tip)[0]
+    status = null1_tensions(LU, p, q, A, nv, f, t_min, t_max, t_ref, t_tip)[0]
     if status != OK:
         return status
     for i in range(t_tip.shape[0]):
@@ -87,3 +88,12 @@ def contact_moment(o, F, out):
     return out
 
 
+
+
+@njit
+def conductance_loop(u, c, out):
+    """out (m,): max(sum_j c_j u^j, 0) for equivalent tensions u (m,) [N]: an FSR's loading-branch
+    conductance [S] from the calibration's power-series coefficients c."""
+    for k in range(u.shape[0]):
+        out[k] = max(horner(c, u[k]), 0.0)
+    return out

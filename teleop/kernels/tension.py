@@ -1,7 +1,7 @@
 """Kernel of the closed-form tension distribution for a one-dimensional null space (teleop.tension).
 
-A t + f = 0 with t = t_p + lambda n: t_p = P f the minimum-norm particular solution (P = -A^+), n the null
-direction; lambda is the value closest to t_ref (least squares: n . (t_ref - t_p) / n . n) clipped to the
+A t + f = 0 with t = t_p + lambda n: t_p = -A^+ f the minimum-norm particular solution, n the null
+direction (both from one LU factorisation of A, kernels.linalg); lambda is the value closest to t_ref (least squares: n . (t_ref - t_p) / n . n) clipped to the
 interval where every tension lies in [t_min, t_max]; the tensions are finally clipped to that range.
 """
 
@@ -12,50 +12,41 @@ import math
 import numpy as np
 
 from teleop.kernels.jit import njit
+from teleop.kernels.linalg import lu_complete, lu_null_vector, lu_particular
 
 OK, OUT_OF_RANGE, INFEASIBLE = 0, 1, 2  # status codes of `null1_tensions`
 
 
 @njit
 def null1_terms(A, tol=1e-9):
-    """(P = -A^+ (n, n) over the rank-(n-1) part, null direction n (n,) with a positive sum, is_null1) of A
-    (n, n); is_null1: the singular values say rank n - 1 at relative tolerance tol (else P, n are not
-    meaningful)."""
-    U, s, Vt = np.linalg.svd(A)
-    m = A.shape[0] - 1
-    ok = s[m - 1] > tol * max(1.0, s[0]) and s[m] <= tol * max(1.0, s[0])
-    P = np.zeros((A.shape[1], A.shape[0]))
-    for j in range(m):
-        for a in range(A.shape[1]):
-            va = Vt[j, a] / s[j]
-            for b in range(A.shape[0]):
-                P[a, b] -= va * U[b, j]
-    nv = Vt[m].copy()
-    if nv.sum() < 0.0:
-        nv = -nv
-    return P, nv, ok
+    """(LU (n, n), p, q (n,) its complete-pivoting factors, null direction nv (n,) unit with a positive sum,
+    is_null1: rank n - 1 at relative tolerance tol, else the rest is not meaningful) of A (n, n)."""
+    n = A.shape[0]
+    LU = np.empty((n, n))
+    p = np.empty(n, dtype=np.int64)
+    q = np.empty(n, dtype=np.int64)
+    rank = lu_complete(A, LU, p, q, tol)
+    nv = np.zeros(n)
+    if rank == n - 1:
+        lu_null_vector(LU, q, rank, nv)
+    return LU, p, q, nv, rank == n - 1
 
 
 @njit
-def tensions_batch(f, A, t_min, t_max, t_ref, out, status):
-    """Per sample k of wrenches f (m, n) and structure matrices A (m, n, n): out[k] tensions [N] and
-    status[k] (OK, OUT_OF_RANGE, INFEASIBLE, or -1: not a one-dimensional null space)."""
-    for k in range(f.shape[0]):
-        P, nv, ok = null1_terms(A[k])
-        if not ok:
-            status[k] = -1
-            continue
-        status[k] = null1_tensions(P, A[k], nv, f[k], t_min, t_max, t_ref, out[k])[0]
-    return out
-
-
-@njit
-def null1_tensions(P, A, nv, f, t_min, t_max, t_ref, out):
-    """Tensions (out, (n,) [N]) balancing the wrench f (n,): (status, residual). Status OUT_OF_RANGE: f has a
-    component A cannot produce (residual |A t_p + f| above 1e-7 max(1, |f|)); INFEASIBLE: no lambda keeps
-    every tension in [t_min, t_max]. `out` is written only when the status is OK."""
+def null1_tensions(LU, p, q, A, nv, f, t_min, t_max, t_ref, out):
+    """Tensions (out, (n,) [N]) balancing the wrench f (n,): (status, residual). t_p = -A^+ f is the
+    solution of A t = -f orthogonal to the null direction (a particular solution from the factors, minus
+    its null component). Status OUT_OF_RANGE: f has a component A cannot produce (residual |A t_p + f| above
+    1e-7 max(1, |f|)); INFEASIBLE: no lambda keeps every tension in [t_min, t_max]. `out` is written only
+    when the status is OK."""
     n = nv.shape[0]
-    t_p = P @ f
+    t_p = np.empty(n)
+    lu_particular(LU, p, q, n - 1, -f, t_p)
+    c = 0.0
+    for i in range(n):
+        c += t_p[i] * nv[i]
+    for i in range(n):
+        t_p[i] -= c * nv[i]
     resid = 0.0
     fmax = 1.0
     for i in range(n):
@@ -86,3 +77,16 @@ def null1_tensions(P, A, nv, f, t_min, t_max, t_ref, out):
     for i in range(n):
         out[i] = min(t_max, max(t_min, t_p[i] + lam * nv[i]))
     return OK, resid
+
+
+@njit
+def tensions_batch(f, A, t_min, t_max, t_ref, out, status):
+    """Per sample k of wrenches f (m, n) and structure matrices A (m, n, n): out[k] tensions [N] and
+    status[k] (OK, OUT_OF_RANGE, INFEASIBLE, or -1: not a one-dimensional null space)."""
+    for k in range(f.shape[0]):
+        LU, p, q, nv, ok = null1_terms(A[k])
+        if not ok:
+            status[k] = -1
+            continue
+        status[k] = null1_tensions(LU, p, q, A[k], nv, f[k], t_min, t_max, t_ref, out[k])[0]
+    return out

@@ -37,9 +37,10 @@ def warm_up(geom=None) -> float:
     from teleop.kernels import sim as KS
     from teleop.kernels import tension as KT
     from teleop.kernels.geometry import forward_kinematics
-    from teleop.kinematics import FREE_AXIAL, lengths2pose, pose2lengths, poses2lengths, rotation_zyx, structure_matrix
+    from teleop.kinematics import FREE_AXIAL, check_lengths, lengths2pose, pose2lengths, poses2lengths, rotation_zyx, structure_matrix
     from teleop.mapping import MappingParams
     from teleop.rendering import Renderer, engage_count
+    from teleop.sensors import default_fsr_calibration
     from teleop.tension import TensionSolver
 
     if _done:
@@ -57,6 +58,7 @@ def warm_up(geom=None) -> float:
             lt.renderer.enable()
             lt.engage(np.zeros(3))
             for k in range(3):
+                est.update_arrays(np.full(n, 400.0 + k), np.zeros(6), 1e-3)
                 lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.0 + k), 1e-3)
                 lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.5 + k), 1e-3)  # a non-table count
                 est.update_floats([400.0] * n, [0.0] * 6, 1e-3)
@@ -76,6 +78,8 @@ def warm_up(geom=None) -> float:
         KS.cable_sensor(f, A, float(geom.mu), theta, -L, float(geom.t_min), float(geom.t_max), 2.85, 5e3, cap,
                         np.empty(n), np.empty(n))
     KS.contact_moment(tip, np.zeros(3), np.empty(6))
+    KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
+    check_lengths(L, geom)
     TensionSolver(A, geom.t_min, geom.t_max, 2.85).solve(f)
     # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's
     # first-engagement forward kinematics and its engage rule

@@ -94,10 +94,10 @@ class Teleop:
         self.offsets = platform_offsets(self.geom, m.home[3:])
         from teleop.estimation.tick import LoopTick
 
-        # the fused float path (mapping, FSR counts -> tensions -> estimate with Kalman, render); estimators
-        # without `update_floats` (e.g. test fakes) go through their numpy `update`
+        # the compiled path (mapping, FSR counts -> tensions -> estimate with Kalman, render); estimators
+        # without `update_arrays` (e.g. test fakes) go through their numpy `update`
         self.fast = LoopTick(self.geom, m, estimator, self.renderer, cmd_dt=p.dt * p.robot_every)
-        self.fast_estimate = callable(getattr(estimator, "update_floats", None))
+        self.fast_estimate = callable(getattr(estimator, "update_arrays", None))
         self.stylus_fresh = Freshness("stylus", p.stale_limit, p.startup_timeout)
         self.robot_fresh = Freshness("robot", p.stale_limit, p.startup_timeout)
         self.range = TensionRange(p.tension_max, p.tension_slack, p.tension_window, len(self.geom.B))
@@ -302,11 +302,10 @@ class Teleop:
                         p.dt * p.robot_every
                     self._est_seq, self._est_t = r.seq, r.t
                     if self.fast_estimate:
-                        t, f = self.fast.estimate(np.asarray(r.fsr_counts, dtype=float).tolist(),
-                                                  self.pose.tolist(), dt)
-                        if not math.isfinite(sum(t) + sum(f)):  # any nan/inf (or an absurd > 1e308 sum)
+                        t, f = self.estimator.update_arrays(np.asarray(r.fsr_counts, dtype=float), self.pose, dt)
+                        if not math.isfinite(t.sum() + f.sum()):  # any nan/inf (or an absurd > 1e308 sum)
                             raise ValueError("estimated tensions/wrench not finite")
-                        t, f = np.array(t), np.array(f)
+                        t, f = t.copy(), f.copy()
                     else:
                         t, f = self.estimator.update(r, self.pose, dt)
                         if not (np.isfinite(t).all() and np.isfinite(f).all()):

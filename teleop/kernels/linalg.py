@@ -1,0 +1,141 @@
+"""Small dense linear algebra for the kernels (6 x 6 at most): Gaussian elimination written out.
+
+Why by hand: numba's np.linalg (LAPACK) costs ~10 us per call at this size in allocation and dispatch,
+more than the arithmetic; the loop and the simulated robot call these every tick.
+
+- `solve_into(M, b, x)`: x = M^-1 b, partial pivoting (M, b left unchanged).
+- `lu_complete(A, LU, p, q)`: P A Q = L U with complete pivoting (rows p, columns q); its rank.
+- `lu_null_vector(LU, q, rank, out)`: the null vector of a matrix of rank n - 1 from its factors.
+- `lu_particular(LU, p, q, rank, b, out)`: a solution of A x = b with the free coordinates 0; returns the
+  residual of the rows beyond the rank (0 when b is in the range of A).
+- `horner(c, s)`: the power series sum c_j s^j (numpy.polynomial.polynomial.polyval's order of operations).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from teleop.kernels.jit import njit
+
+
+@njit
+def solve_into(M, b, x):
+    """x (n,) = M^-1 b for M (n, n) by elimination with partial pivoting; returns x."""
+    n = b.shape[0]
+    W = M.copy()
+    y = b.copy()
+    for k in range(n):
+        piv = k
+        for i in range(k + 1, n):
+            if abs(W[i, k]) > abs(W[piv, k]):
+                piv = i
+        if piv != k:
+            for j in range(n):
+                W[k, j], W[piv, j] = W[piv, j], W[k, j]
+            y[k], y[piv] = y[piv], y[k]
+        for i in range(k + 1, n):
+            m = W[i, k] / W[k, k]
+            for j in range(k, n):
+                W[i, j] -= m * W[k, j]
+            y[i] -= m * y[k]
+    for i in range(n - 1, -1, -1):
+        acc = y[i]
+        for j in range(i + 1, n):
+            acc -= W[i, j] * x[j]
+        x[i] = acc / W[i, i]
+    return x
+
+
+@njit
+def lu_complete(A, LU, p, q, tol):
+    """Factor A (n, n) into LU (n, n) (unit-lower multipliers below the diagonal, U on and above) with row
+    order p and column order q (int arrays (n,)) by complete pivoting; rank = pivots above tol * max|A|."""
+    n = A.shape[0]
+    LU[:, :] = A
+    for i in range(n):
+        p[i] = i
+        q[i] = i
+    scale = 0.0
+    for i in range(n):
+        for j in range(n):
+            scale = max(scale, abs(A[i, j]))
+    rank = 0
+    for k in range(n):
+        bi, bj, best = k, k, -1.0
+        for i in range(k, n):
+            for j in range(k, n):
+                if abs(LU[i, j]) > best:
+                    bi, bj, best = i, j, abs(LU[i, j])
+        if best <= tol * scale:
+            break
+        rank += 1
+        if bi != k:
+            for j in range(n):
+                LU[k, j], LU[bi, j] = LU[bi, j], LU[k, j]
+            p[k], p[bi] = p[bi], p[k]
+        if bj != k:
+            for i in range(n):
+                LU[i, k], LU[i, bj] = LU[i, bj], LU[i, k]
+            q[k], q[bj] = q[bj], q[k]
+        for i in range(k + 1, n):
+            m = LU[i, k] / LU[k, k]
+            LU[i, k] = m
+            for j in range(k + 1, n):
+                LU[i, j] -= m * LU[k, j]
+    return rank
+
+
+@njit
+def lu_null_vector(LU, q, rank, out):
+    """Unit null vector (out (n,)) of a rank-(n-1) matrix from its `lu_complete` factors, sign: positive sum."""
+    n = LU.shape[0]
+    y = np.zeros(n)
+    y[rank] = 1.0  # the free coordinate (rank = n - 1)
+    for i in range(rank - 1, -1, -1):
+        acc = -LU[i, rank]
+        for j in range(i + 1, rank):
+            acc -= LU[i, j] * y[j]
+        y[i] = acc / LU[i, i]
+    norm = 0.0
+    total = 0.0
+    for j in range(n):
+        norm += y[j] * y[j]
+        total += y[j]
+    s = (1.0 if total >= 0.0 else -1.0) / np.sqrt(norm)
+    for j in range(n):
+        out[q[j]] = s * y[j]
+    return out
+
+
+@njit
+def lu_particular(LU, p, q, rank, b, out):
+    """out (n,): x with A x = b from the factors, free coordinates 0; returns max |residual| of the rows
+    beyond the rank (b's component outside the range of A, in the eliminated rows)."""
+    n = LU.shape[0]
+    c = np.empty(n)
+    for i in range(n):
+        acc = b[p[i]]
+        for j in range(min(i, rank)):
+            acc -= LU[i, j] * c[j]
+        c[i] = acc
+    resid = 0.0
+    for i in range(rank, n):
+        resid = max(resid, abs(c[i]))
+    z = np.zeros(n)
+    for i in range(rank - 1, -1, -1):
+        acc = c[i]
+        for j in range(i + 1, rank):
+            acc -= LU[i, j] * z[j]
+        z[i] = acc / LU[i, i]
+    for j in range(n):
+        out[q[j]] = z[j]
+    return resid
+
+
+@njit
+def horner(c, s):
+    """sum_j c[j] s^j by Horner's rule from the highest coefficient (c (k,), k >= 1)."""
+    acc = c[c.shape[0] - 1]
+    for m in range(c.shape[0] - 2, -1, -1):
+        acc = c[m] + acc * s
+    return acc
