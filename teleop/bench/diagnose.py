@@ -14,6 +14,9 @@ def register(subparsers) -> None:
     p.add_argument("--rate", type=float, default=500.0, help="sampling rate of the cases [Hz] (500)")
     p.add_argument("--seconds", type=float, default=20.0, help="duration of each case [s] (20)")
     p.add_argument("--noise", type=float, default=1.0, help="factor on every sensor noise level (1)")
+    p.add_argument("--suite", choices=("all", "generator", "rig"), default="all",
+                   help="cases from the concealed-effect generator, the simulated single-cable bench "
+                        "(column subsets, loads, compounds; scenes.cable_rig), or half each (all)")
     p.set_defaults(func=run)
 
 
@@ -42,13 +45,48 @@ def run(args) -> int:
     if not (50 <= args.rate <= 20000 and 5 <= args.seconds <= 600 and 0 <= args.noise <= 20):
         raise InputError("--rate must be 50..20000 Hz, --seconds 5..600, --noise 0..20")
     cfg = GenConfig(args.rate, args.seconds, args.noise)
-    rows = []
-    plan = case_plan(args.cases)
-    with progress(len(plan), "bench diagnose", unit="cases") as bar:
+    from teleop.bench.diagnose_rig import rig_plan, rig_text, run_rig_case, summarise_rig
+
+    n_gen = {"all": args.cases // 2, "generator": args.cases, "rig": 0}[args.suite]
+    rows, rig_rows = [], []
+    plan = case_plan(n_gen)
+    rplan = rig_plan(args.cases - n_gen, args.seed)
+    with progress(len(plan) + len(rplan), "bench diagnose", unit="cases") as bar:
         for i, (effect, setup) in enumerate(plan):
             rows.append(run_case(make_case(i, effect, setup, args.seed, cfg)))
             bar.update()
-    summary = summarise(rows)
+        for case in rplan:
+            rig_rows.append(run_rig_case(case, args.seed, args.rate, args.seconds, args.noise))
+            bar.update()
+    summary = summarise(rows) if rows else {}
+    rig_summary = summarise_rig(rig_rows) if rig_rows else {}
+    allrows = [{"correct": r["correct"], "clean": r["truth"] == "none", "params_ok": r.get("params_ok"),
+                "improved_2x": r.get("improved_2x")} for r in rows]
+    allrows += [{"correct": r["correct"], "clean": r["truth"] == ["none"], "params_ok": r.get("params_ok"),
+                 "improved_2x": r.get("improved_2x")} for r in rig_rows]
+    eff = [r for r in allrows if not r["clean"]]
+    clean = [r for r in allrows if r["clean"]]
+    combined = {"cases": len(allrows),
+                "named_first_rate": sum(r["correct"] for r in eff) / len(eff) if eff else None,
+                "none_rate": sum(r["correct"] for r in clean) / len(clean) if clean else None,
+                "params_within_20pct_rate": sum(bool(r["params_ok"]) for r in eff) / len(eff) if eff else None,
+                "improved_2x_rate": sum(bool(r["improved_2x"]) for r in eff) / len(eff) if eff else None}
+    if rig_rows:
+        print("simulated single-cable bench (scenes.cable_rig):")
+        print(rig_text(rig_summary))
+        for r in rig_rows:
+            if not r["correct"]:
+                print(f"miss: rig case {r['index']} ({r['subset']}, {r['load']}, {r['trajectory']}): "
+                      f"{'+'.join(r['truth'])} -> {r['all_named'] or ['none']}")
+    if not rows:
+        print("all: " + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in combined.items()))
+        out = {"cases": args.cases, "seed": args.seed, "suite": args.suite, "rate_hz": args.rate,
+               "seconds": args.seconds, "noise": args.noise, "summary": combined, "rig": rig_summary,
+               "rig_rows": rig_rows}
+        if args.json:
+            write_json(args.json, out)
+        return 0
+    print("concealed-effect generator (teleop.diagnosis.generator):")
     print(confusion_text(summary))
     for key in ("cases", "effect_cases", "clean_cases", "named_first_rate", "none_rate",
                 "params_within_20pct_rate", "improved_2x_rate", "improvement_min"):
@@ -57,8 +95,10 @@ def run(args) -> int:
     misses = [r for r in rows if not r["correct"]]
     for r in misses:
         print(f"miss: case {r['index']} ({r['setup']}, {r['trajectory']}): {r['truth']} -> {r['all_named'] or ['none']}")
-    out = {"cases": args.cases, "seed": args.seed, "rate_hz": args.rate, "seconds": args.seconds,
-           "noise": args.noise, "summary": summary, "rows": rows}
+    print("all: " + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in combined.items()))
+    out = {"cases": args.cases, "seed": args.seed, "suite": args.suite, "rate_hz": args.rate,
+           "seconds": args.seconds, "noise": args.noise, "summary": combined, "generator": summary,
+           "rows": rows, "rig": rig_summary, "rig_rows": rig_rows}
     if args.speed:
         case = speed_case(args.seed)
         with tempfile.TemporaryDirectory() as tmp:

@@ -99,3 +99,47 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
         row["improvement"] = min(imps.values()) if imps else 1.0
         row["improved_2x"] = row["improvement"] >= 2.0
     return row
+
+
+def summarise_rig(rows: list[dict]) -> dict:
+    """Rates over rig rows, overall and per column subset (compounds apart), and each subset's confusion
+    matrix (true effects -> first named)."""
+    def rates(rs):
+        eff = [r for r in rs if r["truth"] != ["none"]]
+        clean = [r for r in rs if r["truth"] == ["none"]]
+
+        def rate(xs):
+            return float(np.mean(xs)) if xs else None
+        return {"cases": len(rs), "effect_cases": len(eff), "clean_cases": len(clean),
+                "named_first_rate": rate([r["correct"] for r in eff]),
+                "none_rate": rate([r["correct"] for r in clean]),
+                "params_within_20pct_rate": rate([r["params_ok"] for r in eff]),
+                "improved_2x_rate": rate([r["improved_2x"] for r in eff]),
+                "improvement_min": min((r["improvement"] for r in eff), default=None)}
+
+    groups: dict = {}
+    for r in rows:
+        key = "compound (two effects)" if len(r["switched_on"]) > 1 else f"{r['subset']} ({r['load']})"
+        groups.setdefault(key, []).append(r)
+    out = {"all": rates(rows), "by_subset": {}}
+    for key, rs in sorted(groups.items()):
+        conf: dict = {}
+        for r in rs:
+            t = "+".join(r["truth"])
+            conf.setdefault(t, {})
+            conf[t][r["named"]] = conf[t].get(r["named"], 0) + 1
+        out["by_subset"][key] = {**rates(rs), "confusion": conf}
+    return out
+
+
+def rig_text(summary: dict) -> str:
+    """Per-subset rates and confusion rows as text."""
+    lines = []
+    for key, s in summary["by_subset"].items():
+        def f(v):
+            return "-" if v is None else f"{v:.2f}"
+        lines.append(f"{key}: {s['cases']} cases, named first {f(s['named_first_rate'])}, none "
+                     f"{f(s['none_rate'])}, params {f(s['params_within_20pct_rate'])}, 2x {f(s['improved_2x_rate'])}")
+        for t, row in sorted(s["confusion"].items()):
+            lines.append(f"    {t:<40} -> " + ", ".join(f"{n} {c}" for n, c in sorted(row.items())))
+    return "\n".join(lines)

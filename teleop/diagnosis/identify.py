@@ -382,8 +382,51 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
                 delay = (tau, r_delay)   # a plain delay explains it better: name nothing
                 break
         pays = pick is not None and (pick.rmse_hold * ACCEPT <= current.rmse_hold) and delta_bic(pick, current) < 0
+        if not pays and round_ == 0 and len(cands) >= 2:
+            pair = _pair(d, current, cands, fit_idx, hold_idx, seed)
+            if pair:
+                steps.extend(pair)
+                current = pair[-1][1]
+                continue
         if not pays:
             break
         steps.append((current, pick))
         current = pick
     return LinkResult(d, base, tuple(steps), ranking, current, delay)
+
+
+PAIR_TOP = 3   # when no single effect pays, pairs of the best few singles are fitted jointly
+
+
+def _evaluate(d: LinkData, model: LinkModel, fit_idx: slice, hold_idx: slice, k: int) -> Fit:
+    """A Fit of `model` as it is (no refit): RMSEs on fit and held-out samples."""
+    r = predict(d, model) - d.y
+    return Fit(model, {}, rms(r[fit_idx]), rms(r[hold_idx]), k, effective_n(r[fit_idx]))
+
+
+def _pair(d: LinkData, current: Fit, cands: list, fit_idx: slice, hold_idx: slice, seed: int) -> list:
+    """Two effects whose signatures cancel in part (a tip sensor's hysteresis against the play it reads
+    through a spring) can each fail alone and pay together: fit pairs of the PAIR_TOP best singles
+    jointly; the best pair that pays is returned as two steps, the effect explaining more first."""
+    singles = sorted(cands, key=lambda f: f.rmse_hold)[:PAIR_TOP]
+    names = [f.names[-1] for f in singles]
+    best = None
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            try:
+                f = fit_chain(d, current.model, (names[i], names[j]), fit_idx, hold_idx, seed=seed)
+            except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+                continue
+            if f.at_bound or any(wrong_form(n, p, d) for n, p in f.model.effects):
+                continue
+            if f.rmse_hold * ACCEPT ** 2 <= current.rmse_hold and delta_bic(f, current) < 0:
+                if best is None or f.rmse_hold < best.rmse_hold:
+                    best = f
+    if best is None:
+        return []
+    a, b = best.names[-2], best.names[-1]
+    k_one = current.k + len(get_effect(a).params)
+    only_a = _evaluate(d, best.model.with_effects([e for e in best.model.effects if e[0] != b]), fit_idx, hold_idx, k_one)
+    only_b = _evaluate(d, best.model.with_effects([e for e in best.model.effects if e[0] != a]), fit_idx, hold_idx, k_one)
+    mid = only_a if only_a.rmse_hold <= only_b.rmse_hold else only_b
+    return [(current, mid), (mid, best)]
