@@ -196,3 +196,16 @@ def test_budget_short_slow_or_unrecorded_run_is_not_conclusive():
     assert v["pass"] and not v["conclusive"]
     assert any("--seconds 60" in w for w in v["why_not"]) and any("recording" in w for w in v["why_not"])
     assert not budget_verdict(log.summary(500.0), 60.0, True)["conclusive"]
+
+
+def test_a_deadline_miss_is_more_than_half_a_period_late():
+    from teleop.loop.timing import late_threshold_ns
+
+    assert late_threshold_ns(1000.0) == LATE_NS and late_threshold_ns(4000.0) == 125_000
+    log = TimingLog(400)
+    for i in range(400):  # 130 us late every 100th tick: a miss at 4 kHz, not at 1 kHz
+        log.add(130_000 if i % 100 == 0 else 1000, 5000, np.zeros(len(STAGES)))
+    fast, slow = log.summary(4000.0), log.summary(1000.0)
+    assert fast["late_threshold_us"] == 125.0 and fast["deadline_misses"] == 4
+    assert slow["late_threshold_us"] == 500.0 and slow["deadline_misses"] == 0
+    assert "0.125 ms" in budget_verdict(fast, 60.0, True, rate_hz=4000.0)["criterion"]
