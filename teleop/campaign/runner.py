@@ -24,8 +24,8 @@ def execute_task(task):
 @dataclass
 class RunReport:
     """What a run did: tasks in the campaign, skipped (already done), ran here, failed [(Task, error)],
-    wall time [s] (of which start_s starting or connecting to the scheduler), each task's own time where it
-    ran [s], worker threads at the end, and the summary of everything stored."""
+    wall time [s] (of which start_s starting or connecting to the scheduler), each task's own wall and CPU
+    time where it ran [s], worker threads at the end, and the summary of everything stored."""
 
     total: int
     skipped: int
@@ -35,6 +35,7 @@ class RunReport:
     start_s: float = 0.0
     workers: int = 0
     task_seconds: list = field(default_factory=list)
+    task_cpu_seconds: list = field(default_factory=list)
     summary: dict = field(default_factory=dict)
 
 
@@ -66,16 +67,18 @@ def run_campaign(campaign: Campaign, out_dir: str | Path, scheduler: str = "none
                         progress.note(f"task failed: {task.label}: {shorten(outcome.error)}")
                     report.ran += 1
                     report.task_seconds.append(outcome.seconds)
+                    report.task_cpu_seconds.append(outcome.cpu_seconds)
                     progress.update(outcome.ok)
                 report.workers = sched.workers
         report.wall_s = time.perf_counter() - t0
-        secs = report.task_seconds
+        secs, cpu = report.task_seconds, report.task_cpu_seconds
         store.log_run({"started_utc": started, "scheduler": scheduler, "workers": report.workers,
                        "start_s": round(report.start_s, 3),
                        "tasks": report.total, "skipped": report.skipped, "ran": report.ran,
                        "failed": len(report.failed), "wall_s": round(report.wall_s, 3),
                        "task_s_sum": round(sum(secs), 3),
-                       "task_s_mean": round(sum(secs) / len(secs), 4) if secs else None})
+                       "task_s_mean": round(sum(secs) / len(secs), 4) if secs else None,
+                       "task_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None})
         report.summary = summarise(campaign, store, stream)
     return report
 

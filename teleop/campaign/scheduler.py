@@ -26,14 +26,17 @@ WINDOW = 1000  # tasks submitted ahead of their results (bounds the client's and
 
 @dataclass(frozen=True)
 class Outcome:
-    """What became of one task: its value, or the error (one line) and traceback text; `seconds` is the
-    task's own wall time where it ran (0 when it never ran, e.g. its worker died)."""
+    """What became of one task: its value, or the error (one line) and traceback text; `seconds` and
+    `cpu_seconds` are the task's own wall and CPU time (its process's, all threads) where it ran (0 when it
+    never ran, e.g. its worker died). On a machine shared with other work the wall time grows with the
+    load, the CPU time hardly: it is what a dedicated core would take."""
 
     ok: bool
     value: object = None
     error: str = ""
     traceback: str = ""
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
 
 
 _COLOUR = re.compile(r"\x1b\[[0-9;]*m")  # terminal colour codes
@@ -48,13 +51,13 @@ def error_line(exc: BaseException) -> str:
 
 def guarded(fn: Callable, item) -> Outcome:
     """fn(item) as an Outcome, timed."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     try:
         value = fn(item)
     except Exception as exc:  # noqa: BLE001 - any task failure is reported, never raised into the others
         return Outcome(False, error=error_line(exc), traceback=traceback.format_exc(),
-                       seconds=time.perf_counter() - t0)
-    return Outcome(True, value=value, seconds=time.perf_counter() - t0)
+                       seconds=time.perf_counter() - t0, cpu_seconds=time.process_time() - c0)
+    return Outcome(True, value=value, seconds=time.perf_counter() - t0, cpu_seconds=time.process_time() - c0)
 
 
 _WORKER_POOLS = []  # holds the limiter of this worker process once set (never restored: a worker only runs tasks)
