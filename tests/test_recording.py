@@ -331,3 +331,23 @@ def test_stalled_disk_drops_and_counts_then_recovers(tmp_path):
         box[2] = 0
         rec.close({})
     assert rec.ring.ctrl[WRITTEN] + rec.ring.ctrl[DROPS] == 100 + pushed
+
+
+def test_lossy_cursor_never_holds_the_producer_and_counts_what_it_missed():
+    """The live view's reader: rows it was lapped on (or that may have been overwritten while copied) are
+    skipped and counted; the rows it returns are exactly the ones pushed, in order."""
+    from teleop.recording import Cursor
+
+    ring = Ring(2, 8, gated=False)  # no recorder: the producer overwrites the oldest row
+    cur = Cursor(ring, start=0)
+    for k in range(10):
+        assert ring.push(np.array([k, -k], dtype=float))
+    got = cur.read()
+    assert got[:, 0].tolist() == list(range(3, 10)) and cur.skipped == 3  # row 2's slot is the next to be written
+    assert len(cur.read()) == 0 and cur.skipped == 3
+    gated = Ring(2, 4)  # with a recorder: the cursor reads beside it and never frees or blocks a slot
+    cur = Cursor(gated)
+    for k in range(6):
+        gated.push(np.array([k, 0.0]))
+    assert gated.ctrl[2] == 2 and cur.read()[:, 0].tolist() == [0.0, 1.0, 2.0, 3.0] and cur.skipped == 0
+    assert gated.pop()[:, 0].tolist() == [0.0, 1.0, 2.0, 3.0]  # the recorder still gets every row it kept

@@ -93,20 +93,26 @@ class Cursor:
         self.next = int(ring.ctrl[HEAD]) if start is None else int(start)
         self.skipped = 0
 
+    def _oldest_intact(self, head: int) -> int:
+        """Oldest row the producer cannot be overwriting now: row i's slot is written while head == i + cap
+        (so rows >= head - cap + 1 are safe), and a gated ring never writes over a row its consumer has not
+        popped (rows >= tail are safe too)."""
+        c = self.ring.ctrl
+        safe = head - self.ring.capacity + 1
+        return min(safe, int(c[TAIL])) if c[GATED] else safe
+
     def read(self, max_rows: int = 4096) -> np.ndarray:
         r, c = self.ring, self.ring.ctrl
         cap = r.capacity
         head = int(c[HEAD])
-        lo = max(self.next, head - cap + 1)  # row head - cap is being overwritten by the next push
+        lo = max(self.next, self._oldest_intact(head))
         hi = min(head, lo + max_rows)
         if hi <= lo:
             self.skipped += lo - self.next
             self.next = lo
             return np.zeros((0, r.width))
         out = r.data[np.arange(lo, hi) % cap].copy()
-        # a row i is overwritten while the producer writes row i + cap, i.e. while head == i + cap: after
-        # the copy, rows below head_now - cap + 1 may be torn
-        valid = max(lo, int(c[HEAD]) - cap + 1)
+        valid = max(lo, self._oldest_intact(int(c[HEAD])))  # what may have been overwritten during the copy
         self.skipped += valid - self.next
         self.next = hi
         return out[valid - lo:]
