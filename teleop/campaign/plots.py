@@ -51,7 +51,7 @@ def jnd_curves_figure(curves: list, title: str):
         ax.set_xlabel("participants' stiffness JND [%]")
         ax.set_ylabel("share ranking all four correctly [-]" if len(curves) > 1 else "share / tau [-]")
         ax.set_ylim(-0.02, 1.02)
-        ax.legend(fontsize=7, loc="lower left")
+        ax.legend(fontsize=7, loc="best")
     fig.suptitle(title)
     fig.tight_layout()
     return fig
