@@ -64,7 +64,7 @@ def findings_heatmap(recordings: list, columns: list, matrix: np.ndarray, title:
     from matplotlib.colors import LogNorm
 
     n_r, n_c = matrix.shape
-    fig, ax = plt.subplots(figsize=(max(5.0, 1.3 * n_c + 3.5), max(3.0, 0.35 * n_r + 2.0)))
+    fig, ax = plt.subplots(figsize=(max(5.0, 1.3 * n_c + 3.5), max(4.0, 0.35 * n_r + 2.5)))
     shown = np.ma.masked_invalid(matrix)
     finite = matrix[np.isfinite(matrix)]
     vmax = max(float(finite.max()) if finite.size else 2.0, 1.01)
@@ -77,18 +77,15 @@ def findings_heatmap(recordings: list, columns: list, matrix: np.ndarray, title:
                         color="white" if v < math.sqrt(vmax) else "black")
     ax.set_xticks(range(n_c), columns, rotation=30, ha="right", fontsize=8)
     ax.set_yticks(range(n_r), recordings, fontsize=8)
-    ax.set_xlabel("effect on channel")
+    ax.set_xlabel("effect on channel" + (" (blank: not found on that recording)" if np.isnan(matrix).any() else ""))
     ax.set_ylabel("recording")
     from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
-    cb = fig.colorbar(im, ax=ax, label="held-out improvement: RMSE before / after [-]")
+    cb = fig.colorbar(im, ax=ax, label="RMSE before / after [-]")
     ticks = [t for t in (1, 1.5, 2, 3, 5, 10, 20, 50, 100, 1000) if t <= vmax]
     cb.ax.yaxis.set_major_locator(FixedLocator(ticks))
     cb.ax.yaxis.set_minor_locator(NullLocator())
     cb.ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"x{v:g}"))
-    if np.isnan(matrix).any():
-        ax.text(1.0, -0.02, "blank: effect not found", transform=ax.transAxes, ha="right", va="top",
-                fontsize=7)
     ax.set_title(title)
     fig.tight_layout()
     return fig
