@@ -5,8 +5,8 @@
     seed = 0               # every task's random streams derive from it (and the task's identity)
 
 The other tables belong to the kind: `teleop.campaign.blind` (a grid of simulated blind studies),
-`teleop.campaign.recordings` (recordings to diagnose) and `teleop.campaign.noop` document theirs. Unknown tables and keys raise, with
-the file and key named; relative paths are relative to the campaign file.
+`teleop.campaign.recordings` (recordings to diagnose) and `teleop.campaign.noop` document theirs. Unknown
+tables and keys raise, with the file and key named; relative paths are relative to the campaign file.
 """
 
 from __future__ import annotations
