@@ -23,6 +23,9 @@ def register(subparsers) -> None:
                    help="what your simulation already contains: 'default' (the project's simulation: capstan "
                         "friction over the bend, the spring load), 'lossless' (ideal links), or a comma list "
                         "of catalogue effects; findings are what lies beyond it")
+    p.add_argument("--sindy", action="store_true",
+                   help="also fit the PySINDy peer (polynomial + Fourier library, STLSQ; static and free-run "
+                        "forms) on the same held-out split")
     p.set_defaults(func=run)
 
 
@@ -31,8 +34,9 @@ def _summary(doc: dict) -> str:
     for ch, rm in doc["baseline"]["rmse"].items():
         info = doc["channels"][ch]
         peer = doc["peer"][ch]
+        sindy = f", PySINDy peer {peer['sindy_rmse']:.4g}" if "sindy_rmse" in peer else ""
         lines.append(f"  {ch} ({info['link']} link): baseline rmse {rm:.4g} -> model {info['rmse_model']:.4g} "
-                     f"[ARX peer {peer['arx_rmse']:.4g}] {doc['channels'][ch]['unit']}")
+                     f"[ARX peer {peer['arx_rmse']:.4g}{sindy}] {doc['channels'][ch]['unit']}")
     if not doc["findings"]:
         lines.append("  findings: none")
     for f in doc["findings"]:
@@ -64,7 +68,8 @@ def run(args) -> int:
     docs, diags = [], []
     with progress(total, "diagnose", unit="fits", leave=False) as bar:
         for rec in recs:
-            diag = diagnose(rec, args.holdout, progress=bar.update, seed=args.seed, baseline=baseline)
+            diag = diagnose(rec, args.holdout, progress=bar.update, seed=args.seed, baseline=baseline,
+                            sindy=args.sindy)
             diags.append(diag)
             docs.append(diag.as_dict())
     for doc in docs:

@@ -219,11 +219,12 @@ def sensor_correction(res: LinkResult) -> np.ndarray | None:
 
 
 def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int = 0,
-             baseline: tuple = PROJECT_BASELINE) -> Diagnosis:
+             baseline: tuple = PROJECT_BASELINE, sindy: bool = False) -> Diagnosis:
     """Diagnose `rec` beyond the `baseline` simulation (see the module docstring); progress(k) is called
     as candidate fits finish; seed drives the extra starts of multi-start fits (the report is reproducible
     for a given seed). A sensor effect found on a channel is taken out of that channel where a later link
-    uses it as its input (a tip force sensor's drift is not the sheath's friction)."""
+    uses it as its input (a tip force sensor's drift is not the sheath's friction). sindy: also score the
+    PySINDy peer (teleop.diagnosis.sindy_peer) beside the ARX one."""
     fit_idx, hold_idx = split(rec.n, holdout)
     results, peer, corrections = [], {}, {}
     for link in find_links(rec):
@@ -239,4 +240,9 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
             corrections[link.output] = y - np.interp(rec.t + res.delay[0], rec.t, y)
         peer[link.output] = {"arx_rmse": arx_rmse(d, fit_idx, hold_idx),
                              "baseline_rmse": res.baseline.rmse_hold, "model_rmse": res.final.rmse_hold}
+        if sindy:   # the generic sparse-regression peer (PySINDy), same split
+            from teleop.diagnosis.sindy_peer import sindy_rmse
+            s = sindy_rmse(d, fit_idx, hold_idx)
+            peer[link.output].update({"sindy_static_rmse": s["static"], "sindy_free_run_rmse": s["free_run"],
+                                      "sindy_rmse": s["best"]})
     return Diagnosis(rec, holdout, tuple(results), peer, tuple(baseline))
