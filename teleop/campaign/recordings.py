@@ -6,9 +6,11 @@ tabulated effect x recording.
     paths = ["rig_a/*.csv", "b.csv"]     # globs, relative to the campaign file
     map = "mrdlab"                       # optional: a shipped column map or a .toml path
     holdout = 0.4                        # optional: fraction at the end scoring the models (0.4)
+    baseline = "default"                 # optional: what the simulation already holds ("lossless", "a,b")
+    sindy = false                        # optional: also score the PySINDy peer
 
 A task is one recording; its identity holds the file's absolute path and the SHA-256 of its bytes (an
-edited recording is diagnosed again), the map, the holdout and the seed. The seed drives the fits' extra
+edited recording is diagnosed again), the map, the holdout, the baseline effects, sindy and the seed. The seed drives the fits' extra
 starts and is the campaign seed on every recording, as `teleop diagnose --seed` does, so a campaign's
 report of a file is the one `teleop diagnose FILE --seed S` gives.
 """
@@ -36,12 +38,15 @@ KIND = "diagnose"
 @dataclass(frozen=True)
 class Recording:
     """One file to diagnose: absolute path, SHA-256 of its bytes, column map (None: interchange CSV;
-    else a shipped name or an absolute .toml path) and holdout fraction."""
+    else a shipped name or an absolute .toml path), holdout fraction, the baseline's catalogue effects
+    (teleop.diagnosis.diagnose.baseline_effects) and whether the PySINDy peer is scored too."""
 
     path: str
     sha256: str
     map: str | None
     holdout: float
+    baseline: tuple
+    sindy: bool
 
 
 def _digest(path: Path) -> str:
@@ -54,7 +59,7 @@ def _digest(path: Path) -> str:
 
 def parse(doc: dict, where: str, base_dir: Path) -> tuple:
     """The [[recordings]] tables of the file `where`: a tuple of Recording, in glob order, each file once."""
-    from teleop.diagnosis.diagnose import HOLDOUT
+    from teleop.diagnosis.diagnose import HOLDOUT, baseline_effects
     from teleop.diagnosis.recording_io import builtin_map
 
     check_keys(doc, ("recordings",), where)
@@ -64,7 +69,7 @@ def parse(doc: dict, where: str, base_dir: Path) -> tuple:
     out, seen = [], set()
     for i, g in enumerate(groups, start=1):
         at = f"{where} [[recordings]] #{i}"
-        check_keys(g, ("paths", "map", "holdout"), at)
+        check_keys(g, ("paths", "map", "holdout", "baseline", "sindy"), at)
         paths = g.get("paths")
         if isinstance(paths, str):
             paths = [paths]
@@ -73,6 +78,16 @@ def parse(doc: dict, where: str, base_dir: Path) -> tuple:
         holdout = get_number(g, "holdout", at, default=HOLDOUT, positive=True)
         if holdout >= 1:
             raise InputError(f"{at}: key 'holdout' must be a fraction in (0, 1), got {holdout}")
+        spec = g.get("baseline", "default")
+        if not isinstance(spec, str):
+            raise InputError(f"{at}: key 'baseline' must be 'default', 'lossless' or a comma list of effects")
+        try:
+            baseline = baseline_effects(spec)
+        except InputError as exc:
+            raise InputError(f"{at}: {exc}") from None
+        sindy = g.get("sindy", False)
+        if not isinstance(sindy, bool):
+            raise InputError(f"{at}: key 'sindy' must be true or false, got {sindy!r}")
         cmap = g.get("map")
         if cmap is not None:
             if not isinstance(cmap, str):
@@ -95,13 +110,13 @@ def parse(doc: dict, where: str, base_dir: Path) -> tuple:
             for f in files:
                 if str(f) not in seen:
                     seen.add(str(f))
-                    out.append(Recording(str(f), _digest(f), cmap, holdout))
+                    out.append(Recording(str(f), _digest(f), cmap, holdout, tuple(baseline), sindy))
     return tuple(out)
 
 
 def tasks(campaign) -> list:
     return [Task(KIND, {"recording": r.path, "sha256": r.sha256, "map": r.map, "holdout": r.holdout,
-                        "seed": campaign.seed}, r.path)
+                        "baseline": list(r.baseline), "sindy": r.sindy, "seed": campaign.seed}, r.path)
             for r in campaign.study]
 
 
@@ -111,30 +126,31 @@ def execute(identity: dict) -> dict:
     from teleop.diagnosis.recording_io import read_recording
 
     rec = read_recording(identity["recording"], identity["map"])
-    return diagnose(rec, identity["holdout"], seed=identity["seed"]).as_dict()
+    return diagnose(rec, identity["holdout"], seed=identity["seed"], baseline=tuple(identity["baseline"]),
+                    sindy=identity["sindy"]).as_dict()
 
 
 def _diagnose_file(item):
-    """Read and diagnose one file where the scheduler runs it: item = (path, map, holdout, seed)."""
+    """Read and diagnose one file where the scheduler runs it: item = (path, map, holdout, options)."""
     from teleop.diagnosis.diagnose import diagnose
     from teleop.diagnosis.recording_io import read_recording
 
-    path, cmap, holdout, seed = item
-    return diagnose(read_recording(path, cmap), holdout, seed=seed)
+    path, cmap, holdout, options = item
+    return diagnose(read_recording(path, cmap), holdout, **options)
 
 
-def diagnose_files(paths: list, column_map, holdout: float, seed: int, scheduler: str) -> list:
+def diagnose_files(paths: list, column_map, holdout: float, scheduler: str, **options) -> list:
     """Diagnosis of each of `paths` (in that order), each file read and diagnosed where `scheduler` runs
-    tasks (`teleop diagnose REC... --scheduler`), as `diagnose(read_recording(path, map), holdout, seed)`
-    would give here. Workers get absolute paths; each Diagnosis comes back with the path as given. The
-    first file that fails is an InputError naming it."""
+    tasks (`teleop diagnose REC... --scheduler`), as `diagnose(read_recording(path, column_map), holdout,
+    **options)` (seed, baseline, ...) would give here. Workers get absolute paths; each Diagnosis comes
+    back with the path as given. The first file that fails is an InputError naming it."""
     from teleop.campaign.progress import Progress
     from teleop.campaign.scheduler import open_scheduler
 
     cmap = column_map
     if cmap is not None and str(cmap).endswith(".toml"):
         cmap = str(Path(cmap).absolute())
-    items = [(str(Path(p).absolute()), cmap, holdout, seed) for p in paths]
+    items = [(str(Path(p).absolute()), cmap, holdout, options) for p in paths]
     done = {}
     with open_scheduler(scheduler) as sched, Progress(len(items), "diagnose") as progress:
         for item, outcome in sched.run(_diagnose_file, items):

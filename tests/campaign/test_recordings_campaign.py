@@ -35,5 +35,6 @@ def test_findings_table_heat_map_and_a_bad_recording(tmp_path):
     assert (tmp_path / "out" / "findings.png").stat().st_size > 0
     # a task's result is the report `teleop diagnose FILE --seed 2` makes
     task = [t for t in tasks(campaign) if t.label.endswith("a_backlash.csv")][0]
+    assert task.identity["baseline"] == ["capstan_friction"] and task.identity["sindy"] is False  # the defaults
     direct = diagnose(read_recording(task.label), task.identity["holdout"], seed=2).as_dict()
     assert ResultStore(tmp_path / "out").load(task) == json.loads(dumps_json(direct))

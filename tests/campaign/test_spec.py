@@ -86,7 +86,9 @@ def test_recordings_campaign_paths_maps_and_errors(tmp_path):
     for body, message in (('paths = ["none/*.csv"]', "'none/*.csv' matches no file"),
                           ('paths = ["recs/a.csv"]\nmap = "nosuchmap"', "column map 'nosuchmap' not found"),
                           ('paths = ["recs/a.csv"]\nholdout = 1.5', "'holdout' must be a fraction"),
-                          ('paths = ["recs/a.csv"]\ncolumns = 3', "unknown key 'columns'")):
+                          ('paths = ["recs/a.csv"]\ncolumns = 3', "unknown key 'columns'"),
+                          ('paths = ["recs/a.csv"]\nbaseline = "nosuch"', "--baseline"),
+                          ('paths = ["recs/a.csv"]\nsindy = 1', "'sindy' must be true or false")):
         with pytest.raises(InputError, match="#1: " if "columns" not in body else "#1") as err:
             load_campaign(write(tmp_path, f'[campaign]\nkind = "diagnose"\n[[recordings]]\n{body}\n'))
         assert message in str(err.value)
