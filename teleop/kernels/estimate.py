@@ -69,7 +69,30 @@ def turn_correct(w, x, y, z, dt, turn, coefs):
 
 
 @njit
+def _start(pose, cab, st, out):
+    """Orientation cache, wrench zeroed: the common start of a tick."""
+    _orient(pose, cab, st)
+    out[1, :6] = 0.0
+
+
+@njit
+def _cable(pose, cab, c, out, i):
+    """Cable i at the pose: its length stored in out[0, i]; (L, ux, uy, uz, mu Theta)."""
+    L, ux, uy, uz = cable(pose[0], pose[1], pose[2], cab[:, 6:12], i)
+    out[0, i] = L
+    return L, ux, uy, uz, c[MU] * wrap_angle(ux, uy, uz, c[VX], c[VY], c[VZ], c[THETA0])
+
+
+@njit
+def _put(out, cab, i, t, ux, uy, uz):
+    """Cable i's compensated tension t [N] into out[2, i] and its share of f = -A t into the wrench."""
+    out[2, i] = t
+    _add_cable(out[1, :6], t, ux, uy, uz, cab[i, 9], cab[i, 10], cab[i, 11])
+
+
+@njit
 def _finish(pose, dt, st, kf, turn, coefs, out):
+    """Previous lengths kept; turn correction and Kalman filter on the wrench: the common end of a tick."""
     for i in range(st.shape[1]):
         st[L_PREV, i] = out[0, i]
     w = out[1, :6]
@@ -82,14 +105,10 @@ def _finish(pose, dt, st, kf, turn, coefs, out):
 @njit
 def estimate_non_compensated(pose, t_in, dt, cab, c, st, kf, turn, coefs, out):
     """f = -A t_fsr: no compensation."""
-    _orient(pose, cab, st)
-    L, w = out[0], out[1, :6]
-    w[:] = 0.0
+    _start(pose, cab, st, out)
     for i in range(st.shape[1]):
-        Li, ux, uy, uz = cable(pose[0], pose[1], pose[2], cab[:, 6:12], i)
-        L[i] = Li
-        out[2, i] = t_in[i]
-        _add_cable(w, t_in[i], ux, uy, uz, cab[i, 9], cab[i, 10], cab[i, 11])
+        _, ux, uy, uz, _ = _cable(pose, cab, c, out, i)
+        _put(out, cab, i, t_in[i], ux, uy, uz)
     _finish(pose, dt, st, kf, turn, coefs, out)
 
 
@@ -97,18 +116,12 @@ def estimate_non_compensated(pose, t_in, dt, cab, c, st, kf, turn, coefs, out):
 def estimate_capstan(pose, t_in, dt, cab, c, st, kf, turn, coefs, out):
     """`single` (and `double` with turn fits): capstan compensation per cable with the direction of the
     cable length change (Schmitt trigger with the length dead band; shortening or unmoved = pulling)."""
-    _orient(pose, cab, st)
-    L, w = out[0], out[1, :6]
-    w[:] = 0.0
+    _start(pose, cab, st, out)
     for i in range(st.shape[1]):
-        Li, ux, uy, uz = cable(pose[0], pose[1], pose[2], cab[:, 6:12], i)
-        L[i] = Li
-        mu_theta = c[MU] * wrap_angle(ux, uy, uz, c[VX], c[VY], c[VZ], c[THETA0])
-        d, e, _ = direction_step(st[DIR, i], st[EXT, i], Li, c[DEADBAND])
+        L, ux, uy, uz, mu_theta = _cable(pose, cab, c, out, i)
+        d, e, _ = direction_step(st[DIR, i], st[EXT, i], L, c[DEADBAND])
         st[DIR, i], st[EXT, i] = d, e
-        t = capstan_hold(t_in[i], d <= 0.0, mu_theta)
-        out[2, i] = t
-        _add_cable(w, t, ux, uy, uz, cab[i, 9], cab[i, 10], cab[i, 11])
+        _put(out, cab, i, capstan_hold(t_in[i], d <= 0.0, mu_theta), ux, uy, uz)
     _finish(pose, dt, st, kf, turn, coefs, out)
 
 
@@ -117,19 +130,15 @@ def estimate_dynamic(pose, t_in, dt, cab, c, st, kf, turn, coefs, out):
     """`dynamic`: per cable, the viscous force b v (v: the motor velocity, low-passed with v_smooth) and the
     Dahl state along the cable's own travel are removed, then the capstan is inverted through its friction
     state phi (t_tip = t e^(-phi mu Theta)); no direction rule: phi follows the travel."""
-    _orient(pose, cab, st)
-    L, w = out[0], out[1, :6]
-    w[:] = 0.0
+    _start(pose, cab, st, out)
     first = st[L_PREV, 0] != st[L_PREV, 0]
     Fc, sigma = c[DAHL_FC], c[DAHL_SIGMA]
     dahl = Fc > 0.0 and not first
     a_v = dt / (c[V_SMOOTH] + dt) if dt > 0 else 0.0
     inv_dt = 1.0 / dt if dt > 0 else 0.0
     for i in range(st.shape[1]):
-        Li, ux, uy, uz = cable(pose[0], pose[1], pose[2], cab[:, 6:12], i)
-        L[i] = Li
-        mu_theta = c[MU] * wrap_angle(ux, uy, uz, c[VX], c[VY], c[VZ], c[THETA0])
-        dx = 0.0 if first else st[L_PREV, i] - Li  # motor travel, + while pulling
+        L, ux, uy, uz, mu_theta = _cable(pose, cab, c, out, i)
+        dx = 0.0 if first else st[L_PREV, i] - L  # motor travel, + while pulling
         v = st[VEL, i]
         v += a_v * (dx * inv_dt - v)
         st[VEL, i] = v
@@ -140,9 +149,7 @@ def estimate_dynamic(pose, t_in, dt, cab, c, st, kf, turn, coefs, out):
             t -= Fd
         phi = capstan_state_step(st[PHI, i], dx, t, mu_theta, c[STICK_K])
         st[PHI, i] = phi
-        t = t * math.exp(-phi * mu_theta)
-        out[2, i] = t
-        _add_cable(w, t, ux, uy, uz, cab[i, 9], cab[i, 10], cab[i, 11])
+        _put(out, cab, i, t * math.exp(-phi * mu_theta), ux, uy, uz)
     _finish(pose, dt, st, kf, turn, coefs, out)
 
 
