@@ -120,6 +120,7 @@ class Teleop:
         self.wrench = np.zeros(6)
         self.anchor_stylus = np.zeros(3)
         self.anchor_robot = self.pose[:3].copy()
+        self._map_anchor, self._map_pos = np.zeros(6), np.zeros(3)  # the mapping kernel's arrays
         self.tap = None
         self.last_reading = None
         self._est_seq = None  # sequence number and robot time of the last frame the estimator saw
@@ -172,14 +173,16 @@ class Teleop:
     def follow(self, x) -> np.ndarray:
         """ENABLED: stylus -> target -> lengths, step-limited to v_max dt and clipped to the length limits.
 
-        teleop.mapping.Follower.step (through LoopTick.map): the math of teleop.mapping.stylus2target /
-        position2lengths / limit_lengths on plain floats (this runs every tick).
+        teleop.mapping.Follower.step_into (kernel mapping.follow_step): the math of teleop.mapping.stylus2target /
+        position2lengths / limit_lengths, compiled (this runs every tick).
         """
-        pos, L = self.fast.map(np.asarray(x.sample.measured_cp, dtype=float).tolist(), self.anchor_stylus.tolist(),
-                               self.anchor_robot.tolist(), self.pose[:3].tolist(),
-                               np.asarray(self.L_last, dtype=float).tolist())
+        a, pos = self._map_anchor, self._map_pos
+        a[:3], a[3:] = self.anchor_stylus, self.anchor_robot
+        pos[:] = self.pose[:3]
+        L = np.array(self.L_last, dtype=float)
+        self.fast.follower.step_into(np.ascontiguousarray(x.sample.measured_cp, dtype=float), a, pos, L)
         self.pose[:3] = pos
-        return np.array(L)
+        return L
 
     def stop_robot(self) -> None:
         try:
