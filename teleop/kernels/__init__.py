@@ -12,7 +12,11 @@ the loop's tick all call these):
 - estimate.py   the per-tick estimate of each estimator (one compiled call), turn correction, FSR branch
                 lookup
 - mapping.py    the stylus -> robot target -> cable length step (motion scale, workspace box, cable speed)
+- render.py     the force rendering: frame map, engage rule, ramp-in, passivity observer, norm clamp
 - sim.py        the simulated robot's per-reading cable physics (pose terms, tension distribution, capstan)
-`warm.warm_up()` compiles (or loads from the on-disk cache) every kernel with the hot path's argument types;
+- linalg.py     6 x 6 elimination (LU with complete pivoting, null vector, small solves) and Horner's rule
+- ufuncs.py     element-wise loops over the scalar friction kernels (the physics array forms)
+`jit.njit` is the one decorator (numba, cached on disk; the plain source without numba or with
+TELEOP_NO_JIT=1). `warm.warm_up()` compiles (or loads from the on-disk cache) every kernel with the hot path's argument types;
 the loop calls it before its first tick.
 """
