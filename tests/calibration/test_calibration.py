@@ -1,0 +1,141 @@
+"""teleop.calibration: each fit recovers the parameters a physics-made recording was generated with (within
+5 %), the calibration file round-trips, bad CSVs give one line naming file, line and column."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from teleop.calibration import calfile, generate
+from teleop.calibration.fbg import fit_fbg, read_fbg_steps
+from teleop.calibration.fsr import fit_fsr, read_fsr_steps
+from teleop.calibration.one_sensor import fit_one_sensor, read_one_sensor, transition_width
+from teleop.cli import main
+from teleop.errors import InputError
+from teleop.sensors import LOADING, UNLOADING, FbgParams, FsrCalibration, ProximalDistalModel, default_fsr_calibration
+
+EXAMPLE_MRDLAB = Path(__file__).resolve().parents[2] / "examples" / "mrdlab"
+
+
+def _write(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("drop_branch", [False, True])
+def test_fsr_recovers_both_branches(tmp_path, seed, drop_branch):
+    truth = default_fsr_calibration()
+    text = generate.fsr_step_protocol(truth, seed=seed)
+    if drop_branch:   # the rows' order tells the branch
+        text = "\n".join(",".join(line.split(",")[:2]) for line in text.splitlines()) + "\n"
+    fit = fit_fsr(read_fsr_steps(_write(tmp_path, "fsr.csv", text)))
+    t = np.linspace(0.49, 5.89, 12)          # the seed's 50-600 g
+    for b in (LOADING, UNLOADING):
+        rel = fit.cal.reading(t, b) / truth.reading(t, b) - 1
+        assert np.max(np.abs(rel)) < 0.05, (b, rel)
+        # and the inverse map a loop uses: tension from a conductance on this branch, where the branch
+        # still rises (the unloading branch flattens above ~5.5 N: there no fit can tell tensions apart)
+        ti = t[t < 5.5]
+        back = fit.cal.tension(truth.reading(ti, b), np.full(ti.shape, b))
+        assert np.max(np.abs(back / ti - 1)) < 0.05
+    assert all(len(s) == 6 and all(np.isfinite(s)) for s in fit.stderr.values())
+
+
+def test_fsr_noise_shows_in_residual(tmp_path):
+    """Ten times the conductance noise, about ten times the residual: the fit is not reading its truth."""
+    truth = default_fsr_calibration()
+    quiet = fit_fsr(read_fsr_steps(_write(tmp_path, "a.csv", generate.fsr_step_protocol(truth, noise_uS=0.1))))
+    loud = fit_fsr(read_fsr_steps(_write(tmp_path, "b.csv", generate.fsr_step_protocol(truth, noise_uS=1.0))))
+    ratio = loud.rms_S["loading"] / quiet.rms_S["loading"]
+    assert 5 < ratio < 20
+
+
+@pytest.mark.parametrize("with_branch", [False, True])
+def test_fbg_recovers_sensitivity_hysteresis_and_r(tmp_path, with_branch):
+    p = FbgParams(S_pm_N=30.0, r=2.0, kT1_pm_C=10.0, kT2_pm_C=20.0, noise_pm=10.0)
+    text = generate.fbg_load_steps(p, hysteresis_N=0.5, temperatures_C=(25.0, 50.0), seed=3,
+                                   with_branch=with_branch)
+    fit = fit_fbg(read_fbg_steps(_write(tmp_path, "fbg.csv", text)))
+    v = fit.values
+    for name, truth in (("S_pm_N", 30.0), ("kT1_pm_C", 10.0), ("kT2_pm_C", 20.0), ("r", 2.0),
+                        ("hysteresis_N", 1.0), ("hysteresis_percent", 5.0), ("force_error_N", 10.0 / 30.0)):
+        assert v[name] == pytest.approx(truth, rel=0.05), name
+    assert fit.params.r == pytest.approx(v["r"])
+
+
+def test_fbg_needs_two_temperatures(tmp_path):
+    text = generate.fbg_load_steps(temperatures_C=(25.0,))
+    with pytest.raises(InputError, match="temperature_C.*two or more temperatures"):
+        fit_fbg(read_fbg_steps(_write(tmp_path, "fbg.csv", text)))
+
+
+@pytest.mark.parametrize("mu, theta", [(0.08, 2 * math.pi), (0.05, 3.0)])
+def test_one_sensor_recovers_slopes_and_widths(tmp_path, mu, theta):
+    text, truth = generate.one_cable_cycles(mu=mu, theta=theta, seed=2)
+    fit = fit_one_sensor(*read_one_sensor(_write(tmp_path, "one.csv", text)))
+    assert fit.model.Kp == pytest.approx(truth["Kp"], rel=0.05)
+    assert fit.model.Kr == pytest.approx(truth["Kr"], rel=0.05)
+    true_model = ProximalDistalModel(truth["Kp"], truth["Kr"])
+    for w in fit.widths.values():
+        assert w["width"] == pytest.approx(float(transition_width(true_model, w["distal"])), rel=0.05)
+
+
+def test_calibration_file_round_trip(tmp_path):
+    cal = default_fsr_calibration()
+    path = calfile.write_calibration(tmp_path / "c.toml", "fsr", 'a "quoted" source',
+                                     {"loading_S": list(cal.loading), "unloading_S": list(cal.unloading),
+                                      "t_max_N": cal.t_max}, {"loading_S": [0.0] * 6}, {"note": {"x": 1.0}})
+    kind, back = calfile.load_calibration(path)
+    assert kind == "fsr" and isinstance(back, FsrCalibration)
+    assert back.loading == cal.loading and back.unloading == cal.unloading and back.t_max == cal.t_max
+    text = path.read_text().replace("t_max_N", "t_maximum_N")
+    with pytest.raises(InputError, match=r"\[fsr\]: unknown key 't_maximum_N'"):
+        calfile.load_calibration(_write(tmp_path, "bad.toml", text))
+    kind, fbg = calfile.load_calibration(calfile.write_calibration(
+        tmp_path / "f.toml", "fbg", "x", {"S_pm_N": 34.12, "r": 2.28, "kT1_pm_C": 11.23, "kT2_pm_C": 25.62,
+                                         "noise_pm": 12.59}, {}, {}))
+    assert fbg == FbgParams()
+
+
+def test_cli_calibrate_writes_file_plot_and_json(tmp_path, capsys):
+    csv = _write(tmp_path, "fbg.csv", generate.fbg_load_steps())
+    out = tmp_path / "fbg.toml"
+    assert main(["calibrate", "fbg", str(csv), "--out", str(out), "--json", str(tmp_path / "f.json")]) == 0
+    assert "temperature ratio r = 2.2" in capsys.readouterr().out
+    kind, p = calfile.load_calibration(out)
+    assert kind == "fbg" and p.S_pm_N == pytest.approx(34.12, rel=0.01)
+    assert (tmp_path / "fbg.png").stat().st_size > 10_000 and (tmp_path / "f.json").exists()
+
+
+@pytest.mark.parametrize("kind, text, expected", [
+    ("fsr", "tension_N,conductance_uS\n0,0\n0.5,x\n", r"fsr.csv: line 3: column 'conductance_uS': expected a finite number"),
+    ("fsr", "# c\ntension_N,branch\n0,loading\n", r"fsr.csv: line 2: missing column 'conductance_uS'"),
+    ("fsr", "tension_N,conductance_uS,branch\n" + "1,2,sideways\n" * 14,
+     r"fsr.csv: line 2: column 'branch': expected a finite number or .*loading"),
+    ("fbg", "force_N,temperature_C,dl1_pm,dl2_pm\n" + "1,25,3,nan\n" * 9, r"fsr.csv: line 2: column 'dl2_pm'"),
+])
+def test_cli_bad_csv_one_line_exit_2(tmp_path, capsys, kind, text, expected):
+    csv = _write(tmp_path, "fsr.csv", text)
+    out = tmp_path / "c.toml"
+    assert main(["calibrate", kind, str(csv), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and __import__("re").search(expected, err), err
+    assert not out.exists() and not (tmp_path / "c.png").exists()
+
+
+@pytest.mark.skipif(not EXAMPLE_MRDLAB.is_dir(), reason="examples/mrdlab absent")
+def test_one_sensor_on_real_mrdlab_run(tmp_path, capsys):
+    """The shipped 8 s of a real da Vinci instrument run: the fit runs; its slopes are negative (the
+    spindle and jaw torques invert) and the command says eq 7's single pull-only cable does not apply."""
+    run = sorted(EXAMPLE_MRDLAB.glob("*.TXT")) + sorted(EXAMPLE_MRDLAB.glob("*.txt"))
+    assert run
+    out = tmp_path / "m.toml"
+    assert main(["calibrate", "one-sensor", str(run[0]), "--map", "mrdlab", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    kind, model = calfile.load_calibration(out)
+    assert kind == "one-sensor" and model.Kp < 0 and model.Kr < 0 and "negative slopes" in text
