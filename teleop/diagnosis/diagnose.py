@@ -231,6 +231,12 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
         d = link_data(rec, link, corrections)
         res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed,
                                         baseline=tuple(baseline))
+        if link.kind == "position" and "backlash" in res.final.names:
+            # a play seen on the raw input too: keep whichever input the held-out part prefers
+            d_raw = link_data(rec, link, corrections, raw_input=True)
+            raw = identify_link(d_raw, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline))
+            if raw.final.rmse_hold < res.final.rmse_hold and "backlash" in raw.final.names:
+                d, res = d_raw, raw
         results.append(res)
         corr = sensor_correction(res)
         if corr is not None:

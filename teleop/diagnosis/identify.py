@@ -358,6 +358,8 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
                 continue
             try:
                 f = fit_chain(d, current.model, (name,), fit_idx, hold_idx, seed=seed, freeze=round_ > 0)
+                if name == "backlash" and d.link.kind == "position" and not current.model.effects:
+                    f = min([f] + _play_restarts(d, current.model, fit_idx, hold_idx, seed), key=lambda g: g.rmse_fit)
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 continue
             if round_ == 0:
@@ -393,6 +395,21 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
         steps.append((current, pick))
         current = pick
     return LinkResult(d, base, tuple(steps), ranking, current, delay)
+
+
+def _play_restarts(d: LinkData, start: LinkModel, fit_idx: slice, hold_idx: slice, seed: int) -> list:
+    """Backlash refitted from larger gains: a wide play flattens the affine least-squares gain (the tip
+    stands still over the dead band), so its fit can end at a too-small gain; the gain through the
+    branches is up to 1 / (1 - play fraction) larger."""
+    out = []
+    for factor in (1.5, 2.5, 4.0):
+        try:
+            out.append(fit_chain(d, LinkModel(start.link, start.gain * factor, start.offset, start.direction,
+                                              start.load_sign, (), start.base), ("backlash",),
+                                 fit_idx, hold_idx, seed=seed))
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            pass
+    return out
 
 
 PAIR_TOP = 3   # when no single effect pays, pairs of the best few singles are fitted jointly

@@ -151,10 +151,12 @@ class LinkData:
                         cut(self.temperature), cut(self.theta), self.resolution_s)
 
 
-def link_data(rec: Recording, link: Link, corrections: dict | None = None) -> LinkData:
-    """The arrays of `link` from `rec`; inputs (not the output) are smoothed (see smooth_width).
-    corrections: {channel: (n,) array} subtracted from a recorded channel before use (a sensor effect
-    identified on another link, taken out of this link's input)."""
+def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_input: bool = False) -> LinkData:
+    """The arrays of `link` from `rec`; inputs (not the output) are smoothed (see smooth_width), except
+    the link's input itself with raw_input (a play operator's dead band filters the input's noise on its
+    own, and smoothing rounds the reversals it switches at). corrections: {channel: (n,) array}
+    subtracted from a recorded channel before use (a sensor effect identified on another link, taken out
+    of this link's input)."""
     ch = dict(rec.channels)
     for name, c in (corrections or {}).items():
         if name in ch:
@@ -169,7 +171,7 @@ def link_data(rec: Recording, link: Link, corrections: dict | None = None) -> Li
         return smooth(ch[name], w)
 
     x = sm(link.drive) if link.drive and link.kind != "contact" else None
-    u = sm(link.input)
+    u = ch[link.input] if raw_input else sm(link.input)
     load = sm(link.load) if link.load else None
     temp = sm("temperature") if "temperature" in ch else None
     return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"), max(widths) * dt)

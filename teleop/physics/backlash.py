@@ -31,7 +31,7 @@ def _guess(signals: Signals, y: np.ndarray) -> dict:
     return {"width": float(np.percentile(e, 98) - np.percentile(e, 2))}
 
 
-PARAMS = (ParamSpec("width", "m", 1e-8, 1.0, 5e-4, "total play (dead band) width; rad for a rotary joint",
+PARAMS = (ParamSpec("width", "m", 1e-8, 100.0, 5e-4, "total play (dead band) width; rad for a rotary joint (a tendon-sheath joint can lose radians)",
                     log=True),)
 
 
