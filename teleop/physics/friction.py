@@ -78,10 +78,25 @@ def _stribeck_guess(s: Signals, y: np.ndarray) -> dict:
     m = _moving(s.v)
     if m.sum() < 10:
         return {}
-    f, sp = np.abs(y - s.load)[m], np.abs(s.v[m])
-    fast, slow = sp >= np.percentile(sp, 70), sp <= np.percentile(sp, 10)
-    return {"Fc": float(np.median(f[fast])), "Fs": float(np.percentile(f[slow], 90)),
-            "vs": float(np.percentile(sp, 25))}
+    # friction along the motion, binned by speed: Fc where fastest, Fs the low-speed peak, vs where the
+    # excess over Fc has fallen to 1/e of its peak
+    f, sp = ((y - s.load) * np.sign(s.v))[m], np.abs(s.v[m])
+    edges = np.unique(np.percentile(sp, np.linspace(0, 100, 21)))
+    which = np.clip(np.searchsorted(edges, sp, side="right") - 1, 0, max(edges.size - 2, 0))
+    med = np.array([np.median(f[which == b]) if np.any(which == b) else np.nan for b in range(edges.size - 1)])
+    centre = 0.5 * (edges[:-1] + edges[1:])
+    ok = np.isfinite(med)
+    if ok.sum() < 3:
+        return {"Fc": float(np.median(np.abs(f))), "Fs": float(np.percentile(np.abs(f), 90)),
+                "vs": float(np.percentile(sp, 25))}
+    med, centre = med[ok], centre[ok]
+    Fc = max(float(np.median(med[-max(2, med.size // 4):])), 0.0)
+    peak = int(np.argmax(med))
+    Fs = max(float(med[peak]), Fc)
+    excess = med - Fc
+    after = np.nonzero(excess[peak:] <= excess[peak] / np.e)[0]
+    vs = float(centre[peak + after[0]]) if after.size else float(np.percentile(sp, 25))
+    return {"Fc": Fc, "Fs": Fs if Fs > 1.2 * Fc else 2.0 * Fc, "vs": vs}
 
 
 def _dahl_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
