@@ -112,16 +112,27 @@ def _apply(name: str, params: dict, **channels) -> np.ndarray:
 
 
 def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_hz: float = 500.0,
-             duration_s: float = 20.0, noise: float = 1.0) -> RigRecording:
+             duration_s: float = 20.0, noise: float = 1.0, given: dict | None = None) -> RigRecording:
     """One recording of the bench with `effects` switched on (catalogue names, OUTSIDE names, or 'none')
-    at random parameters drawn from `seed` (int or sequence); `columns` of COLUMNS are written."""
+    at random parameters drawn from `seed` (int or sequence); `columns` of COLUMNS are written.
+
+    `given` fixes what is otherwise drawn (a set experiment, e.g. seed 000 Fig 9-13): "x" motor haul-in
+    (n,) [m] with n = duration_s * fs_hz, "theta" bend [rad] (scalar or (n,)), "mu", "k_stick" [N/m],
+    "spring_N_per_m" and "preload_N" (load = spring), "tip_force" (n,) [N] (load = external), and
+    "ideal_sensors": True for unit gains and zero offsets. The random draws happen all the same, so the
+    rest of the recording is the one `seed` gives without `given`."""
     rng = np.random.default_rng(seed)
+    given = dict(given or {})
     effects = tuple(e for e in effects if e != "none")
     unknown = [e for e in effects if e not in RIG_EFFECTS + OUTSIDE]
     if unknown:
         raise ValueError(f"cable rig: cannot switch on {unknown} (known: {RIG_EFFECTS + OUTSIDE})")
     t = np.arange(int(duration_s * fs_hz)) / fs_hz
     traj, x = _trajectory(rng, t, fs_hz)
+    if "x" in given:
+        traj, x = "given", np.asarray(given["x"], dtype=float)
+        if x.shape != t.shape:
+            raise ValueError(f"cable rig: given x has shape {x.shape}, expected {t.shape}")
     A = float(np.ptp(x)) / 2
     v = np.gradient(x, t)
     v[np.abs(v) < 1e-9] = 0.0          # at rest (round-off of the smoothing is not motion)
@@ -135,6 +146,9 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         levels = rng.uniform(math.pi / 3, 2 * math.pi, 4)
         theta = levels[np.minimum((t / duration_s * 4).astype(int), 3)]
     mu = rng.uniform(0.04, 0.12)
+    if "theta" in given:
+        theta = np.broadcast_to(np.asarray(given["theta"], dtype=float), t.shape).copy()
+    mu = float(given.get("mu", mu))
     temp = 24 + rng.uniform(2, 10) * np.sin(2 * np.pi * t / rng.uniform(15, 40) + rng.uniform(0, 6.3))
     # position: the tip follows the motor (backlash when on)
     z = x.copy()
@@ -146,6 +160,7 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     if load == "spring":
         ks = rng.uniform(200.0, 2000.0)                 # N/m
         pre = ks * A * rng.uniform(1.2, 2.0)            # keeps the cable taut
+        ks, pre = float(given.get("spring_N_per_m", ks)), float(given.get("preload_N", pre))
         F_tip = pre + ks * z
         if "stiffening_spring" in effects:
             k3 = rng.uniform(0.25, 0.5) * ks / A ** 2
@@ -156,10 +171,13 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         fl = rng.uniform(0.05, 0.4)
         F_tip = L0 * (1 + rng.uniform(0.3, 0.6) * np.sin(2 * np.pi * fl * t + rng.uniform(0, 6.3))
                       + 0.1 * np.sin(2 * np.pi * 1.7 * fl * t))
+        if "tip_force" in given:
+            F_tip = np.broadcast_to(np.asarray(given["tip_force"], dtype=float), t.shape).copy()
     L0 = float(np.mean(F_tip))
     # the sheath: capstan friction over the bend, stick transitions at reversals
     band = 2 * L0 * math.sinh(mu * float(np.mean(theta)))
     k_stick = band / (rng.uniform(0.02, 0.08) * A)
+    k_stick = float(given.get("k_stick", k_stick))
     F_m = tip2motor_transitions(x, F_tip, mu, theta, k_stick)
     Fc = rng.uniform(0.08, 0.2) * L0
     if "coulomb_friction" in effects:
@@ -186,6 +204,8 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     # sensors: gains and zeros, then the sensor effect on one of the two force sensors
     readings = {"motor_force": rng.uniform(0.9, 1.1) * F_m + rng.uniform(-0.5, 0.5),
                 "tip_force": rng.uniform(0.95, 1.05) * F_tip + rng.uniform(-0.3, 0.3)}
+    if given.get("ideal_sensors"):
+        readings = {"motor_force": F_m.copy(), "tip_force": F_tip.copy()}
     sensor_channel = "motor_force" if rng.random() < 0.5 else "tip_force"
     if "motor_force_N" not in columns:
         sensor_channel = "tip_force"
