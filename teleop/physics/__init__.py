@@ -29,7 +29,9 @@ Catalogue (registry key: inputs -> output, parameters):
   backlash (x -> x; width), cable_compliance (x, load -> x; k)
 - force link, tip load -> motor force (x increasing = pulling):
   capstan_friction (x, load [, theta] -> load; mu, theta, k), coulomb_friction (v, load; Fc),
-  viscous_friction (v, load; b), stribeck_friction (v, load; Fc, Fs, vs), dahl_hysteresis (x, load; sigma, Fc)
+  viscous_friction (v, load; b), stribeck_friction (v, load; Fc, Fs, vs), dahl_hysteresis (x, load; sigma, Fc),
+  pulley_friction (x, load -> load; mu, wrap, bend, k: seed 002's cable-pulley chain, lumped)
+- position link over pulleys: pulley_elongation (x, load -> x; c, mu, wrap, bend, k)
 - sensor, true force -> reading:
   sensor_hysteresis (force; h, delta), thermal_drift (force, temperature; c, T0),
   thermal_drift_time (t, force; offset, rate)
@@ -49,6 +51,7 @@ from teleop.physics.capstan import (CapstanCompensator, capstan_band, capstan_in
                                     motor2tip_transitions, tip2motor, tip2motor_transitions)
 from teleop.physics.backlash import backlash
 from teleop.physics.compliance import cable_stretch
+from teleop.physics.pulley import Pulley, PulleyChain, pulley_band, pulley_elongation, pulley_motor_force
 from teleop.physics.friction import coulomb, dahl, stribeck, viscous
 from teleop.physics.sensor_effects import hysteresis_offset, thermal_offset
 from teleop.physics.contact import damped_force, hertz_force, linear_force, sls_force
@@ -59,5 +62,6 @@ __all__ = [
     "CapstanCompensator", "capstan_band", "capstan_in", "capstan_out", "motor2tip", "motor2tip_transitions",
     "tip2motor", "tip2motor_transitions", "backlash", "cable_stretch", "coulomb", "dahl", "stribeck",
     "viscous", "hysteresis_offset", "thermal_offset", "damped_force", "hertz_force", "linear_force",
-    "sls_force", "FitResult", "fit", "rmse",
+    "sls_force", "FitResult", "fit", "rmse", "Pulley", "PulleyChain", "pulley_band", "pulley_elongation",
+    "pulley_motor_force",
 ]

@@ -44,6 +44,11 @@ def scenario(name: str) -> Scenario:
     if name == "capstan_friction":
         return Scenario(Signals(t=t, x=x, load=load), {"mu": 0.1, "k": 3e3}, 0.02,
                         {"theta": np.deg2rad(140.0) + 1.0})
+    if name == "pulley_friction":
+        return Scenario(Signals(t=t, x=x, load=load), {"mu": 0.1, "bend": 0.2, "k": 3e3}, 0.02, {"wrap": np.pi})
+    if name == "pulley_elongation":
+        return Scenario(Signals(t=t, x=x, load=load), {"c": 2e-4, "mu": 0.1}, 2e-6,
+                        {"wrap": np.pi, "bend": 0.2, "k": 3e3})
     if name == "coulomb_friction":
         return Scenario(Signals(t=t, x=x, load=load), {"Fc": 0.3}, 0.02)
     if name == "viscous_friction":
