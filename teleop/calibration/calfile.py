@@ -125,3 +125,13 @@ def load_calibration(path: str | Path):
     if v["Kp"] == 0 or v["Kr"] == 0:
         raise InputError(f"{where}: keys 'Kp' and 'Kr' must be non-zero slopes")
     return kind, ProximalDistalModel(**v)
+
+
+def load_fsr(path: str | Path):
+    """The FsrCalibration of a calibration file of kind "fsr" (the loop reads FSR tensions; an FBG or
+    one-sensor file is refused with what it holds)."""
+    kind, model = load_calibration(path)
+    if kind != "fsr":
+        raise InputError(f"{path}: kind = \"{kind}\", expected \"fsr\" (the loop's robots read FSR arrays; "
+                         f"FBG and one-sensor paths are not wired into the loop yet)")
+    return model

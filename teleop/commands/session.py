@@ -31,9 +31,9 @@ def register(subparsers) -> None:
                    help="zero forces along -z of the stylus frame, i.e. toward the pad (seed 000 blind test)")
     p.add_argument("--passivity-damping", type=float, default=0.0, metavar="N_S_PER_M",
                    help="largest damping of the passivity observer/controller [N s/m] (default 0: off)")
-    p.add_argument("--fsr-calibration", type=input_file, metavar="CSV",
-                   help="FSR calibration (columns tension_N, conductance_uS, branch) for the estimator "
-                        "(default: the built-in synthetic calibration)")
+    p.add_argument("--fsr-calibration", type=input_file, metavar="CSV|TOML",
+                   help="FSR calibration for the estimator: a CSV (columns tension_N, conductance_uS, branch) or "
+                        "the .toml of `teleop calibrate fsr` (default: the built-in synthetic calibration)")
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20; docs/safety.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
@@ -91,7 +91,12 @@ def run(args) -> int:
     from teleop.sensors import load_fsr_calibration
 
     # read before any device is opened or file written: a bad file leaves nothing
-    cal = load_fsr_calibration(args.fsr_calibration) if args.fsr_calibration else None
+    if args.fsr_calibration and str(args.fsr_calibration).endswith(".toml"):
+        from teleop.calibration.calfile import load_fsr
+
+        cal = load_fsr(args.fsr_calibration)
+    else:
+        cal = load_fsr_calibration(args.fsr_calibration) if args.fsr_calibration else None
     robot_hz = None if args.robot_inline else args.robot_rate
     estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
     with _CtrlC() as ctrl_c:

@@ -139,3 +139,25 @@ def test_one_sensor_on_real_mrdlab_run(tmp_path, capsys):
     text = capsys.readouterr().out
     kind, model = calfile.load_calibration(out)
     assert kind == "one-sensor" and model.Kp < 0 and model.Kr < 0 and "negative slopes" in text
+
+
+def test_session_loads_the_fsr_calibration_file(tmp_path, capsys):
+    """`teleop calibrate fsr` output is what `teleop session --fsr-calibration FILE.toml` records; an FBG file
+    is refused in one line."""
+    from teleop.recording import read_session
+
+    csv = _write(tmp_path, "fsr.csv", generate.fsr_step_protocol(default_fsr_calibration(), noise_uS=0.0))
+    cal_file = tmp_path / "fsr.toml"
+    assert main(["calibrate", "fsr", str(csv), "--out", str(cal_file)]) == 0
+    rec = tmp_path / "s.mcap"
+    assert main(["session", "--fsr-calibration", str(cal_file), "--record", str(rec), "--seconds", "0.2",
+                 "--no-realtime", "--robot-inline"]) == 0
+    recorded = read_session(str(rec)).metadata["session"]["calibration"]["fsr"]
+    _, cal = calfile.load_calibration(cal_file)
+    np.testing.assert_allclose(np.ravel(recorded["loading"]), cal.loading)
+    fbg_file = calfile.write_calibration(tmp_path / "fbg.toml", "fbg", "x", {"S_pm_N": 34.12, "r": 2.28,
+                                         "kT1_pm_C": 11.23, "kT2_pm_C": 25.62, "noise_pm": 12.59}, {}, {})
+    capsys.readouterr()
+    assert main(["session", "--fsr-calibration", str(fbg_file), "--seconds", "0.2", "--no-realtime",
+                 "--robot-inline"]) == 2
+    assert 'kind = "fbg", expected "fsr"' in capsys.readouterr().err
