@@ -127,10 +127,10 @@ class DaskScheduler:
             except Exception as exc:  # noqa: BLE001 - no workers (memory, a broken install): say so in a line
                 raise InputError(f"--scheduler {self.name}: the Dask LocalCluster did not start "
                                  f"({type(exc).__name__}: {exc})") from None
-            self.client = Client(self.cluster)
+            self.client = Client(self.cluster, set_as_default=False)
         else:
             try:
-                self.client = Client(self.address, timeout="20s")
+                self.client = Client(self.address, timeout="20s", set_as_default=False)
             except (OSError, TimeoutError) as exc:
                 raise InputError(f"--scheduler {self.address}: no Dask scheduler answered ({exc})") from None
         return self
@@ -154,7 +154,7 @@ class DaskScheduler:
 
         items = iter(items)
         pending = {}
-        done = as_completed()
+        done = as_completed(loop=self.client.loop)  # this client's loop, not a process-wide default client
 
         def submit() -> bool:
             item = next(items, _END)
