@@ -96,3 +96,29 @@ def one_cable_cycles(mu: float = 0.08, theta: float = 2 * math.pi, seed: int = 0
              "t_s,motor_pos_mm,motor_force_N,tip_force_N"]
     lines += [",".join(f"{v:.9g}" for v in row) for row in cols]
     return "\n".join(lines) + "\n", {"Kp": math.exp(-mu * theta), "Kr": math.exp(mu * theta), "bp": 0.0, "br": 0.0}
+
+
+def write_examples(directory, seed: int = 0) -> list:
+    """Write fsr_steps.csv (truth: the built-in FSR calibration), fbg_steps.csv (truth: seed 001's constants,
+    h = 0.48 N) and one_cable.csv (truth: mu 0.08 over 2 pi) into `directory`; returns the paths."""
+    from pathlib import Path
+
+    from teleop.outputs import atomic_write
+    from teleop.sensors import default_fsr_calibration
+
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    texts = {"fsr_steps.csv": fsr_step_protocol(default_fsr_calibration(), seed=seed),
+             "fbg_steps.csv": fbg_load_steps(seed=seed),
+             "one_cable.csv": one_cable_cycles(seed=seed)[0]}
+    return [atomic_write(d / name, lambda tmp, text=text: tmp.write_text(text, encoding="utf-8"))
+            for name, text in texts.items()]
+
+
+if __name__ == "__main__":  # pragma: no cover - `python -m teleop.calibration.generate DIR [SEED]`
+    import sys
+
+    if len(sys.argv) not in (2, 3):
+        sys.exit("usage: python -m teleop.calibration.generate DIR [SEED]")
+    for path in write_examples(sys.argv[1], int(sys.argv[2]) if len(sys.argv) == 3 else 0):
+        print(path)
