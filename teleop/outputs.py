@@ -95,10 +95,11 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
     return path
 
 
-def dumps_json(obj: Any, sort_keys: bool = False) -> str:
+def dumps_json(obj: Any, sort_keys: bool = False, compact: bool = False) -> str:
     """Deterministic JSON text: insertion order (the documented order) unless `sort_keys`; floats as
-    Python's shortest round-trip repr."""
-    return json.dumps(obj, indent=2, default=_default, allow_nan=False, sort_keys=sort_keys) + "\n"
+    Python's shortest round-trip repr; indented, or on one line without spaces if `compact`."""
+    layout = {"separators": (",", ":")} if compact else {"indent": 2}
+    return json.dumps(obj, default=_default, allow_nan=False, sort_keys=sort_keys, **layout) + "\n"
 
 
 def write_json(path: str | Path, obj: Any, sort_keys: bool = False) -> Path:

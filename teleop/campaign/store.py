@@ -2,8 +2,8 @@
 
 Layout of DIR:
     tasks/<task id>.json    {"task", "kind", "label", "identity", "teleop_version", "result"}: a finished
-                            task (sorted keys, floats as shortest round-trip repr: the same result is
-                            the same bytes)
+                            task (one line, sorted keys, floats as shortest round-trip repr: the same
+                            result is the same bytes; 2.6x smaller than indented)
     failed/<task id>.json   {"task", "kind", "label", "identity", "error"}: the last failure of a task not
                             yet finished (removed when it finishes)
     runs.jsonl              one line per run: scheduler, counts, wall and task times (not results)
@@ -97,7 +97,7 @@ class ResultStore:
 
         doc = {"task": task.id, "kind": task.kind, "label": task.label, "identity": task.identity,
                "teleop_version": __version__, "result": result}
-        _write_synced(self._path(task), dumps_json(doc, sort_keys=True))
+        _write_synced(self._path(task), dumps_json(doc, sort_keys=True, compact=True))
         (self.failed_dir / f"{task.id}.json").unlink(missing_ok=True)
 
     def forget(self, task: Task) -> None:

@@ -20,7 +20,7 @@ def test_save_load_failure_and_stale_temp_files(tmp_path):
         assert store.done_ids() == {t.id}
         text = (tmp_path / "tasks" / f"{t.id}.json").read_text()
         assert text.index('"identity"') < text.index('"kind"') < text.index('"result"')  # sorted keys
-        assert '"teleop_version": "' in text
+        assert '"teleop_version":"' in text and text.count("\n") == 1  # one line
         other = Task("blind-jnd", {"seed": 2, "x": [0.1, 2]}, "x=0.1")
         (tmp_path / "tasks" / f"{other.id}.json").write_text(text)  # a file holding another identity
         assert store.load(other) is None
