@@ -169,14 +169,17 @@ def plot_fbg_fit(fit: FbgFit):
     ax.set_ylabel("FBG2 shift minus kT2 (T - Tm) [pm]")
     ax.legend(fontsize=7)
     ax.set_title("force calibration (seed 001 Fig 4a)", fontsize=9)
-    force_part = fit.dl2_fit - v["kT2_pm_C"] * (d.temperature - fit.Tm)
-    axT.plot(d.temperature, d.dl1, ".", ms=3, color="tab:green", label=f"FBG1, kT1 = {v['kT1_pm_C']:.2f} pm/degC")
-    axT.plot(d.temperature, d.dl2 - force_part + np.mean(force_part), ".", ms=3, color="tab:orange",
-             label=f"FBG2 minus force part, kT2 = {v['kT2_pm_C']:.2f} pm/degC")
+    # each shift minus its fitted non-temperature part (zero, force, hysteresis): k (T - Tm) + residual
+    rest1 = fit.dl1_fit - v["kT1_pm_C"] * (d.temperature - fit.Tm)
+    rest2 = fit.dl2_fit - v["kT2_pm_C"] * (d.temperature - fit.Tm)
+    axT.plot(d.temperature, d.dl1 - rest1, ".", ms=3, color="tab:green",
+             label=f"FBG1 minus its zero, kT1 = {v['kT1_pm_C']:.2f} pm/degC")
+    axT.plot(d.temperature, d.dl2 - rest2, ".", ms=3, color="tab:orange",
+             label=f"FBG2 minus zero, force and hysteresis, kT2 = {v['kT2_pm_C']:.2f} pm/degC")
     axT.set_xlabel("temperature [degC]")
-    axT.set_ylabel("Bragg shift [pm]")
+    axT.set_ylabel("Bragg shift about the mean temperature [pm]")
     axT.set_title(f"temperature: r = kT2/kT1 = {v['r']:.3f} +/- {fit.stderr['r']:.3f} (seed 001 Fig 4b)", fontsize=9)
-    axT.legend(fontsize=7)
+    axT.legend(fontsize=7, loc="lower right")
     axr.plot(d.force, d.dl2 - fit.dl2_fit, ".", ms=3, color="tab:blue", label="FBG2 residual")
     axr.plot(d.force, d.dl1 - fit.dl1_fit, ".", ms=3, color="tab:green", alpha=0.6, label="FBG1 residual")
     axr.axhline(0, color="k", lw=0.6)
