@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from teleop.calibration import calfile, generate
 from teleop.calibration.fbg import fit_fbg, read_fbg_steps
@@ -161,3 +162,26 @@ def test_session_loads_the_fsr_calibration_file(tmp_path, capsys):
     assert main(["session", "--fsr-calibration", str(fbg_file), "--seconds", "0.2", "--no-realtime",
                  "--robot-inline"]) == 2
     assert 'kind = "fbg", expected "fsr"' in capsys.readouterr().err
+
+
+@settings(derandomize=True, max_examples=8, deadline=None)
+@given(S=st.floats(10.0, 60.0), kT1=st.floats(5.0, 20.0), ratio=st.floats(1.2, 3.5), h=st.floats(0.2, 1.0),
+       seed=st.integers(0, 1000))
+def test_fbg_recovery_property(tmp_path_factory, S, kT1, ratio, h, seed):
+    p = FbgParams(S_pm_N=S, r=ratio, kT1_pm_C=kT1, kT2_pm_C=ratio * kT1, noise_pm=8.0)
+    path = tmp_path_factory.mktemp("fbg") / "f.csv"
+    path.write_text(generate.fbg_load_steps(p, hysteresis_N=h, temperatures_C=(25.0, 40.0, 60.0), seed=seed))
+    v = fit_fbg(read_fbg_steps(path)).values
+    assert v["S_pm_N"] == pytest.approx(S, rel=0.05) and v["r"] == pytest.approx(ratio, rel=0.05)
+    assert v["hysteresis_N"] == pytest.approx(2 * h, rel=0.05)
+
+
+@settings(derandomize=True, max_examples=8, deadline=None)
+@given(mu=st.floats(0.03, 0.15), theta=st.floats(1.0, 8.0), seed=st.integers(0, 1000))
+def test_one_sensor_recovery_property(tmp_path_factory, mu, theta, seed):
+    text, truth = generate.one_cable_cycles(mu=mu, theta=theta, seed=seed)
+    path = tmp_path_factory.mktemp("one") / "o.csv"
+    path.write_text(text)
+    fit = fit_one_sensor(*read_one_sensor(path))
+    assert fit.model.Kp == pytest.approx(truth["Kp"], rel=0.05)
+    assert fit.model.Kr == pytest.approx(truth["Kr"], rel=0.05)
