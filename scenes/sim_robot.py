@@ -218,7 +218,8 @@ class SimRobot(ContextDevice):
     """
 
     def __init__(self, pad: Pad | None = None, params: SimRobotParams = SimRobotParams(), seed: int = 0,
-                 calibration: FsrCalibration | None = None):
+                 calibration: FsrCalibration | None = None, model=None):
+        self.model = model   # an identified link model (teleop.diagnosis.model_io): its findings switched on
         self.pad = pad if pad is not None else z_test_pad()
         self.params = params
         self.seed = int(seed)
@@ -255,6 +256,7 @@ class SimRobot(ContextDevice):
         self._v, self._tip = np.asarray(self.geom.v, dtype=float), np.asarray(self.geom.tip, dtype=float)
         self._f = np.empty(6)
         self._lag = FsrBranchLag(self.cal)
+        self._added = _AddedEffects(self.model, n) if self.model is not None else None
         self.is_open = True
 
     def close(self) -> None:
@@ -322,6 +324,8 @@ class SimRobot(ContextDevice):
                 t_fsr[i] = capstan_play_step(float(F0), float(x[i] - x0), float(t_tip[i]),
                                              float(g.mu * self._theta[i]), float(p.capstan_k))
                 self._cap[:, i] = t_fsr[i], x[i]
+        if self._added is not None:
+            t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
         u = self._lag.step(t_fsr)
         noise = self.rng.normal(0.0, p.noise_counts, 6) if p.noise_counts > 0 else np.zeros(6)
         counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
@@ -384,11 +388,56 @@ class SimRobot(ContextDevice):
                         counts=counts, theta=theta)
 
 
+class _AddedEffects:
+    """The findings of an identified link model (teleop diagnose --save-model) switched on in every cable,
+    per sample (the physics Steps of teleop.physics, the same models the diagnosis fitted):
+
+    - force link and sensor effects: the tension at the FSR -> with the added friction or sensor effect,
+      along the motor position x = -length (hauling in is +).
+    Position-link effects are refused: per-cable play would give six lengths that no pose has.
+    Baseline effects of the model (the sheath's capstan friction) are not added: the robot has its own.
+    Gains and offsets of the model are those of the rig it was identified on and are not applied.
+    """
+
+    def __init__(self, model, n: int):
+        if "position" in model.links and model.links["position"].effects[model.links["position"].base:]:
+            raise InputError("sim://robot: position-link effects (play, stretch) cannot be switched on in the "
+                             "6-cable robot: its six lengths must stay those of one pose (rank-5 structure); "
+                             "switch them on in the single-cable bench (scenes.cable_rig)")
+
+        def steps(kind):
+            if kind not in model.links:
+                return [[] for _ in range(n)]
+            m = model.links[kind]
+            from teleop.physics import get_effect
+            return [[(get_effect(name), get_effect(name).make_step(p)) for name, p in m.effects[m.base:]]
+                    for _ in range(n)]
+        self.force = steps("force")
+        self.x_prev = None
+        self.t_prev = None
+
+    def forces(self, t_fsr: np.ndarray, x: np.ndarray, t: float) -> np.ndarray:
+        if not any(self.force):
+            return t_fsr
+        dt = (t - self.t_prev) if self.t_prev is not None else 0.0
+        v = (x - self.x_prev) / dt if self.x_prev is not None and dt > 0 else np.zeros_like(x)
+        self.x_prev, self.t_prev = x.copy(), t
+        out = t_fsr.copy()
+        for i, chain in enumerate(self.force):
+            F = float(t_fsr[i])
+            for eff, st in chain:
+                ch = {"x": float(x[i]), "v": float(v[i]), "load": F, "force": F, "t": t, "temperature": 25.0}
+                F = st.step(**{c: ch[c] for c in eff.inputs + eff.optional if c in ch})
+            out[i] = F
+        return out
+
+
 def from_url(parsed, options: dict) -> SimRobot:
-    """`sim://robot?pad=z60&seed=3&substeps=1`: build (not open) a SimRobot."""
+    """`sim://robot?pad=z60&seed=3&substeps=1&model=M.json`: build (not open) a SimRobot; `model`: an
+    identified link model (teleop diagnose --save-model) whose findings are switched on in every cable."""
     from scenes import pads as pads_mod
 
-    known = {"pad", "seed", "substeps", "letter"}
+    known = {"pad", "seed", "substeps", "letter", "model"}
     for k in options:
         if k not in known:
             raise InputError(f"sim://robot: unknown option '{k}' (expected one of: {', '.join(sorted(known))})")
@@ -403,4 +452,8 @@ def from_url(parsed, options: dict) -> SimRobot:
         substeps = int(options.get("substeps", 1))
     except ValueError:
         raise InputError("sim://robot: seed and substeps must be integers") from None
-    return SimRobot(makers[name](), SimRobotParams(substeps=substeps), seed=seed)
+    model = None
+    if "model" in options:
+        from teleop.diagnosis.model_io import load_model
+        model = load_model(str(options["model"]))
+    return SimRobot(makers[name](), SimRobotParams(substeps=substeps), seed=seed, model=model)

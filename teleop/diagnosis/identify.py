@@ -446,4 +446,6 @@ def _pair(d: LinkData, current: Fit, cands: list, fit_idx: slice, hold_idx: slic
     only_a = _evaluate(d, best.model.with_effects([e for e in best.model.effects if e[0] != b]), fit_idx, hold_idx, k_one)
     only_b = _evaluate(d, best.model.with_effects([e for e in best.model.effects if e[0] != a]), fit_idx, hold_idx, k_one)
     mid = only_a if only_a.rmse_hold <= only_b.rmse_hold else only_b
+    if mid.rmse_hold >= current.rmse_hold:   # each step must explain something on its own
+        return []
     return [(current, mid), (mid, best)]

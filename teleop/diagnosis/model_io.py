@@ -1,7 +1,9 @@
 """Save an identified model and load it back into the simulated robot and the estimator.
 
 File (JSON): {"format": "teleop-link-model/1", "source": recording, "links": [{"kind", "input", "output",
-"drive", "load", "gain", "offset", "direction", "load_sign", "effects": [{"effect", "params"}]}]}.
+"drive", "load", "gain", "offset", "direction", "load_sign", "baseline_effects", "effects": [{"effect",
+"params"}]}]}; the first `baseline_effects` effects are the baseline's (the simulation the recording was
+compared with), the rest the findings (`scenes.sim_robot` switches those on: `sim://robot?model=FILE`).
 Effect names and parameters are those of the physics registry, so `IdentifiedModel.effects(kind)` can be
 handed to any user of teleop.physics: `chain_effect(kind)` gives one physics Effect (namespaced params)
 and `steps(kind)` per-sample Step objects for a real-time estimator.
@@ -29,6 +31,7 @@ def model2dict(m: LinkModel) -> dict:
     L = m.link
     return {"kind": L.kind, "input": L.input, "output": L.output, "drive": L.drive, "load": L.load,
             "gain": m.gain, "offset": m.offset, "direction": m.direction, "load_sign": m.load_sign,
+            "baseline_effects": m.base,
             "effects": [{"effect": n, "params": dict(p)} for n, p in m.effects]}
 
 
@@ -39,8 +42,11 @@ def dict2model(doc: dict, where: str) -> LinkModel:
         for e in doc.get("effects", []):
             eff = get_effect(e["effect"])
             effects.append((eff.name, eff.check(e["params"])))
+        base = int(doc.get("baseline_effects", 0))
+        if not 0 <= base <= len(effects):
+            raise ValueError(f"baseline_effects {base} outside 0..{len(effects)}")
         return LinkModel(L, float(doc["gain"]), float(doc["offset"]), float(doc.get("direction", 1.0)),
-                         float(doc.get("load_sign", 1.0)), tuple(effects))
+                         float(doc.get("load_sign", 1.0)), tuple(effects), base)
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(f"{where}: malformed link model ({exc!r})") from None
 
