@@ -3,7 +3,7 @@
 Why by hand: numba's np.linalg (LAPACK) costs ~10 us per call at this size in allocation and dispatch,
 more than the arithmetic; the loop and the simulated robot call these every tick.
 
-- `solve_into(M, b, x)`: x = M^-1 b, partial pivoting (M, b left unchanged).
+- `solve_into(M, b, x)`: x = M^-1 b from the complete-pivoting factors (M, b left unchanged).
 - `lu_complete(A, LU, p, q)`: P A Q = L U with complete pivoting (rows p, columns q); its rank.
 - `lu_null_vector(LU, q, rank, out)`: the null vector of a matrix of rank n - 1 from its factors.
 - `lu_particular(LU, p, q, rank, b, out)`: a solution of A x = b with the free coordinates 0; returns the
@@ -16,34 +16,6 @@ from __future__ import annotations
 import numpy as np
 
 from teleop.kernels.jit import njit
-
-
-@njit
-def solve_into(M, b, x):
-    """x (n,) = M^-1 b for M (n, n) by elimination with partial pivoting; returns x."""
-    n = b.shape[0]
-    W = M.copy()
-    y = b.copy()
-    for k in range(n):
-        piv = k
-        for i in range(k + 1, n):
-            if abs(W[i, k]) > abs(W[piv, k]):
-                piv = i
-        if piv != k:
-            for j in range(n):
-                W[k, j], W[piv, j] = W[piv, j], W[k, j]
-            y[k], y[piv] = y[piv], y[k]
-        for i in range(k + 1, n):
-            m = W[i, k] / W[k, k]
-            for j in range(k, n):
-                W[i, j] -= m * W[k, j]
-            y[i] -= m * y[k]
-    for i in range(n - 1, -1, -1):
-        acc = y[i]
-        for j in range(i + 1, n):
-            acc -= W[i, j] * x[j]
-        x[i] = acc / W[i, i]
-    return x
 
 
 @njit
@@ -139,3 +111,14 @@ def horner(c, s):
     for m in range(c.shape[0] - 2, -1, -1):
         acc = c[m] + acc * s
     return acc
+
+
+@njit
+def solve_into(M, b, x):
+    """x (n,) = M^-1 b for a nonsingular M (n, n) (complete-pivoting factors; M, b left unchanged); returns x."""
+    n = b.shape[0]
+    LU = np.empty((n, n))
+    p = np.empty(n, dtype=np.int64)
+    q = np.empty(n, dtype=np.int64)
+    lu_particular(LU, p, q, lu_complete(M, LU, p, q, 0.0), b, x)
+    return x
