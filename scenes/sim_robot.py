@@ -107,6 +107,7 @@ class SimRobotParams:
 
 
 HOME_POSE = np.zeros(6)
+_STATUS = {s: robot_status(homed=True, stopped=s) for s in (False, True)}  # the status byte, by the STOP latch
 
 
 def home_pose() -> np.ndarray:
@@ -326,15 +327,13 @@ class SimRobot(ContextDevice):
                 self._cap[:, i] = t_fsr[i], x[i]
         if self._added is not None:
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
-        u = self._lag.step(t_fsr)
         noise = self.rng.normal(0.0, p.noise_counts, 6) if p.noise_counts > 0 else np.zeros(6)
-        counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
+        counts = self._lag.counts(t_fsr, noise)  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
         self.t += p.dt
         self.seq += 1
         steps = np.rint((self.L_home - self.L_cmd) * self.spec.steps_per_m).astype(np.int64)
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
-                            commanded_lengths=self.L_cmd.copy(), status=robot_status(homed=True,
-                                                                                     stopped=self.stopped),
+                            commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
                             boot_id=self.boot_id, wrench_truth=f,
                             extras={"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy()})
 

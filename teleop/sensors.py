@@ -19,6 +19,7 @@ import numpy as np
 from numpy.polynomial import Polynomial
 
 from teleop.errors import InputError
+from teleop.kernels.sensor import branch_lag_loop, fsr_counts
 
 G = 9.80665  # standard gravity [m/s^2], converts the seed's calibration weights to newtons
 LOADING, UNLOADING = 1, -1
@@ -202,9 +203,12 @@ class FsrCalibration:
         return c / ((self.adc_max - c) * self.r_divider)
 
     def conductance2counts(self, g) -> np.ndarray:
-        """ADC counts (float, unrounded) for conductance g [S]: adc_max G R / (1 + G R)."""
-        gr = np.maximum(np.asarray(g, dtype=float), 0.0) * self.r_divider
-        return self.adc_max * gr / (1.0 + gr)
+        """ADC counts (float, unrounded) for conductance g [S]: adc_max G R / (1 + G R) (kernel
+        sensor.conductance2counts, array-broadcast)."""
+        from teleop.kernels.jit import broadcast_call
+        from teleop.kernels.sensor import conductance2counts_loop
+
+        return broadcast_call(conductance2counts_loop, g, self.r_divider, self.adc_max)
 
 
 class FsrBranchLag:
@@ -245,27 +249,29 @@ class FsrBranchLag:
 
     def step(self, t) -> np.ndarray:
         """(n,) equivalent tensions u [N] after tensions t (n,) [N]."""
-        t = np.asarray(t, dtype=float)
-        u = t.copy() if self.u is None else np.clip(self.u, t, t + self.gap(t))
-        self.u = u
-        return u.copy()
+        return self.run(np.reshape(t, (1, -1)))[0]
 
     def run(self, T) -> np.ndarray:
         """(m, n) equivalent tensions for (m, n) tensions, continuing from the state (same numbers as `step`
-        row by row)."""
-        T = np.asarray(T, dtype=float)
-        hi = T + self.gap(T)
-        U = np.empty_like(T)
-        u0 = T[0] if self.u is None else self.u
-        for i in range(T.shape[1]):
-            lo_i, hi_i, u = T[:, i].tolist(), hi[:, i].tolist(), float(u0[i])
-            out = []
-            for a, b in zip(lo_i, hi_i):
-                u = a if u < a else (b if u > b else u)
-                out.append(u)
-            U[:, i] = out
-        self.u = U[-1].copy()
+        row by row; kernel sensor.branch_lag)."""
+        T = np.ascontiguousarray(T, dtype=float)
+        u = T[0].copy() if self.u is None else self.u.copy()
+        U = branch_lag_loop(u, T, self._t, self._gap, np.empty_like(T))
+        self.u = u
         return U
+
+    def counts(self, t, noise) -> np.ndarray:
+        """(n,) int64 ADC counts after tensions t (n,) [N] with noise (n,) [counts] added before rounding:
+        `step`, the loading branch's conductance, the divider and the ADC (one kernel call, sensor.fsr_counts;
+        the numbers of conductance2counts(conductance(step(t))) + noise, rounded and clipped)."""
+        t = np.ascontiguousarray(t, dtype=float)
+        first = self.u is None
+        if first:
+            self.u = np.empty(t.shape[0])
+            self._c = np.asarray(self.cal.loading, dtype=float)
+        return fsr_counts(t, self.u, first, self._t, self._gap, self._c, float(self.cal.r_divider),
+                          float(self.cal.adc_max), np.ascontiguousarray(noise, dtype=float),
+                          np.empty(t.shape[0], dtype=np.int64))
 
     def conductance(self, u) -> np.ndarray:
         """Conductance [S] the FSR reads at equivalent tension u [N]: the loading branch."""

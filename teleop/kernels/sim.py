@@ -15,7 +15,7 @@ from teleop.kernels.friction import capstan_play_step
 from teleop.kernels.geometry import cable, forward_kinematics, platform_offsets, rotation_zyx, structure_column, \
     wrap_angle
 from teleop.kernels.jit import njit
-from teleop.kernels.linalg import horner
+from teleop.kernels.sensor import loading_conductance
 from teleop.kernels.tension import OK, null1_terms, null1_tensions
 
 
@@ -95,5 +95,5 @@ def conductance_loop(u, c, out):
     """out (m,): max(sum_j c_j u^j, 0) for equivalent tensions u (m,) [N]: an FSR's loading-branch
     conductance [S] from the calibration's power-series coefficients c."""
     for k in range(u.shape[0]):
-        out[k] = max(horner(c, u[k]), 0.0)
+        out[k] = loading_conductance(c, u[k])
     return out

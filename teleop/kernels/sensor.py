@@ -1,0 +1,78 @@
+"""Kernels of the FSR's reading chain (teleop.sensors; the simulated robot's per-reading sensor side):
+
+    branch_lag        the FSR hysteresis as play between its branches: u = clip(u_prev, t, t + G(t))
+                      (teleop.sensors.FsrBranchLag; G tabulated on a grid, linear interpolation as np.interp)
+    loading_conductance   the loading branch's conductance [S]: max(sum_j c_j u^j, 0)
+    conductance2counts    the divider and ADC: adc_max G R / (1 + G R) [counts, unrounded]
+    adc_round         rounded, clipped counts: clip(rint(c), 0, adc_max)
+    fsr_counts        one reading of n FSRs: tensions at the FSRs -> lag -> conductance -> counts + noise
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from teleop.kernels.friction import clamp
+from teleop.kernels.jit import njit
+from teleop.kernels.linalg import horner
+
+
+@njit
+def branch_lag(u, t, grid, gap):
+    """Equivalent tension [N] after tension t [N] from u [N]: clip(u, t, t + G(t)), G the branch gap
+    tabulated at `grid` [N] (gap (k,) [N], >= 0, linear interpolation, constant beyond the ends)."""
+    return clamp(u, t, t + np.interp(t, grid, gap))
+
+
+@njit
+def loading_conductance(c, u):
+    """An FSR's loading-branch conductance [S] at equivalent tension u [N]: max(sum_j c_j u^j, 0), c the
+    calibration's power-series coefficients (lowest first)."""
+    return max(horner(c, u), 0.0)
+
+
+@njit
+def conductance2counts(g, r_divider, adc_max):
+    """ADC counts (float, unrounded) for conductance g [S] through the divider r_divider [ohm]:
+    adc_max G R / (1 + G R), G clipped at 0."""
+    gr = max(g, 0.0) * r_divider
+    return adc_max * gr / (1.0 + gr)
+
+
+@njit
+def adc_round(c, adc_max):
+    """Counts c rounded half to even and clipped to [0, adc_max] (the ADC's integer reading, as a float)."""
+    return min(max(np.rint(c), 0.0), adc_max)
+
+
+@njit
+def conductance2counts_loop(g, r_divider, adc_max, out):
+    """conductance2counts element-wise (1-D arrays of one length, jit.broadcast_call)."""
+    for k in range(g.shape[0]):
+        out[k] = conductance2counts(g[k], r_divider[k], adc_max[k])
+    return out
+
+
+@njit
+def branch_lag_loop(u, T, grid, gap, out):
+    """branch_lag along the rows of T (m, n) from u (n,) (updated in place to the last row): out (m, n)."""
+    for i in range(T.shape[1]):
+        ui = u[i]
+        for k in range(T.shape[0]):
+            ui = branch_lag(ui, T[k, i], grid, gap)
+            out[k, i] = ui
+        u[i] = ui
+    return out
+
+
+@njit
+def fsr_counts(t_fsr, u, first, grid, gap, c, r_divider, adc_max, noise, counts):
+    """One reading of n FSRs: equivalent tensions u (n,) [N] after the tensions t_fsr (n,) [N] at the FSRs
+    (u = t_fsr when `first`: the loading branch), then counts (n,) int64 = adc_round(conductance2counts(
+    loading_conductance(u)) + noise) with noise (n,) [counts]."""
+    for i in range(t_fsr.shape[0]):
+        ui = t_fsr[i] if first else branch_lag(u[i], t_fsr[i], grid, gap)
+        u[i] = ui
+        k = conductance2counts(loading_conductance(c, ui), r_divider, adc_max) + noise[i]
+        counts[i] = int(adc_round(k, adc_max))
+    return counts
