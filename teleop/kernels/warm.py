@@ -18,10 +18,11 @@ _done = []  # [True] once warmed (the argument types do not depend on the geomet
 
 def kernels() -> list:
     """Every compiled kernel (numba dispatcher) of teleop.kernels."""
-    from teleop.kernels import estimate, friction, geometry, kalman, mapping, render, sim, tension, ufuncs
+    from teleop.kernels import estimate, friction, geometry, kalman, mapping, render, safety, sensor, sim, tension, \
+        ufuncs
 
     out = []
-    for mod in (estimate, friction, geometry, kalman, mapping, render, sim, tension, ufuncs):
+    for mod in (estimate, friction, geometry, kalman, mapping, render, safety, sensor, sim, tension, ufuncs):
         out += [v for v in vars(mod).values() if hasattr(v, "py_func") and getattr(v, "__module__", "") == mod.__name__]
     return out
 
@@ -79,6 +80,20 @@ def warm_up(geom=None) -> float:
                         np.empty(n), np.empty(n))
     KS.contact_moment(tip, np.zeros(3), np.empty(6))
     KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
+    from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample
+    from teleop.sensors import FsrBranchLag
+
+    lag = FsrBranchLag(default_fsr_calibration(), n)
+    for _ in range(2):  # the first reading, then the lag
+        lag.counts(np.full(n, 2.85), np.zeros(n))
+    # the loop's safety monitors and finiteness checks (float and int arrays)
+    TensionRange(5.5, 0.2, 0.05, n).update(0.0, np.full(n, 2.85))
+    StuckCable(0.05, 0.3, 1e-7, n).update(0.0, np.full(n, 2.85), np.zeros(n))
+    check = type("R", (), {"fsr_counts": np.zeros(n, dtype=np.int64), "position_steps": np.zeros(n, dtype=np.int64),
+                           "commanded_lengths": L, "t": 0.0, "measured_cp": np.zeros(3), "measured_cv": np.zeros(3),
+                           "orientation": np.eye(3)})()
+    is_finite_reading(check)
+    is_finite_sample(check)
     check_lengths(L, geom)
     TensionSolver(A, geom.t_min, geom.t_max, 2.85).solve(f)
     # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's

@@ -30,6 +30,7 @@ from teleop.robot_status import RobotStatus, stop_reason
 
 STAGES = ("read", "map", "robot", "estimate", "render", "write", "record")
 HOMED, WATCHDOG_STOP, STOPPED = RobotStatus.HOMED, RobotStatus.WATCHDOG_STOP, RobotStatus.STOPPED
+_STOP_BITS = int(WATCHDOG_STOP | STOPPED)  # a plain int: IntFlag arithmetic costs microseconds per tick
 
 
 @dataclass
@@ -297,7 +298,7 @@ class Teleop:
                 elif r.boot_id != self.boot_id and self.state != State.FAULT:
                     self.robot_status &= ~HOMED
                     self.fault(f"firmware reset: boot id {self.boot_id} -> {r.boot_id}; re-home before motion")
-                if r.status & (WATCHDOG_STOP | STOPPED) and self.state != State.FAULT:
+                if self.robot_status & _STOP_BITS and self.state != State.FAULT:
                     self.fault(f"robot status 0x{int(r.status):02x}: {stop_reason(r.status)}")
                 self.robot_fresh.update(now, r.seq)
                 if r.seq != self._est_seq:  # a new frame: estimate (a repeated frame changes nothing)

@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 
+from teleop.kernels import safety as KS
+
 
 class Freshness:
     """Telemetry watchdog: a source is stale when its sequence number (or timestamp) has not advanced for
@@ -53,30 +55,24 @@ class Freshness:
 class TensionRange:
     """Over-range or slack tension on any cable persisting longer than `window` [s] -> fault.
 
-    Six cables per tick: plain floats (numpy's per-call cost would dominate)."""
+    The rule is the kernel safety.tension_range (one compiled call per update)."""
 
     def __init__(self, t_max: float, t_slack: float, window: float, n: int = 6):
         self.t_max, self.t_slack, self.window, self.n = t_max, t_slack, window, n
         self.reset()
 
     def reset(self) -> None:
-        self.since_over = [None] * self.n  # host time the condition started [s], None while it does not hold
-        self.since_slack = [None] * self.n
+        # host time each condition started [s] (row 0 over-range, row 1 slack), NaN while it does not hold
+        self.since = np.full((2, self.n), np.nan)
 
     def update(self, now: float, t) -> str | None:
-        t = [float(v) for v in t]
-        t_max, t_slack, window = self.t_max, self.t_slack, self.window
-        for since, what, over in ((self.since_over, "over-range", True), (self.since_slack, "slack", False)):
-            for i, ti in enumerate(t):
-                if (ti > t_max) if over else (ti < t_slack):
-                    if since[i] is None:
-                        since[i] = now
-                    elif now - since[i] > window:
-                        return (f"cable {i + 1} tension {what} for {1e3 * (now - since[i]):.1f} ms "
-                                f"({ti:.3f} N; limits {t_slack:g}..{t_max:g} N)")
-                else:
-                    since[i] = None
-        return None
+        t = np.ascontiguousarray(t, dtype=float)
+        k = KS.tension_range(float(now), t, float(self.t_max), float(self.t_slack), float(self.window), self.since)
+        if k < 0:
+            return None
+        row, i = divmod(k, self.n)
+        return (f"cable {i + 1} tension {'slack' if row else 'over-range'} for "
+                f"{1e3 * (now - self.since[row, i]):.1f} ms ({t[i]:.3f} N; limits {self.t_slack:g}..{self.t_max:g} N)")
 
 
 class StuckCable:
@@ -86,53 +82,35 @@ class StuckCable:
     lasted `window` [s], a tension more than `rise` [N] above the lowest tension of the streak, seen on
     `confirm` consecutive updates, reports the cable stuck. A pause or reversal of the command ends the streak.
     Tensions are low-pass filtered first (time constant `tau` [s]) so sensor noise and FSR branch flips
-    do not count as a rise. Plain floats, like TensionRange.
+    do not count as a rise. The rule is the kernel safety.stuck_cable (one compiled call per update).
     """
 
     def __init__(self, window: float, rise: float, payout_eps: float, n: int = 6, confirm: int = 3,
                  tau: float = 0.02):
         self.window, self.rise, self.eps, self.confirm, self.tau, self.n = window, rise, payout_eps, confirm, tau, n
-        self.Tmin = [0.0] * n
-        self.t_prev = None
+        self.st = np.zeros((4, n))  # filtered tension, streak start (NaN: none), streak minimum, rises
+        self.sc = np.array([np.nan, 0.0])  # previous update time [s], filtered tension valid
         self.reset()
 
     def reset(self) -> None:
-        self.t0 = [None] * self.n  # start of each cable's pay-out streak [s], None outside one
-        self.count = [0] * self.n
-        self.tf = None
+        self.st[KS.T0] = np.nan
+        self.st[KS.COUNT] = 0.0
+        self.sc[KS.HAS_TF] = 0.0
 
     def update(self, now: float, t, dL) -> str | None:
-        t = [float(v) for v in t]
-        if self.tf is None:
-            self.tf = t
-        else:  # tf += a (t - tf), a = 1 - exp(-dt / tau)
-            a = 1.0 - math.exp(-max(now - self.t_prev, 0.0) / self.tau)
-            self.tf = [f + a * (ti - f) for f, ti in zip(self.tf, t)]
-        self.t_prev = now
-        tf, t0, Tmin, count = self.tf, self.t0, self.Tmin, self.count
-        bad = None
-        for i, (ti, dl) in enumerate(zip(tf, dL)):
-            if not float(dl) > self.eps:  # not paying out: the streak ends
-                t0[i] = None
-                count[i] = 0
-                continue
-            if t0[i] is None:
-                t0[i], Tmin[i] = now, ti
-            elif ti < Tmin[i]:
-                Tmin[i] = ti
-            if now - t0[i] >= self.window and ti - Tmin[i] > self.rise:
-                count[i] += 1
-                if count[i] >= self.confirm and bad is None:
-                    bad = i
-            else:
-                count[i] = 0
-        if bad is not None:
-            return (f"cable {bad + 1} stuck: tension rose {tf[bad] - Tmin[bad]:.2f} N over "
-                    f"{1e3 * (now - t0[bad]):.0f} ms while paying out")
-        return None
+        bad = KS.stuck_cable(float(now), np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(dL, dtype=float),
+                             self.st, self.sc, float(self.tau), float(self.eps), float(self.window),
+                             float(self.rise), float(self.confirm))
+        if bad < 0:
+            return None
+        st = self.st
+        return (f"cable {bad + 1} stuck: tension rose {st[KS.TF, bad] - st[KS.TMIN, bad]:.2f} N over "
+                f"{1e3 * (now - st[KS.T0, bad]):.0f} ms while paying out")
 
 
 def _all_finite(values) -> bool:
+    if type(values) is np.ndarray and values.dtype.kind in "fiu":  # a compiled loop (the devices' arrays)
+        return KS.all_finite(values)
     return all(math.isfinite(v) for v in (values.tolist() if hasattr(values, "tolist") else values))
 
 
