@@ -27,6 +27,8 @@ import numpy as np
 from devices.base import OMEGA_SPEC, TOUCH_SPEC, ContextDevice, DeviceError, DeviceSpec, HapticSample
 from devices.guard import guarded_force
 from teleop.errors import InputError
+from teleop.kernels import operator as KO
+from teleop.kernels.operator import operator_steps, script_offset
 from teleop.kinematics import rotation_zyx
 
 SCRIPTS = ("hold", "sine", "pokes", "recorded")
@@ -98,33 +100,19 @@ class Script:
 
     def target(self, t: float) -> np.ndarray:
         """(3,) hand target at time t [s]."""
-        c, a = np.asarray(self.center, dtype=float), np.asarray(self.axis, dtype=float)
-        if self.kind == "hold":
-            return c
-        if self.kind == "sine":
-            return c + a * (self.amplitude * math.sin(2 * math.pi * t / self.period))
-        if self.kind == "pokes":
-            phase = (t / self.period) % 1.0
-            # smooth press (raised cosine) during the duty part of the period
-            s = 0.5 - 0.5 * math.cos(2 * math.pi * phase / self.duty) if phase < self.duty else 0.0
-            return c + a * (self.amplitude * s)
-        pts = np.asarray(self.points, dtype=float)
-        return np.array([np.interp(t, pts[:, 0], pts[:, j]) for j in (1, 2, 3)])
+        if self.kind == "recorded":
+            pts = np.asarray(self.points, dtype=float)
+            return np.array([np.interp(t, pts[:, 0], pts[:, j]) for j in (1, 2, 3)])
+        return np.array(self.target_xyz(t))
 
     def target_xyz(self, t: float) -> tuple:
-        """target(t) as three floats (the integrator's hot path)."""
+        """target(t) as three floats: centre + axis s(t) (kernel operator.script_offset)."""
         if self.kind == "recorded":
             return tuple(self.target(t).tolist())
-        cx, cy, cz = self.center
-        if self.kind == "hold":
-            return float(cx), float(cy), float(cz)
-        if self.kind == "sine":
-            s = self.amplitude * math.sin(2 * math.pi * t / self.period)
-        else:
-            phase = (t / self.period) % 1.0
-            s = self.amplitude * (0.5 - 0.5 * math.cos(2 * math.pi * phase / self.duty)) if phase < self.duty else 0.0
-        ax, ay, az = self.axis
-        return cx + ax * s, cy + ay * s, cz + az * s
+        s = script_offset(SCRIPTS.index(self.kind), float(t), float(self.amplitude), float(self.period),
+                          float(self.duty))
+        (cx, cy, cz), (ax, ay, az) = self.center, self.axis
+        return float(cx + ax * s), float(cy + ay * s), float(cz + az * s)
 
     def buttons(self, t: float) -> tuple[int, bool]:
         """(button mask, operator present) at time t."""
@@ -150,7 +138,7 @@ class SimulatedStylus(ContextDevice):
 
     def open(self) -> None:
         self.rng = np.random.default_rng(self.seed)
-        self._nbuf, self._nbuf_i = [], 0
+        self._nbuf, self._nbuf_i = np.empty((0, 3)), 0
         self.clock = self._clock if self._clock is not None else time.perf_counter
         self.t0 = None if self.start_on_read else float(self.clock())
         self.t = 0.0
@@ -161,6 +149,19 @@ class SimulatedStylus(ContextDevice):
         self.F_tremor = np.zeros(3)
         self.R = rotation_zyx(0.0, 0.0, self.script.tilt)
         self._lo, self._hi = np.asarray(self.spec.workspace_min), np.asarray(self.spec.workspace_max)
+        op, sc = self.operator, self.script
+        a_ou = math.exp(-op.h / 0.05)
+        c = np.zeros(KO.N_CONST)
+        c[[KO.H, KO.M, KO.K, KO.B, KO.A_OU, KO.S_OU, KO.KIND, KO.AMP, KO.PERIOD, KO.DUTY]] = (
+            op.h, op.m, op.k, op.b, a_ou, op.tremor * math.sqrt(1.0 - a_ou * a_ou), SCRIPTS.index(sc.kind),
+            sc.amplitude, sc.period, sc.duty)
+        c[KO.CENTER:KO.CENTER + 3], c[KO.AXIS:KO.AXIS + 3] = sc.center, sc.axis
+        c[KO.LO:KO.LO + 3], c[KO.HI:KO.HI + 3] = self._lo, self._hi
+        self._c = c
+        self._absent = np.array(sc.absent, dtype=float).reshape(-1, 2)
+        self._x = np.empty(9)
+        self._F = np.zeros(3)
+        self._no_targets = np.zeros((0, 3))
         self.is_open = True
 
     def close(self) -> None:
@@ -168,8 +169,9 @@ class SimulatedStylus(ContextDevice):
         self.is_open = False
 
     def _advance(self, t_now: float) -> None:
+        """Integrate up to t_now [s] (kernel operator.operator_steps)."""
         op = self.operator
-        h, m, k, b = op.h, op.m, op.k, op.b
+        h = op.h
         target_steps = int(math.floor(t_now / h + 1e-6))  # integer step count: no drift from summing h
         n = target_steps - self.steps
         if n <= 0:
@@ -177,47 +179,34 @@ class SimulatedStylus(ContextDevice):
         if n > int(1.0 / h):  # a long pause: integrate at most the last 1 s (the hand has settled anyway)
             self.steps = target_steps - int(1.0 / h)
             n = int(1.0 / h)
-        a_ou = math.exp(-h / 0.05)
-        s_ou = op.tremor * math.sqrt(1.0 - a_ou * a_ou)
-        noise = self._noise(n, s_ou) if op.tremor > 0 else None
-        # plain floats: a 3-vector in numpy costs more in call overhead than the arithmetic
-        px, py, pz = self.p.tolist()
-        vx, vy, vz = self.v.tolist()
-        rx, ry, rz = self.F_tremor.tolist()
-        fx, fy, fz = self.F_cmd
-        absent, target = self.script.absent, self.script.target_xyz
-        for i in range(n):
-            t = (self.steps + i + 1) * h
-            if noise is not None:
-                e = noise[i]
-                rx, ry, rz = a_ou * rx + e[0], a_ou * ry + e[1], a_ou * rz + e[2]
-            if not any(t0 <= t < t1 for t0, t1 in absent):
-                tx, ty, tz = target(t)
-                ax = (k * (tx - px) - b * vx + fx + rx) / m
-                ay = (k * (ty - py) - b * vy + fy + ry) / m
-                az = (k * (tz - pz) - b * vz + fz + rz) / m
-            else:  # hand off: the stylus alone (light, heavily damped by the device's friction)
-                ax, ay, az = (fx - 20.0 * vx) / 0.05, (fy - 20.0 * vy) / 0.05, (fz - 20.0 * vz) / 0.05
-            vx, vy, vz = vx + h * ax, vy + h * ay, vz + h * az
-            px, py, pz = px + h * vx, py + h * vy, pz + h * vz
-        p, v = np.array([px, py, pz]), np.array([vx, vy, vz])
-        lo, hi = self._lo, self._hi
-        clipped = np.minimum(np.maximum(p, lo), hi)
-        if (clipped != p).any():
-            v = np.where(clipped != p, 0.0, v)
+        tremor = op.tremor > 0
+        noise, i0 = self._noise(n) if tremor else (self._nbuf, 0)
+        targets = self._no_targets
+        if self.script.kind == "recorded":
+            targets = np.array([self.script.target_xyz((self.steps + i + 1) * h) for i in range(n)])
+        x = self._x
+        x[0:3], x[3:6], x[6:9] = self.p, self.v, self.F_tremor
+        self._F[:] = self.F_cmd
+        operator_steps(x, self._F, self.steps, n, self._c, noise, i0, tremor, targets, self._absent)
         self.steps += n
-        self.p, self.v, self.F_tremor, self.t = clipped, v, np.array([rx, ry, rz]), self.steps * h
+        self.p, self.v, self.F_tremor, self.t = x[0:3].copy(), x[3:6].copy(), x[6:9].copy(), self.steps * h
 
-    def _noise(self, n: int, scale: float) -> list:
-        """n rows of 3 N(0, scale^2) draws, taken from blocks drawn 1024 rows at a time (same stream)."""
-        out = []
-        while len(out) < n:
-            if self._nbuf_i >= len(self._nbuf):
-                self._nbuf, self._nbuf_i = self.rng.standard_normal((1024, 3)).tolist(), 0
-            take = min(n - len(out), len(self._nbuf) - self._nbuf_i)
-            out.extend(self._nbuf[self._nbuf_i:self._nbuf_i + take])
-            self._nbuf_i += take
-        return [[scale * a, scale * b, scale * c] for a, b, c in out]
+    def _noise(self, n: int) -> tuple:
+        """(rows, i0): n rows of 3 standard normal draws at rows[i0:i0 + n], taken from blocks drawn 1024 rows
+        at a time (the same stream whatever the read timing)."""
+        if self._nbuf_i + n <= len(self._nbuf):
+            i0 = self._nbuf_i
+            self._nbuf_i += n
+            return self._nbuf, i0
+        out = [self._nbuf[self._nbuf_i:]]
+        got = len(out[0])
+        while got < n:
+            self._nbuf, self._nbuf_i = self.rng.standard_normal((1024, 3)), 0
+            take = min(n - got, 1024)
+            out.append(self._nbuf[:take])
+            self._nbuf_i = take
+            got += take
+        return np.concatenate(out), 0
 
     def read(self) -> HapticSample:
         if not self.is_open:

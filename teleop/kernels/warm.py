@@ -18,11 +18,11 @@ _done = []  # [True] once warmed (the argument types do not depend on the geomet
 
 def kernels() -> list:
     """Every compiled kernel (numba dispatcher) of teleop.kernels."""
-    from teleop.kernels import estimate, friction, geometry, kalman, mapping, render, safety, sensor, sim, tension, \
-        ufuncs
+    from teleop.kernels import estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, \
+        tension, ufuncs
 
     out = []
-    for mod in (estimate, friction, geometry, kalman, mapping, render, safety, sensor, sim, tension, ufuncs):
+    for mod in (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, tension, ufuncs):
         out += [v for v in vars(mod).values() if hasattr(v, "py_func") and getattr(v, "__module__", "") == mod.__name__]
     return out
 
@@ -94,6 +94,16 @@ def warm_up(geom=None) -> float:
                            "orientation": np.eye(3)})()
     is_finite_reading(check)
     is_finite_sample(check)
+    # the simulated operator (devices.simulated): one step with and without tremor
+    from teleop.kernels import operator as KO
+
+    c = np.zeros(KO.N_CONST)
+    c[[KO.H, KO.M, KO.K, KO.B, KO.PERIOD, KO.DUTY]] = 1e-3, 0.15, 150.0, 6.0, 2.0, 0.5
+    c[KO.HI:KO.HI + 3] = 1.0
+    for tremor in (True, False):
+        KO.operator_steps(np.zeros(9), np.zeros(3), 0, 1, c, np.zeros((1, 3)), 0, tremor, np.zeros((0, 3)),
+                          np.zeros((0, 2)))
+    KO.script_offset(KO.POKES, 0.1, 0.01, 2.0, 0.5)
     check_lengths(L, geom)
     TensionSolver(A, geom.t_min, geom.t_max, 2.85).solve(f)
     # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's
