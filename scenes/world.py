@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenes.pads import Pad
+from teleop.kernels.sim import series_spring_force
 
 
 _BANNER_SILENCED = []
@@ -179,15 +180,18 @@ class PadWorld:
         self._contacts = functools.partial(pb.getContactPoints, physicsClientId=cid)
         self._world_frame = pb.WORLD_FRAME
         if self.K is not None:
-            self._Kl, self._Cl = self.K.tolist(), self.C.tolist()
             self._implicit = implicit_spring(self.K, self.C, p.indenter_mass, p.dt)
+            self._D, self._Mi, self._dtm = self.C, np.eye(3), 0.0
             if self._implicit:
                 # f = -K (e + dt v') - C v', v' = v + dt/m (f + f_contact): solved for f with the contact force
                 # of the last step, so the static stiffness stays K and the step is stable for any K
                 D = (p.dt * self.K + self.C)
                 self._Mi = np.linalg.inv(np.eye(3) + D * (p.dt / p.indenter_mass))
                 self._D = D
-                self._Mil, self._Dl, self._dtm = self._Mi.tolist(), D.tolist(), p.dt / p.indenter_mass
+                self._dtm = p.dt / p.indenter_mass
+        self._r = self.proxy_radius
+        self._steps = 0  # stepSimulation calls so far; the contact force is cached per step
+        self._fc, self._fc_step = None, -1
         self.is_open = True
 
     def close(self) -> None:
@@ -244,6 +248,7 @@ class PadWorld:
         """Set the slab's contact stiffness to the material map under the tip at xy (the caller skips
         moves under 50 um)."""
         self._xy_cached = np.array(xy, dtype=float)
+        self._xc, self._yc = self._xy_cached.tolist()
         k = self.pad.stiffness_at(self._xy_cached - self.offset, self.params.tip_radius)
         if force or self._k_set is None or abs(k / self._k_set - 1.0) > 1e-3:
             self._set_contact(self.slab, k)
@@ -252,6 +257,7 @@ class PadWorld:
     def set_offset(self, xy) -> None:
         """Place the pad with its centre at xy (2,) [m] in {B} (a positioning stage under the robot)."""
         self.offset = np.array(xy, dtype=float).reshape(2)
+        self._fc_step = -1
         for b, (pos, orn) in self._home.items():
             self.client.resetBasePositionAndOrientation(b, [pos[0] + self.offset[0], pos[1] + self.offset[1], pos[2]], orn)
         if self.slab is not None:
@@ -271,7 +277,7 @@ class PadWorld:
     def tip(self) -> np.ndarray:
         """(3,) touching point (sphere centre + r z) [m]."""
         x, y, z = self._get_pos(self.body)[0]
-        return np.array([x, y, z + self.proxy_radius])
+        return np.array([x, y, z + self._r])
 
     def velocity(self) -> np.ndarray:
         return np.asarray(self.client.getBaseVelocity(self.body)[0])
@@ -282,37 +288,28 @@ class PadWorld:
 
     def step(self, target) -> None:
         """Advance one dt with the tip (touching point) commanded to `target` (3,) [m]."""
-        r = self.proxy_radius
-        tx, ty, tz = float(target[0]), float(target[1]), float(target[2]) - r  # sphere centre target
+        tgt = (float(target[0]), float(target[1]), float(target[2]) - self._r)  # sphere centre target
         pos = self._get_pos(self.body)[0]
-        if self.slab is not None and (abs(pos[0] - self._xy_cached[0]) > 5e-5 or abs(pos[1] - self._xy_cached[1]) > 5e-5):
+        if self.slab is not None and (abs(pos[0] - self._xc) > 5e-5 or abs(pos[1] - self._yc) > 5e-5):
             self._update_slab(np.array(pos[:2]))
         if self.K is None:
-            self._change_constraint(self._cid, [tx, ty, tz], maxForce=1e4)
-        else:
-            v = self._get_vel(self.body)[0]
-            e = (pos[0] - tx, pos[1] - ty, pos[2] - tz)
-            if self._implicit:  # in floats: numpy's per-call cost dominates on 3-vectors
-                fc, dtm = self._contact_force_list(), self._dtm
-                vp = [v[i] + dtm * fc[i] for i in range(3)]
-                K, D, Mi = self._Kl, self._Dl, self._Mil
-                g = [-(K[i][0] * e[0] + K[i][1] * e[1] + K[i][2] * e[2])
-                     - (D[i][0] * vp[0] + D[i][1] * vp[1] + D[i][2] * vp[2]) for i in range(3)]
-                f = [Mi[i][0] * g[0] + Mi[i][1] * g[1] + Mi[i][2] * g[2] for i in range(3)]
-                self._apply_force(self.body, -1, f, pos, self._world_frame)
-                self._step()
-                return
-            K, C = self._Kl, self._Cl
-            f = [-(K[i][0] * e[0] + K[i][1] * e[1] + K[i][2] * e[2])
-                 - (C[i][0] * v[0] + C[i][1] * v[1] + C[i][2] * v[2]) for i in range(3)]  # spring-damper
+            self._change_constraint(self._cid, list(tgt), maxForce=1e4)
+        else:  # the series spring-damper (kernel sim.series_spring_force)
+            fc = self._contact_force_tuple() if self._implicit else (0.0, 0.0, 0.0)
+            f = series_spring_force(pos, self._get_vel(self.body)[0], tgt, self.K, self._D, self._Mi, self._dtm, fc,
+                                    self._implicit)
             self._apply_force(self.body, -1, f, pos, self._world_frame)
         self._step()
+        self._steps += 1
 
     def contact_force(self) -> np.ndarray:
         """(3,) force of the pad on the tip [N]: normal plus friction forces of every contact point."""
-        return np.array(self._contact_force_list())
+        return np.array(self._contact_force_tuple())
 
-    def _contact_force_list(self) -> list:
+    def _contact_force_tuple(self) -> tuple:
+        """contact_force as a tuple, summed once per step (the contact points change only when stepping)."""
+        if self._fc_step == self._steps:
+            return self._fc
         F = [0.0, 0.0, 0.0]
         for cp in self._contacts(bodyA=self.body):
             # cp[7] normal on B pointing towards A, cp[9] its force; cp[10..13] friction magnitudes and
@@ -320,7 +317,8 @@ class PadWorld:
             n, d1, d2 = cp[7], cp[11], cp[13]
             for i in range(3):
                 F[i] += cp[9] * n[i] - cp[10] * d1[i] - cp[12] * d2[i]
-        return F
+        self._fc, self._fc_step = tuple(F), self._steps
+        return self._fc
 
     def n_contacts(self) -> int:
         """Number of contact points between the tip and the pad (1 while touching, by construction)."""

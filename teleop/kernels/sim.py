@@ -97,3 +97,23 @@ def conductance_loop(u, c, out):
     for k in range(u.shape[0]):
         out[k] = loading_conductance(c, u[k])
     return out
+
+
+@njit
+def series_spring_force(pos, v, tgt, K, D, Mi, dtm, fc, implicit):
+    """(3,) force [N] of the series spring-damper pulling the contact tip (centre pos (3,) [m], velocity v
+    (3,) [m/s]) towards tgt (3,) [m]: explicit f = -K e - D v (D the damping C), e = pos - tgt; implicit
+    (stiff springs, scenes.world.implicit_spring) f = Mi (-K e - D v'), v' = v + dtm fc, with the contact
+    force fc (3,) [N] of the last step, D = dt K + C, Mi = (I + D dt/m)^-1 and dtm = dt/m [s/kg]."""
+    e0, e1, e2 = pos[0] - tgt[0], pos[1] - tgt[1], pos[2] - tgt[2]
+    if implicit:
+        w0, w1, w2 = v[0] + dtm * fc[0], v[1] + dtm * fc[1], v[2] + dtm * fc[2]
+    else:
+        w0, w1, w2 = v[0], v[1], v[2]
+    g0 = -(K[0, 0] * e0 + K[0, 1] * e1 + K[0, 2] * e2) - (D[0, 0] * w0 + D[0, 1] * w1 + D[0, 2] * w2)
+    g1 = -(K[1, 0] * e0 + K[1, 1] * e1 + K[1, 2] * e2) - (D[1, 0] * w0 + D[1, 1] * w1 + D[1, 2] * w2)
+    g2 = -(K[2, 0] * e0 + K[2, 1] * e1 + K[2, 2] * e2) - (D[2, 0] * w0 + D[2, 1] * w1 + D[2, 2] * w2)
+    if not implicit:
+        return g0, g1, g2
+    return (Mi[0, 0] * g0 + Mi[0, 1] * g1 + Mi[0, 2] * g2, Mi[1, 0] * g0 + Mi[1, 1] * g1 + Mi[1, 2] * g2,
+            Mi[2, 0] * g0 + Mi[2, 1] * g1 + Mi[2, 2] * g2)

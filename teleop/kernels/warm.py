@@ -79,6 +79,9 @@ def warm_up(geom=None) -> float:
         KS.cable_sensor(f, A, float(geom.mu), theta, -L, float(geom.t_min), float(geom.t_max), 2.85, 5e3, cap,
                         np.empty(n), np.empty(n))
     KS.contact_moment(tip, np.zeros(3), np.empty(6))
+    for implicit in (True, False):  # scenes.world.PadWorld.step: pybullet's tuples in, a tuple out
+        KS.series_spring_force((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), np.eye(3), np.eye(3), np.eye(3),
+                               0.1, (0.0, 0.0, 0.0), implicit)
     KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
     from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample
     from teleop.sensors import FsrBranchLag
