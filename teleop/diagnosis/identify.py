@@ -37,10 +37,12 @@ EXCLUDED = ("linear_contact", "thermal_drift_time")
 
 def fixed_params(d: LinkData, name: str) -> dict:
     """Parameters held fixed when fitting `name` on link data d: those identifiable only as a product or
-    sum with another (capstan theta with mu, unless a bend-angle channel is recorded; the thermal T0 with
-    the baseline offset)."""
+    sum with another (capstan theta with mu, unless a bend-angle channel is recorded; a pulley chain's
+    wrap with its mu; the thermal T0 with the baseline offset)."""
     if name == "capstan_friction":
         return {"theta": get_effect(name).spec("theta").default}
+    if name in ("pulley_friction", "pulley_elongation"):   # mu and the wrap: only their product shows
+        return {"wrap": get_effect(name).spec("wrap").default}
     if name == "thermal_drift" and d.temperature is not None:
         return {"T0": float(np.mean(d.temperature))}
     return {}
