@@ -159,7 +159,8 @@ class SimulatedStylus(ContextDevice):
         c[KO.LO:KO.LO + 3], c[KO.HI:KO.HI + 3] = self._lo, self._hi
         self._c = c
         self._absent = np.array(sc.absent, dtype=float).reshape(-1, 2)
-        self._x = np.empty(9)
+        self._x = np.zeros(9)  # the integrator's state: p, v, F_tremor (p, v, F_tremor are copies of it)
+        self._x[0:3] = self.p
         self._F = np.zeros(3)
         self._no_targets = np.zeros((0, 3))
         self.is_open = True
@@ -185,7 +186,6 @@ class SimulatedStylus(ContextDevice):
         if self.script.kind == "recorded":
             targets = np.array([self.script.target_xyz((self.steps + i + 1) * h) for i in range(n)])
         x = self._x
-        x[0:3], x[3:6], x[6:9] = self.p, self.v, self.F_tremor
         self._F[:] = self.F_cmd
         operator_steps(x, self._F, self.steps, n, self._c, noise, i0, tremor, targets, self._absent)
         self.steps += n
@@ -214,7 +214,8 @@ class SimulatedStylus(ContextDevice):
         if self.t0 is None:
             self.t0 = float(self.clock())
         self._advance(float(self.clock()) - self.t0)
-        buttons, present = self.script.buttons(self.t)
+        sc = self.script
+        buttons, present = sc.buttons(self.t) if sc.absent or sc.clutch else (1, True)
         return HapticSample(t=self.t, measured_cp=self.p.copy(), orientation=self.R, measured_cv=self.v.copy(),
                             buttons=buttons, operator_present=present)
 

@@ -276,7 +276,7 @@ class SimRobot(ContextDevice):
         L = check_lengths(lengths, self.geom)
         if not self.stopped:
             pose = self._fk.solve_into(np.ascontiguousarray(L))
-            if not np.array_equal(pose, self.pose):
+            if pose.tolist() != self.pose.tolist():  # np.array_equal, for six floats
                 self.pose, self._terms = pose.copy(), None
             self.L_cmd = L.copy()
 
