@@ -25,7 +25,12 @@ def figure(diag, findings: list | None = None):
         d = res.data
         yb, yf = predict(d, res.baseline.model), predict(d, res.final.model)
         t = d.t[hold]
-        names = "+".join(res.final.names) or "none"
+        m = res.final.model
+        names = "+".join(n for n, _ in m.effects[m.base:]) or "no finding"
+        base_names = "+".join(res.baseline.model.baseline_names)
+        base_label = f"baseline{' (' + base_names + ')' if base_names else ''}"
+        u_out, u_in = diag.rec.units.get(d.link.output, ""), diag.rec.units.get(d.link.input, "")
+        y_label = f"{d.link.output} [{u_out}]"
         wins = [w for f in findings if f["channel"] == d.link.output for w in f["where"]["windows"]]
         # the held-out part (its first 10 s when longer)
         t0 = t[0]
@@ -33,13 +38,16 @@ def figure(diag, findings: list | None = None):
         sel = (t >= t0) & (t <= t1)
         ax = row[0]
         ax.plot(t[sel], d.y[hold][sel], "k.", ms=1.5, label="measured")
-        ax.plot(t[sel], yb[hold][sel], "-", c="tab:blue", lw=1, label=f"baseline (rmse {res.baseline.rmse_hold:.3g})")
-        ax.plot(t[sel], yf[hold][sel], "-", c="tab:red", lw=1, label=f"+ {names} (rmse {res.final.rmse_hold:.3g})")
+        ax.plot(t[sel], yb[hold][sel], "-", c="tab:blue", lw=1,
+                label=f"{base_label} (rmse {res.baseline.rmse_hold:.3g} {u_out})")
+        ax.plot(t[sel], yf[hold][sel], "-", c="tab:red", lw=1,
+                label=f"+ {names} (rmse {res.final.rmse_hold:.3g} {u_out})")
         ax.set_title(f"{d.link.name}: held-out")
         ax.set_xlabel("t [s]")
+        ax.set_ylabel(y_label)
         ax.legend(loc="best", fontsize=7)
         ax = row[1]
-        ax.plot(t[sel], (d.y - yb)[hold][sel], "-", c="tab:blue", lw=0.8, label="residual baseline")
+        ax.plot(t[sel], (d.y - yb)[hold][sel], "-", c="tab:blue", lw=0.8, label=f"residual {base_label}")
         ax.plot(t[sel], (d.y - yf)[hold][sel], "-", c="tab:red", lw=0.8, label=f"residual + {names}")
         for a in (row[0], row[1]):
             for w0, w1 in wins:
@@ -47,6 +55,7 @@ def figure(diag, findings: list | None = None):
                     a.axvspan(max(w0, t0), min(w1, t1), color="orange", alpha=0.2, lw=0)
         ax.set_title("residual before/after (shaded: located windows)")
         ax.set_xlabel("t [s]")
+        ax.set_ylabel(f"residual [{u_out}]")
         ax.legend(loc="best", fontsize=7)
         ax = row[2]
         held = [w for w in wins if w[0] >= t[0]]
@@ -56,8 +65,9 @@ def figure(diag, findings: list | None = None):
             z = (d.t >= w0 - pad) & (d.t <= w1 + pad)
             ax.axvspan(w0, w1, color="orange", alpha=0.2, lw=0)
             ax.plot(d.t[z], d.y[z], "k.", ms=2, label="measured")
-            ax.plot(d.t[z], yb[z], "-", c="tab:blue", lw=1, label="baseline")
-            ax.plot(d.t[z], yf[z], "-", c="tab:red", lw=1, label="improved")
+            ax.plot(d.t[z], yb[z], "-", c="tab:blue", lw=1, label=base_label)
+            ax.plot(d.t[z], yf[z], "-", c="tab:red", lw=1, label=f"+ {names}")
+            ax.set_ylabel(y_label)
             ax.set_title(f"located window {w0:.2f}-{w1:.2f} s")
             ax.legend(loc="best", fontsize=7)
         else:
@@ -65,10 +75,12 @@ def figure(diag, findings: list | None = None):
         ax.set_xlabel("t [s]")
         ax = row[3]
         ax.plot(d.u[hold], d.y[hold], "k.", ms=1, label="measured")
-        ax.plot(d.u[hold], yf[hold], "-", c="tab:red", lw=0.8, label="model")
-        ax.set_xlabel(d.link.input)
-        ax.set_ylabel(d.link.output)
-        ax.set_title("input-output loop")
+        ax.plot(d.u[hold], yf[hold], "-", c="tab:red", lw=0.8, label=f"model (+ {names})")
+        ax.set_xlabel(f"{d.link.input} [{u_in}]")
+        ax.set_ylabel(y_label)
+        ax.xaxis.set_major_locator(plt.MaxNLocator(4))
+        ax.legend(loc="best", fontsize=7)
+        ax.set_title("input-output loop (held-out)")
     title = f"teleop diagnose: {diag.rec.path}"
     if "mrdlab" in diag.rec.path.lower() or "MRDLab" in diag.rec.metadata.get("source", ""):
         title += f"\n{ATTRIBUTION}"
