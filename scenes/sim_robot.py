@@ -331,7 +331,7 @@ class SimRobot(ContextDevice):
         counts = self._lag.counts(t_fsr, noise)  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
         self.t += p.dt
         self.seq += 1
-        steps = np.rint((self.L_home - self.L_cmd) * self.spec.steps_per_m).astype(np.int64)
+        steps = KS.position_steps(self.L_home, self.L_cmd, float(self.spec.steps_per_m), np.empty(len(x), np.int64))
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
                             boot_id=self.boot_id, wrench_truth=f,

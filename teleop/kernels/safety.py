@@ -1,7 +1,7 @@
 """Kernels of the loop's safety monitors (teleop.loop.safety: the monitors' rules live here, their messages
 and state holders there). State arrays are float64; NaN stands for "no time yet" (the condition does not hold).
 
-    all_finite        every element of an array finite
+    all_finite        every element of an array finite (all_finite3: three arrays and a time)
     tension_range     over-range / slack tension persisting longer than a window (TensionRange)
     stuck_cable       a paying-out cable whose filtered tension keeps rising (StuckCable)
 """
@@ -25,6 +25,12 @@ def all_finite(a):
         if not np.isfinite(v):
             return False
     return True
+
+
+@njit
+def all_finite3(a, b, c, t):
+    """all_finite of the three arrays and the float t (a reading's or a sample's numbers in one call)."""
+    return np.isfinite(t) and all_finite(a) and all_finite(b) and all_finite(c)
 
 
 @njit

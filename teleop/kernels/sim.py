@@ -117,3 +117,12 @@ def series_spring_force(pos, v, tgt, K, D, Mi, dtm, fc, implicit):
         return g0, g1, g2
     return (Mi[0, 0] * g0 + Mi[0, 1] * g1 + Mi[0, 2] * g2, Mi[1, 0] * g0 + Mi[1, 1] * g1 + Mi[1, 2] * g2,
             Mi[2, 0] * g0 + Mi[2, 1] * g1 + Mi[2, 2] * g2)
+
+
+@njit
+def position_steps(L_home, L, steps_per_m, out):
+    """out (n,) int64: the motors' positions [microsteps] relative to home for cable lengths L (n,) [m],
+    rint((L_home - L) steps_per_m) (hauling in is +)."""
+    for i in range(L.shape[0]):
+        out[i] = int(np.rint((L_home[i] - L[i]) * steps_per_m))
+    return out

@@ -79,6 +79,7 @@ def warm_up(geom=None) -> float:
         KS.cable_sensor(f, A, float(geom.mu), theta, -L, float(geom.t_min), float(geom.t_max), 2.85, 5e3, cap,
                         np.empty(n), np.empty(n))
     KS.contact_moment(tip, np.zeros(3), np.empty(6))
+    KS.position_steps(L, L, 1e5, np.empty(n, dtype=np.int64))
     for implicit in (True, False):  # scenes.world.PadWorld.step: pybullet's tuples in, a tuple out
         KS.series_spring_force((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), np.eye(3), np.eye(3), np.eye(3),
                                0.1, (0.0, 0.0, 0.0), implicit)

@@ -109,18 +109,26 @@ class StuckCable:
 
 
 def _all_finite(values) -> bool:
-    if type(values) is np.ndarray and values.dtype.kind in "fiu":  # a compiled loop (the devices' arrays)
+    if _numeric(values):  # a compiled loop (the devices' arrays)
         return KS.all_finite(values)
     return all(math.isfinite(v) for v in (values.tolist() if hasattr(values, "tolist") else values))
 
 
+def _numeric(a) -> bool:
+    return type(a) is np.ndarray and a.dtype.kind in "fiu"
+
+
 def is_finite_sample(sample) -> bool:
     """True when a HapticSample's numbers are all finite."""
-    return (_all_finite(sample.measured_cp) and _all_finite(sample.measured_cv)
-            and _all_finite(np.ravel(sample.orientation)) and math.isfinite(sample.t))
+    cp, cv, R = sample.measured_cp, sample.measured_cv, sample.orientation
+    if _numeric(cp) and _numeric(cv) and _numeric(R) and type(sample.t) is float:  # one compiled call
+        return KS.all_finite3(cp, cv, R, sample.t)
+    return (_all_finite(cp) and _all_finite(cv) and _all_finite(np.ravel(R)) and math.isfinite(sample.t))
 
 
 def is_finite_reading(reading) -> bool:
     """True when a RobotReading's numbers are all finite."""
-    return (_all_finite(reading.fsr_counts) and _all_finite(reading.position_steps)
-            and _all_finite(reading.commanded_lengths) and math.isfinite(reading.t))
+    c, s, L = reading.fsr_counts, reading.position_steps, reading.commanded_lengths
+    if _numeric(c) and _numeric(s) and _numeric(L) and type(reading.t) is float:  # one compiled call
+        return KS.all_finite3(c, s, L, reading.t)
+    return (_all_finite(c) and _all_finite(s) and _all_finite(L) and math.isfinite(reading.t))
