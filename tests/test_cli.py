@@ -158,7 +158,7 @@ def test_ctrl_c_during_a_recorded_session_exit_130_recording_closed_and_marked(t
     doc = json.loads(out.read_text())
     assert doc["interrupted"] is True and 0 < doc["timing"]["ticks"] < 600_000
     s = read_session(rec)
-    assert not s.damage and "session" in s.metadata
+    assert not s.damage and "session" in s.metadata and s.metadata["session_end"]["interrupted"] == "SIGINT"
 
 
 def test_results_follow_the_umask(tmp_path):

@@ -38,6 +38,7 @@ class SessionResult:
     record: str | None = None
     scheduling: str = ""
     live: dict = field(default_factory=dict)  # the live view's counters (teleop.live.LiveView.stats), if served
+    interrupted: str = ""  # "SIGINT" (Ctrl-C) or "SIGTERM" when a signal ended the run before `seconds`
 
 
 def software_version() -> str:
@@ -201,12 +202,15 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             scheduling = set_realtime(50) if realtime else "SCHED_OTHER (not requested)"
             gc.collect()
             gc.disable()
+            interrupted = ""
             try:
                 run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us,
                           on_start=recorder.set_t0 if recorder is not None else
                           live_view.ring.set_t0 if live_view is not None else None)
-            except (KeyboardInterrupt, _Terminate):
-                pass
+            except KeyboardInterrupt:
+                interrupted = "SIGINT"
+            except _Terminate:
+                interrupted = "SIGTERM"
             finally:
                 gc.enable()
                 if realtime:
@@ -220,7 +224,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                         pass
             timing = log.summary(params.rate_hz)
             result = SessionResult(timing=timing, events=[vars(e) for e in tp.events], final_state=tp.state.name,
-                                   fault_reason=tp.fault_reason, record=record, scheduling=scheduling)
+                                   fault_reason=tp.fault_reason, record=record, scheduling=scheduling,
+                                   interrupted=interrupted)
     finally:
         signal.signal(signal.SIGTERM, old)
         if live_view is not None:
@@ -231,7 +236,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             end = {"timing": timing if "timing" in locals() else {},
                    "final_state": result.final_state if "result" in locals() else "unknown",
                    "fault_reason": result.fault_reason if "result" in locals() else "",
-                   "drops": recorder.drops, "event_drops": recorder.event_drops}
+                   "drops": recorder.drops, "event_drops": recorder.event_drops,
+                   "interrupted": result.interrupted if "result" in locals() else "unknown"}
             recorder.close(end)
             if "result" in locals():
                 result.drops, result.alarm = recorder.drops, recorder.alarm
