@@ -376,11 +376,14 @@ class PalpationResult:
 
     def table(self) -> str:
         """Plain-text table of the pokes and the summary."""
-        head = f"{'#':>3} {'poke':<8} {'dir':<3} " + " ".join(f"{n[:9]:>9}" for n in ("truth",) + ESTIMATORS)
-        lines = [head]
+        names = ("truth",) + ESTIMATORS
+        widths = [max(len(n), 9) for n in names]
+        head = f"{'#':>3} {'poke':<8} {'dir':<3} " + " ".join(f"{n:>{w}}" for n, w in zip(names, widths))
+        lines = ["contact force along the poke [N]: the pad's ground truth and each estimator's", head]
         for i, pk in enumerate(self.pokes, 1):
             vals = [pk["ground_truth_N"]] + [pk[f"{n}_N"] for n in ESTIMATORS]
-            lines.append(f"{i:>3} {pk['label']:<8} {pk['direction']:<3} " + " ".join(f"{v:9.3f}" for v in vals))
+            lines.append(f"{i:>3} {pk['label']:<8} {pk['direction']:<3} "
+                         + " ".join(f"{v:{w}.3f}" for v, w in zip(vals, widths)))
         lines.append("")
         lines.append(f"{'estimator':<16} {'MAE [N]':>8} {'RMSE [N]':>9}")
         for n in ESTIMATORS:
