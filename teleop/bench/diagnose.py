@@ -14,6 +14,8 @@ def register(subparsers) -> None:
     p.add_argument("--rate", type=float, default=500.0, help="sampling rate of the cases [Hz] (500)")
     p.add_argument("--seconds", type=float, default=20.0, help="duration of each case [s] (20)")
     p.add_argument("--noise", type=float, default=1.0, help="factor on every sensor noise level (1)")
+    p.add_argument("--sindy", action="store_true",
+                   help="also fit the PySINDy peer on each effect's channel and count where physics <= PySINDy")
     p.add_argument("--suite", choices=("all", "generator", "rig"), default="all",
                    help="cases from the concealed-effect generator, the simulated single-cable bench "
                         "(column subsets, loads, compounds; scenes.cable_rig), or half each (all)")
@@ -53,10 +55,10 @@ def run(args) -> int:
     rplan = rig_plan(args.cases - n_gen, args.seed)
     with progress(len(plan) + len(rplan), "bench diagnose", unit="cases") as bar:
         for i, (effect, setup) in enumerate(plan):
-            rows.append(run_case(make_case(i, effect, setup, args.seed, cfg)))
+            rows.append(run_case(make_case(i, effect, setup, args.seed, cfg), sindy=args.sindy))
             bar.update()
         for case in rplan:
-            rig_rows.append(run_rig_case(case, args.seed, args.rate, args.seconds, args.noise))
+            rig_rows.append(run_rig_case(case, args.seed, args.rate, args.seconds, args.noise, args.sindy))
             bar.update()
     summary = summarise(rows) if rows else {}
     rig_summary = summarise_rig(rig_rows) if rig_rows else {}
@@ -71,6 +73,13 @@ def run(args) -> int:
                 "none_rate": sum(r["correct"] for r in clean) / len(clean) if clean else None,
                 "params_within_20pct_rate": sum(bool(r["params_ok"]) for r in eff) / len(eff) if eff else None,
                 "improved_2x_rate": sum(bool(r["improved_2x"]) for r in eff) / len(eff) if eff else None}
+    if args.sindy:
+        peers = [r["peer"] for r in rows if "peer" in r] + [p for r in rig_rows for p in r.get("peer", [])]
+        le = [p for p in peers if p["model_le_sindy"]]
+        combined["model_le_sindy"] = f"{len(le)}/{len(peers)}"
+        for p_ in peers:
+            if not p_["model_le_sindy"]:
+                print(f"PySINDy better on {p_['channel']}: model {p_['model_rmse']:.4g}, PySINDy {p_['sindy_rmse']:.4g}")
     if rig_rows:
         print("simulated single-cable bench (scenes.cable_rig):")
         print(rig_text(rig_summary))

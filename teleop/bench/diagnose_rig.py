@@ -56,8 +56,10 @@ def rig_plan(n: int, seed: int) -> list[dict]:
     return plan
 
 
-def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float = 20.0, noise: float = 1.0) -> dict:
-    """Simulate, write, diagnose and score one rig case."""
+def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float = 20.0, noise: float = 1.0,
+                 sindy: bool = False) -> dict:
+    """Simulate, write, diagnose and score one rig case (sindy: with the PySINDy peer on the channels of
+    the true effects)."""
     from scenes.cable_rig import PRIMARY, observable, simulate
     from teleop.diagnosis.diagnose import diagnose
     from teleop.diagnosis.recording_io import read_interchange
@@ -67,7 +69,7 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"rig_{case['index']:04d}.csv"
         rig.write(path)
-        doc = diagnose(read_interchange(path)).as_dict()
+        doc = diagnose(read_interchange(path), sindy=sindy).as_dict()
     truth = {e: v for e, v in rig.effects.items() if e in PRIMARY and observable(e, cols, case["load"])}
     findings = doc["findings"]
     named = [f["effect"] for f in findings]
@@ -98,6 +100,10 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
             len(PRIMARY[e]) for e in truth)
         row["improvement"] = min(imps.values()) if imps else 1.0
         row["improved_2x"] = row["improvement"] >= 2.0
+        if sindy:
+            from teleop.diagnosis.scoring import peer_row
+            chans = sorted({f["channel"] for f in findings if f["effect"] in truth})
+            row["peer"] = [peer_row(doc, ch) for ch in chans]
     return row
 
 

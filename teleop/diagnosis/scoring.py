@@ -15,13 +15,25 @@ from teleop.diagnosis.recording_io import read_interchange
 PARAM_TOL = 0.2
 
 
-def run_case(case: Case, workdir: str | Path | None = None) -> dict:
-    """Write the case as CSV, diagnose the CSV, and score the report against the truth."""
+def run_case(case: Case, workdir: str | Path | None = None, sindy: bool = False) -> dict:
+    """Write the case as CSV, diagnose the CSV, and score the report against the truth (sindy: with the
+    PySINDy peer on the effect's channel)."""
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         path = Path(tmp) / f"case_{case.index:04d}.csv"
         case.write(path)
-        doc = diagnose(read_interchange(path)).as_dict()
-    return score(case, doc)
+        doc = diagnose(read_interchange(path), sindy=sindy).as_dict()
+    row = score(case, doc)
+    if sindy and case.channel in doc["peer"]:
+        row["peer"] = peer_row(doc, case.channel)
+    return row
+
+
+def peer_row(doc: dict, channel: str) -> dict:
+    """The physics model's and the peers' held-out RMSE on `channel`, and whether physics <= PySINDy."""
+    p = doc["peer"][channel]
+    return {"channel": channel, "model_rmse": p["model_rmse"], "arx_rmse": p["arx_rmse"],
+            "sindy_rmse": p.get("sindy_rmse"),
+            "model_le_sindy": p.get("sindy_rmse") is not None and p["model_rmse"] <= p["sindy_rmse"]}
 
 
 def score(case: Case, doc: dict) -> dict:
