@@ -274,18 +274,21 @@ class StudyResult:
         labels = [a.label for a in self.areas]
         ax1.boxplot([R[:, i] for i in range(R.shape[1])])
         ax1.set_xticks(range(1, len(labels) + 1), labels)
+        ax1.plot([], [], color="C1", label="simulated participants: median, quartiles, range")  # the boxes
         ax1.plot(range(1, len(labels) + 1), [row["mean"] for row in SEED_TABLE3], "r*", ms=10,
                  label="seed 000 Table 3 mean")
         ax1.set_ylabel("rating (1 soft - 10 hard)")
-        ax1.set_ylim(0, 11)
+        ax1.set_ylim(0, 13)  # room above the 1-10 scale for the legend
+        ax1.set_yticks(range(0, 11, 2))
         ax1.set_title(f"{len(self.records)} participants, correct ranking {self.correct_ranking_rate:.0%}")
-        ax1.legend(loc="upper right")
+        ax1.legend(loc="upper right", fontsize=8)
         ax1.tick_params(axis="x", labelrotation=15)
         rendered = self.rendered_stiffness()
         pts = [(a.stiffness, rendered[a.name], a.label) for a in self.areas if rendered[a.name]]
         if pts:
             k_true, k_r, names = zip(*pts)
-            ax2.loglog(k_true, k_r, "o-")
+            ax2.loglog(k_true, k_r, "o-", label="rendered on the stylus (median over the presses)")
+            ax2.set_xlim(min(k_true) / 1.5, max(k_true) * 3)  # room for the labels of the end points
             for x, y, s in pts:
                 ax2.annotate(s, (x, y), textcoords="offset points", xytext=(5, -10), fontsize=8)
             # a perfectly transparent chain keeps every ratio: a line of slope 1 through the geometric mean
@@ -295,7 +298,7 @@ class StudyResult:
             if self.expected:
                 ax2.loglog([a.stiffness for a in self.areas], [self.expected[a.name] for a in self.areas], "s:",
                            color="grey", label="transparent chain (robot compliance in series)")
-            ax2.legend(loc="upper left")
+            ax2.legend(loc="upper left", fontsize=8)
         ax2.set_xlabel("pad stiffness [N/m]")
         ax2.set_ylabel("rendered on the stylus dF/dx [N/m]")
         ax2.set_title("transparency of the chain")
