@@ -17,7 +17,9 @@ else:  # pragma: no cover - exercised on Python 3.10 only
 
 
 def input_problem(path: str | Path) -> str | None:
-    """Why `path` cannot be read as an input file (missing, a directory, unreadable), or None."""
+    """Why `path` cannot be read as an input file (empty, missing, a directory, unreadable), or None."""
+    if str(path) == "":
+        return "expected a file name"
     path = Path(path)
     if not path.exists():
         return "file not found"
@@ -32,7 +34,7 @@ def check_input(path: str | Path) -> Path:
     """`path` if it is a readable file, else an InputError naming it (call before the work starts)."""
     problem = input_problem(path)
     if problem:
-        raise InputError(f"{path}: {problem}")
+        raise InputError(f"{str(path) or repr('')}: {problem}")
     return Path(path)
 
 
