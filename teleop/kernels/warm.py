@@ -98,6 +98,12 @@ def warm_up(geom=None) -> float:
                            "orientation": np.eye(3)})()
     is_finite_reading(check)
     is_finite_sample(check)
+    check.fsr_counts, check.position_steps = np.zeros(n), np.zeros(n)  # a ProcessRobot's reading: floats
+    is_finite_reading(check)
+    from teleop.kernels.safety import all_finite
+
+    for a in (np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros((3, n))[1, :6]):  # the loop's estimate check
+        all_finite(a)
     # the simulated operator (devices.simulated): one step with and without tremor
     from teleop.kernels import operator as KO
 
