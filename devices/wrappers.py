@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from devices.base import ContextDevice, DeviceError, HapticSample, RobotReading
+from teleop.kernels.safety import all_finite
 
 # ------------------------------------------------------------------------------------------------------------
 # generic wrappers
@@ -120,8 +121,9 @@ class LoggedDevice(Wrapper):
 # ------------------------------------------------------------------------------------------------------------
 
 _SLOT = 256  # float64 slots of a published reading
-# command block (float64): [version, 6 lengths, stop flag, quit flag]
-_CMD_N = 9
+# command block (float64): [version, 6 lengths, stop flag, quit flag, child error flag]
+_CMD_N = 10
+_ERR = 9  # set by the child after it has sent an error on the pipe: the parent polls the pipe only then
 _BASE = ("t", "seq", "status", "boot_id")  # then fsr(6), steps(6), lengths(6), wrench(6), wrench_ok, extras
 
 
@@ -224,6 +226,7 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
             conn.send_bytes(pickle.dumps(("error", f"{type(exc).__name__}: {exc}", None, None)))
         except OSError:
             pass
+        cmd[_ERR] = 1
     finally:
         try:
             dev.stop()
@@ -265,6 +268,7 @@ class ProcessRobot(ContextDevice):
             raise DeviceError(f"{self.url}: {spec}")
         self.spec, self.keys, self.firmware_version = spec, keys, fw
         self.buf = np.zeros(1 + _SLOT)
+        self.n_reads = 0
         self.last = None
         self.last_version = -1.0
         deadline = time.monotonic() + self.start_timeout
@@ -288,7 +292,7 @@ class ProcessRobot(ContextDevice):
 
     def command_lengths(self, lengths) -> None:
         L = np.asarray(lengths, dtype=float)
-        if L.shape != (6,) or not np.isfinite(L).all():
+        if L.shape != (6,) or not all_finite(L):
             raise DeviceError(f"{self.url}: lengths must be 6 finite numbers")
         self.cmd[1:7] = L
         self.cmd[0] += 1
@@ -300,7 +304,9 @@ class ProcessRobot(ContextDevice):
     def read(self) -> RobotReading:
         if not self.is_open:
             raise DeviceError(f"{self.url}: read() before open()")
-        if self.rx.poll():
+        self.n_reads += 1
+        # the pipe (a syscall) only after the child flagged an error, and every 64th read (a killed child: EOF)
+        if (self.cmd[_ERR] or not self.n_reads & 63) and self.rx.poll():
             status, msg, _, _ = pickle.loads(self.rx.recv_bytes())
             raise DeviceError(f"{self.url} (robot process): {msg}")
         for _ in range(100):  # seqlock: retry while the writer is mid-update

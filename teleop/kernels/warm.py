@@ -19,10 +19,11 @@ _done = []  # [True] once warmed (the argument types do not depend on the geomet
 def kernels() -> list:
     """Every compiled kernel (numba dispatcher) of teleop.kernels."""
     from teleop.kernels import estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, \
-        tension, ufuncs
+        tap, tension, ufuncs
 
     out = []
-    for mod in (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, tension, ufuncs):
+    for mod in (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, tap, tension,
+                ufuncs):
         out += [v for v in vars(mod).values() if hasattr(v, "py_func") and getattr(v, "__module__", "") == mod.__name__]
     return out
 
@@ -36,6 +37,7 @@ def warm_up(geom=None) -> float:
     from teleop.estimation.turn import AxisTurnFit, TurnCompensation
     from teleop.geometry import default_geometry
     from teleop.kernels import sim as KS
+    from teleop.kernels import tap as KTap
     from teleop.kernels import tension as KT
     from teleop.kernels.geometry import forward_kinematics
     from teleop.kinematics import FREE_AXIAL, check_lengths, lengths2pose, pose2lengths, poses2lengths, rotation_zyx, structure_matrix
@@ -114,6 +116,16 @@ def warm_up(geom=None) -> float:
         KO.operator_steps(np.zeros(9), np.zeros(3), 0, 1, c, np.zeros((1, 3)), 0, tremor, np.zeros((0, 3)),
                           np.zeros((0, 2)))
     KO.script_offset(KO.POKES, 0.1, 0.01, 2.0, 0.5)
+    # the recorder's tap: a reading's counts and steps as ints (inline robot) or floats (ProcessRobot)
+    from teleop.kernels.tap import tap_row
+
+    o, w = np.arange(29, dtype=np.int64) * 16, np.full(29, 6, dtype=np.int64)
+    w[[KTap.STAGES, KTap.ORIENT, KTap.CP, KTap.CV, KTap.SETPOINT, KTap.SERVO_CF]] = 7, 9, 3, 3, 3, 3
+    for dt in (np.int64, np.float64):
+        c6 = np.zeros(6, dtype=dt)
+        tap_row(np.zeros(29 * 16), o, w, 0, 0.0, 0, 0, 0, np.zeros(7, dtype=np.int64), True, 0.0, np.zeros(3),
+                np.zeros(3), np.eye(3), 1, True, True, np.zeros(6), L, True, 0.0, 0, c6, c6, L, 1, 0, True, L,
+                np.zeros(6), np.zeros(6), 0.0, 0.0, 0.0, 0.0, np.zeros(3))
     check_lengths(L, geom)
     TensionSolver(A, geom.t_min, geom.t_max, 2.85).solve(f)
     # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's

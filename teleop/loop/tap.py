@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from teleop.kernels import tap as KT
 from teleop.loop.core import STAGES
 from teleop.recording import INT, TOPIC_FORCE, TOPIC_ROBOT, TOPIC_SETPOINT, Layout, Signal
 
@@ -47,8 +48,21 @@ def session_layout(extras: dict | None = None) -> Layout:
     return Layout(tuple(sig), {TOPIC_ROBOT: "new"})
 
 
+# the columns the tap kernel fills, in the order of its indices (teleop.kernels.tap); "read_us" stands for the
+# stage block (read_us .. record_us)
+COLUMNS = ("tick", "t", "state", "lateness_us", "tick_us", "read_us", "t_device", "measured_cp", "measured_cv",
+           "orientation", "buttons", "operator_present", "commanded", "setpoint_cp", "servo_jp", "new", "t_robot",
+           "seq", "fsr_counts", "position_steps", "commanded_lengths", "status", "boot_id", "wrench_truth",
+           "tensions", "measured_cf", "force_raw", "ramp", "servo_cf")
+
+
+def _arr(a) -> np.ndarray:
+    return a if type(a) is np.ndarray else np.asarray(a, dtype=float)
+
+
 class RowTap:
-    """Callable given to Teleop.tap: fills the row and pushes it (`push(row)` -> bool)."""
+    """Callable given to Teleop.tap: fills the row (one kernel call, teleop.kernels.tap.tap_row; the backend's
+    extras per key) and pushes it (`push(row)` -> bool)."""
 
     def __init__(self, layout: Layout, push, extras: dict | None = None):
         self.row = np.zeros(layout.width)
@@ -56,44 +70,37 @@ class RowTap:
         self.sl = layout.columns()  # raises unless signal names are unique across topics
         self.stage_sl = slice(self.sl["read_us"].start, self.sl["record_us"].stop)
         self.extras = dict(extras or {})
+        self._x_sl = [(k, self.sl[f"x_{k}"]) for k in self.extras]
+        self.o = np.array([self.sl[c].start for c in COLUMNS], dtype=np.int64)
+        self.w = np.array([self.sl[c].stop - self.sl[c].start for c in COLUMNS], dtype=np.int64)
+        self.w[KT.STAGES] = self.stage_sl.stop - self.stage_sl.start
+        self._z = np.zeros(max(16, int(self.w.max())))  # stands in for what is absent this tick (not written)
+        self._R0 = np.zeros((3, 3))
 
     def __call__(self, tp) -> None:
-        r, sl, x = self.row, self.sl, tp.x
-        r[sl["tick"]] = x.k
-        r[sl["t"]] = x.now
-        r[sl["state"]] = int(tp.state)
-        r[sl["lateness_us"]] = tp.lateness_ns * 1e-3
-        r[sl["tick_us"]] = tp.prev_tick_ns * 1e-3  # the previous tick's duration
-        r[self.stage_sl] = tp.stage_ns * 1e-3  # this tick's stages; record_us is the previous tick's
-        s = x.sample
-        if s is not None:
-            r[sl["t_device"]] = s.t
-            r[sl["measured_cp"]] = s.measured_cp
-            r[sl["measured_cv"]] = s.measured_cv
-            r[sl["orientation"]] = np.ravel(s.orientation)
-            r[sl["buttons"]] = s.buttons
-            r[sl["operator_present"]] = s.operator_present
+        r, x, z = self.row, tp.x, self._z
+        s, rd = x.sample, x.reading
         cmd = x.L_cmd is not None
-        r[sl["commanded"]] = cmd
-        r[sl["setpoint_cp"]] = tp.pose[:3]
-        if cmd:
-            r[sl["servo_jp"]] = x.L_cmd
-        rd = x.reading
-        r[sl["new"]] = rd is not None
+        if s is not None:
+            s_args = (s.t, _arr(s.measured_cp), _arr(s.measured_cv), _arr(s.orientation), s.buttons,
+                      s.operator_present)
+        else:
+            s_args = (0.0, z[:3], z[:3], self._R0, 0, False)
         if rd is not None:
-            r[sl["t_robot"]] = rd.t
-            r[sl["seq"]] = rd.seq
-            r[sl["fsr_counts"]] = rd.fsr_counts
-            r[sl["position_steps"]] = rd.position_steps
-            r[sl["commanded_lengths"]] = rd.commanded_lengths
-            r[sl["status"]] = rd.status
-            r[sl["boot_id"]] = rd.boot_id
-            r[sl["wrench_truth"]] = np.nan if rd.wrench_truth is None else rd.wrench_truth
-            for k in self.extras:
-                r[sl[f"x_{k}"]] = np.asarray(rd.extras.get(k, np.nan), dtype=float)
-        r[sl["tensions"]] = tp.tensions
-        r[sl["measured_cf"]] = tp.wrench
-        r[sl["force_raw"]] = x.F_raw
-        r[sl["ramp"]] = x.ramp
-        r[sl["servo_cf"]] = x.F
+            wt = rd.wrench_truth
+            r_args = (rd.t, rd.seq, _arr(rd.fsr_counts), _arr(rd.position_steps), _arr(rd.commanded_lengths),
+                      int(rd.status), int(rd.boot_id), wt is not None, z[:6] if wt is None else _arr(wt))
+        else:
+            r_args = (0.0, 0, z[:6], z[:6], z[:6], 0, 0, False, z[:6])
+        fx, fy, fz = x.F_raw
+        bad = KT.tap_row(r, self.o, self.w, x.k, x.now, int(tp.state), tp.lateness_ns, tp.prev_tick_ns,
+                         tp.stage_ns, s is not None, *s_args, cmd, tp.pose, _arr(x.L_cmd) if cmd else z[:6],
+                         rd is not None, *r_args, _arr(tp.tensions), _arr(tp.wrench), fx, fy, fz, x.ramp, _arr(x.F))
+        if bad >= 0:
+            raise ValueError(f"signal {COLUMNS[bad]}: expected {self.w[bad]} numbers")
+        if rd is not None:
+            ex = rd.extras
+            for k, sl in self._x_sl:
+                v = ex.get(k, np.nan)
+                r[sl] = v if type(v) is np.ndarray else np.asarray(v, dtype=float)
         self.push(r)
