@@ -149,16 +149,7 @@ class SimulatedStylus(ContextDevice):
         self.F_tremor = np.zeros(3)
         self.R = rotation_zyx(0.0, 0.0, self.script.tilt)
         self._lo, self._hi = np.asarray(self.spec.workspace_min), np.asarray(self.spec.workspace_max)
-        op, sc = self.operator, self.script
-        a_ou = math.exp(-op.h / 0.05)
-        c = np.zeros(KO.N_CONST)
-        c[[KO.H, KO.M, KO.K, KO.B, KO.A_OU, KO.S_OU, KO.KIND, KO.AMP, KO.PERIOD, KO.DUTY]] = (
-            op.h, op.m, op.k, op.b, a_ou, op.tremor * math.sqrt(1.0 - a_ou * a_ou), SCRIPTS.index(sc.kind),
-            sc.amplitude, sc.period, sc.duty)
-        c[KO.CENTER:KO.CENTER + 3], c[KO.AXIS:KO.AXIS + 3] = sc.center, sc.axis
-        c[KO.LO:KO.LO + 3], c[KO.HI:KO.HI + 3] = self._lo, self._hi
-        self._c = c
-        self._absent = np.array(sc.absent, dtype=float).reshape(-1, 2)
+        self._c_for = None  # (operator, script, spec) the integrator's constants were built for
         self._x = np.zeros(9)  # the integrator's state: p, v, F_tremor (p, v, F_tremor are copies of it)
         self._x[0:3] = self.p
         self._F = np.zeros(3)
@@ -168,6 +159,23 @@ class SimulatedStylus(ContextDevice):
     def close(self) -> None:
         self.F_cmd = (0.0, 0.0, 0.0)  # commanded force (fx, fy, fz) [N], device frame
         self.is_open = False
+
+    def _constants(self) -> np.ndarray:
+        """The integrator's constants (kernel operator.operator_steps' c), rebuilt when the operator, the
+        script or the device spec was replaced (the blind-test rig swaps scripts between presses)."""
+        key = (self.operator, self.script, self.spec)
+        if self._c_for is None or any(a is not b for a, b in zip(key, self._c_for)):
+            op, sc = self.operator, self.script
+            a_ou = math.exp(-op.h / 0.05)
+            c = np.zeros(KO.N_CONST)
+            c[[KO.H, KO.M, KO.K, KO.B, KO.A_OU, KO.S_OU, KO.KIND, KO.AMP, KO.PERIOD, KO.DUTY]] = (
+                op.h, op.m, op.k, op.b, a_ou, op.tremor * math.sqrt(1.0 - a_ou * a_ou), SCRIPTS.index(sc.kind),
+                sc.amplitude, sc.period, sc.duty)
+            c[KO.CENTER:KO.CENTER + 3], c[KO.AXIS:KO.AXIS + 3] = sc.center, sc.axis
+            c[KO.LO:KO.LO + 3], c[KO.HI:KO.HI + 3] = self._lo, self._hi
+            self._c, self._absent = c, np.array(sc.absent, dtype=float).reshape(-1, 2)
+            self._c_for = key
+        return self._c
 
     def _advance(self, t_now: float) -> None:
         """Integrate up to t_now [s] (kernel operator.operator_steps)."""
@@ -187,7 +195,7 @@ class SimulatedStylus(ContextDevice):
             targets = np.array([self.script.target_xyz((self.steps + i + 1) * h) for i in range(n)])
         x = self._x
         self._F[:] = self.F_cmd
-        operator_steps(x, self._F, self.steps, n, self._c, noise, i0, tremor, targets, self._absent)
+        operator_steps(x, self._F, self.steps, n, self._constants(), noise, i0, tremor, targets, self._absent)
         self.steps += n
         self.p, self.v, self.F_tremor, self.t = x[0:3].copy(), x[3:6].copy(), x[6:9].copy(), self.steps * h
 
