@@ -72,3 +72,27 @@ def test_recorded_script_from_csv(tmp_path):
 def test_bad_url_options(url, msg):
     with pytest.raises(InputError, match=msg):
         open_device(url)
+
+
+def test_replaced_script_and_operator_take_effect_mid_run():
+    """The blind-test rig swaps scripts (and tests swap operators) on an open stylus: the hand follows the
+    new target from the next read, as a fresh stylus with that script would from the same state."""
+    clock = Clock()
+    dev = SimulatedStylus(Script(kind="hold"), OperatorParams(tremor=0.0), clock=clock)
+    with dev:
+        for k in range(100):
+            clock.t = k * 1e-3
+            dev.read()
+        assert np.allclose(dev.p, 0.0)
+        dev.script = Script(kind="hold", center=(0.0, 0.0, -0.01))
+        for k in range(100, 1100):
+            clock.t = k * 1e-3
+            dev.read()
+        assert dev.p[2] == pytest.approx(-0.01, abs=1e-4)  # settled on the new target (k = 150 N/m)
+        dev.operator = OperatorParams(k=1500.0, b=30.0, tremor=0.0)
+        dev.servo_cf([0.0, 0.0, 1.5])
+        for k in range(1100, 2100):
+            clock.t = k * 1e-3
+            dev.read()
+            dev.servo_cf([0.0, 0.0, 1.5])
+        assert dev.p[2] == pytest.approx(-0.01 + 1.5 / 1500.0, abs=1e-4)  # the stiffer hand yields F / k
