@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.diagnosis.identify import LinkResult, identify_link, rms
+from teleop.diagnosis.identify import Fit, LinkResult, identify_link, rms
 from teleop.diagnosis.links import LinkData, find_links, link_data, predict
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
@@ -116,12 +116,16 @@ class Diagnosis:
         out = []
         for res in self.links:
             d = res.data
-            for before, after in res.steps:
-                name = [n for n in after.names if n not in before.names][0]
-                y0, y1 = predict(d, before.model), predict(d, after.model)
+            for before, after, name in (
+                    (b, a, n) for b, a in res.steps for n in a.names if n not in b.names):
+                y1 = predict(d, after.model)
                 # the effect's own signature: the final model with and without it (same gain and offset)
                 y1_without = predict(d, after.model.with_effects(
                     [(n, p) for n, p in after.model.effects if n != name]))
+                if len([n for n in after.names if n not in before.names]) > 1:
+                    # a pair that pays only together: each one's share is what the pair loses without it
+                    before = Fit(after.model, {}, math.nan, rms((d.y - y1_without)[self.hold]), after.k, after.n_eff)
+                y0 = predict(d, before.model)
                 loc = locate(d, d.y - y0, d.y, index=self.hold, change=y1 - y1_without)
                 params = dict(after.model.effects)[name]
                 block = _param_block(self.rec, d, name, params, after.stderr.get(name, {}))

@@ -426,7 +426,8 @@ def _evaluate(d: LinkData, model: LinkModel, fit_idx: slice, hold_idx: slice, k:
 def _pair(d: LinkData, current: Fit, cands: list, fit_idx: slice, hold_idx: slice, seed: int) -> list:
     """Two effects whose signatures cancel in part (a tip sensor's hysteresis against the play it reads
     through a spring) can each fail alone and pay together: fit pairs of the PAIR_TOP best singles
-    jointly; the best pair that pays is returned as two steps, the effect explaining more first."""
+    jointly; the best pair that pays, and whose every member the pair needs (>= ACCEPT lost without it),
+    is returned as one step adding both."""
     singles = sorted(cands, key=lambda f: f.rmse_hold)[:PAIR_TOP]
     names = [f.names[-1] for f in singles]
     best = None
@@ -447,7 +448,6 @@ def _pair(d: LinkData, current: Fit, cands: list, fit_idx: slice, hold_idx: slic
     k_one = current.k + len(get_effect(a).params)
     only_a = _evaluate(d, best.model.with_effects([e for e in best.model.effects if e[0] != b]), fit_idx, hold_idx, k_one)
     only_b = _evaluate(d, best.model.with_effects([e for e in best.model.effects if e[0] != a]), fit_idx, hold_idx, k_one)
-    mid = only_a if only_a.rmse_hold <= only_b.rmse_hold else only_b
-    if mid.rmse_hold >= current.rmse_hold:   # each step must explain something on its own
+    if min(only_a.rmse_hold, only_b.rmse_hold) < best.rmse_hold * ACCEPT:   # each one must be needed
         return []
-    return [(current, mid), (mid, best)]
+    return [(current, best)]
