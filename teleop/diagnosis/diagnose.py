@@ -169,6 +169,9 @@ class Diagnosis:
                             "r2": round(1.0 - (r_delay / max(rms(rh), 1e-300)) ** 2, 4), "rmse": rms(rh),
                             "rmse_delayed_link": r_delay, "noise_rmse": noise, "windows": loc.windows})
                 continue
+            scale = max(float(np.max(np.abs(d.y))), 1e-300)
+            if rms(rh - rh.mean()) <= 1e-9 * scale:   # a constant channel (the robot did not move) holds nothing
+                continue
             if rms(rh - rh.mean()) > STRUCTURE * noise and best_r2 >= R2_MIN:
                 out.append({"channel": d.link.output, "link": d.link.kind, "correlate": loc.condition,
                             "r2": round(best_r2, 4), "rmse": rms(rh), "noise_rmse": noise,
