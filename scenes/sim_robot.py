@@ -307,7 +307,9 @@ class SimRobot(ContextDevice):
         for _ in range(self.params.substeps):
             w.step(target)
         # force at the tool tip, moments about p
-        return w.tip(), KS.contact_moment(tip_offset, np.asarray(w.contact_force(), dtype=float), np.empty(6))
+        f = np.empty(6)
+        KS.contact_moment(tip_offset, np.asarray(w.contact_force(), dtype=float), f)
+        return w.tip(), f
 
     def read(self) -> RobotReading:
         """Advance one reading period and return the raw reading."""
@@ -331,7 +333,8 @@ class SimRobot(ContextDevice):
         counts = self._lag.counts(t_fsr, noise)  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
         self.t += p.dt
         self.seq += 1
-        steps = KS.position_steps(self.L_home, self.L_cmd, float(self.spec.steps_per_m), np.empty(len(x), np.int64))
+        steps = np.empty(len(x), np.int64)
+        KS.position_steps(self.L_home, self.L_cmd, float(self.spec.steps_per_m), steps)
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
                             boot_id=self.boot_id, wrench_truth=f,

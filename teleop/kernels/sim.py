@@ -80,12 +80,12 @@ def cable_sensor(f, A, mu, theta, x, t_min, t_max, t_ref, k, cap, t_tip, t_fsr):
 
 @njit
 def contact_moment(o, F, out):
-    """out (6,) = (F, o x F): the contact force at the tool tip and its moment about p (tip offset o)."""
+    """out (6,) = (F, o x F): the contact force at the tool tip and its moment about p (tip offset o); returns
+    nothing (the caller holds out)."""
     out[0], out[1], out[2] = F[0], F[1], F[2]
     out[3] = o[1] * F[2] - o[2] * F[1]
     out[4] = o[2] * F[0] - o[0] * F[2]
     out[5] = o[0] * F[1] - o[1] * F[0]
-    return out
 
 
 
@@ -122,7 +122,6 @@ def series_spring_force(pos, v, tgt, K, D, Mi, dtm, fc, implicit):
 @njit
 def position_steps(L_home, L, steps_per_m, out):
     """out (n,) int64: the motors' positions [microsteps] relative to home for cable lengths L (n,) [m],
-    rint((L_home - L) steps_per_m) (hauling in is +)."""
+    rint((L_home - L) steps_per_m) (hauling in is +); returns nothing (the caller holds out)."""
     for i in range(L.shape[0]):
         out[i] = int(np.rint((L_home[i] - L[i]) * steps_per_m))
-    return out
