@@ -192,6 +192,7 @@ class PadWorld:
         self._r = self.proxy_radius
         self._steps = 0  # stepSimulation calls so far; the contact force is cached per step
         self._fc, self._fc_step = None, -1
+        self._pos, self._pos_step = None, -1  # the tip's base position, cached per step like the contact force
         self.is_open = True
 
     def close(self) -> None:
@@ -276,8 +277,14 @@ class PadWorld:
 
     def tip(self) -> np.ndarray:
         """(3,) touching point (sphere centre + r z) [m]."""
-        x, y, z = self._get_pos(self.body)[0]
+        x, y, z = self._position()
         return np.array([x, y, z + self._r])
+
+    def _position(self) -> tuple:
+        """The sphere centre (x, y, z) [m], queried once per step (only stepping moves the tip)."""
+        if self._pos_step != self._steps:
+            self._pos, self._pos_step = self._get_pos(self.body)[0], self._steps
+        return self._pos
 
     def velocity(self) -> np.ndarray:
         return np.asarray(self.client.getBaseVelocity(self.body)[0])
@@ -289,7 +296,7 @@ class PadWorld:
     def step(self, target) -> None:
         """Advance one dt with the tip (touching point) commanded to `target` (3,) [m]."""
         tgt = (float(target[0]), float(target[1]), float(target[2]) - self._r)  # sphere centre target
-        pos = self._get_pos(self.body)[0]
+        pos = self._position()
         if self.slab is not None and (abs(pos[0] - self._xc) > 5e-5 or abs(pos[1] - self._yc) > 5e-5):
             self._update_slab(np.array(pos[:2]))
         if self.K is None:
