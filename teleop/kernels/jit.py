@@ -7,10 +7,17 @@ the same source runs as Python (`kernel.py_func` is that source in both cases). 
 Cache location: `NUMBA_CACHE_DIR` if set and writable, else next to the sources (`__pycache__`), else a
 per-user directory (~/.cache/numba). With none writable the kernels compile in memory at each start (one
 warning line; numba itself would refuse to import them).
+
+Cache freshness: a kernel's cached machine code holds the kernels it calls, compiled in, but numba checks
+only the kernel's own file (its time stamp and size). A change in a callee's module (linalg.py under
+geometry.py's forward kinematics) left the old code running from the cache (measured: a fresh compile gave
+contact forces 5e-13 N apart). So every kernel's cache is stamped with a hash of all the kernel sources
+(`_kernels_stamp`): any change to any of them recompiles all, once.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 
 try:  # numba is a dependency (pyproject.toml); TELEOP_NO_JIT=1 runs the same sources as Python
@@ -21,6 +28,47 @@ except ImportError:  # pragma: no cover - exercised with TELEOP_NO_JIT=1
     _numba = None
 
 COMPILED = _numba is not None
+_KERNEL_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def _kernels_stamp() -> str:
+    """sha256 of every kernel source file (this directory's *.py, by name and content)."""
+    h = hashlib.sha256()
+    for name in sorted(os.listdir(_KERNEL_DIR)):
+        if name.endswith(".py"):
+            with open(os.path.join(_KERNEL_DIR, name), "rb") as f:
+                h.update(name.encode() + b"\0" + f.read())
+    return h.hexdigest()
+
+
+def _stamp_caches() -> None:
+    """Put locators in front of numba's own that stamp the kernels' caches with `_kernels_stamp` (same cache
+    places: NUMBA_CACHE_DIR, __pycache__, the per-user directory). Leaves numba's default (per-file stamps)
+    if its caching internals are not the expected ones."""
+    try:
+        from numba.core import caching
+
+        bases = (caching.UserProvidedCacheLocator, caching.InTreeCacheLocator, caching.UserWideCacheLocator)
+        classes = caching.CacheImpl._locator_classes
+    except (ImportError, AttributeError):  # pragma: no cover - another numba layout
+        return
+    stamp = _kernels_stamp()
+
+    class _Stamped:
+        def get_source_stamp(self):
+            return stamp
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if os.path.dirname(os.path.abspath(py_file)) != _KERNEL_DIR:
+                return None
+            return super().from_function(py_func, py_file)
+
+    classes[:0] = [type(f"Kernels{b.__name__}", (_Stamped, b), {}) for b in bases]
+
+
+if _numba is not None:
+    _stamp_caches()
 
 
 _warned = []

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from teleop.kernels import jit
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -87,3 +89,25 @@ def test_py_func_is_the_kernel_source(fn):
 
     k = getattr(friction, fn)
     assert k.py_func.__code__.co_filename.endswith("friction.py")
+
+
+@pytest.mark.skipif(not jit.COMPILED, reason="numba not installed (or TELEOP_NO_JIT)")
+def test_kernel_caches_are_stamped_with_every_kernel_source(tmp_path):
+    """A kernel's cached code holds its callees compiled in: its cache must go stale when any kernel source
+    changes, not only its own file (numba's default, which kept old linalg code under the forward kinematics)."""
+    from teleop.kernels import geometry, linalg
+
+    for k in (geometry.forward_kinematics, linalg.solve_into):
+        assert k._cache._cache_file._source_stamp == jit._kernels_stamp()
+    src = tmp_path / "kernels"
+    src.mkdir()
+    for name in ("a.py", "b.py"):
+        (src / name).write_text("x = 1\n")
+    old = jit._KERNEL_DIR
+    try:
+        jit._KERNEL_DIR = str(src)
+        before = jit._kernels_stamp()
+        (src / "b.py").write_text("x = 2\n")  # a callee's module changes
+        assert jit._kernels_stamp() != before
+    finally:
+        jit._KERNEL_DIR = old
