@@ -163,8 +163,8 @@ class SimulatedStylus(ContextDevice):
     def _constants(self) -> np.ndarray:
         """The integrator's constants (kernel operator.operator_steps' c), rebuilt when the operator, the
         script or the device spec was replaced (the blind-test rig swaps scripts between presses)."""
-        key = (self.operator, self.script, self.spec)
-        if self._c_for is None or any(a is not b for a, b in zip(key, self._c_for)):
+        key = self._c_for
+        if key is None or key[0] is not self.operator or key[1] is not self.script or key[2] is not self.spec:
             op, sc = self.operator, self.script
             a_ou = math.exp(-op.h / 0.05)
             c = np.zeros(KO.N_CONST)
@@ -174,7 +174,7 @@ class SimulatedStylus(ContextDevice):
             c[KO.CENTER:KO.CENTER + 3], c[KO.AXIS:KO.AXIS + 3] = sc.center, sc.axis
             c[KO.LO:KO.LO + 3], c[KO.HI:KO.HI + 3] = self._lo, self._hi
             self._c, self._absent = c, np.array(sc.absent, dtype=float).reshape(-1, 2)
-            self._c_for = key
+            self._c_for = (self.operator, self.script, self.spec)
         return self._c
 
     def _advance(self, t_now: float) -> None:
