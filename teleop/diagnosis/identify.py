@@ -33,6 +33,7 @@ MIN_FIT_RATE_DT = 0.01  # ... but never decimated below 100 Hz (reversal timing)
 # never candidates: the contact baseline law itself, and time drift (no physical cause named: a drift
 # with time and no temperature channel is reported as unexplained, correlate "time")
 EXCLUDED = ("linear_contact", "thermal_drift_time")
+ALTERNATIVES_TO_CAPSTAN = ("pulley_friction",)
 
 
 def fixed_params(d: LinkData, name: str) -> dict:
@@ -352,6 +353,10 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
     steps = []
     ranking = {}
     pool = [n for n in applicable(d) if n not in base.names]
+    if "capstan_friction" in base.names:
+        # a lumped pulley chain's friction is the capstan law plus a constant bending loss on force data
+        # alone: beside a capstan baseline it would rename Coulomb friction, not find the pulleys
+        pool = [n for n in pool if n not in ALTERNATIVES_TO_CAPSTAN]
     delay = ()
     for round_ in range(MAX_EFFECTS):
         cands = []
