@@ -26,6 +26,9 @@ def register(subparsers) -> None:
     p.add_argument("--sindy", action="store_true",
                    help="also fit the PySINDy peer (polynomial + Fourier library, STLSQ; static and free-run "
                         "forms) on the same held-out split")
+    from teleop.commands.campaign import add_scheduler_option
+
+    add_scheduler_option(p)  # several files: each diagnosed where the scheduler runs tasks (teleop.campaign)
     p.set_defaults(func=run)
 
 
@@ -64,8 +67,14 @@ def run(args) -> int:
 
     baseline = baseline_effects(args.baseline)
     recs = [read_recording(p, args.map) for p in args.recordings]
-    total = sum(3 * len(applicable(link_data(r, L))) for r in recs for L in find_links(r))
     docs, diags = [], []
+    if args.scheduler != "none":  # each file read again and diagnosed on the scheduler's workers
+        from teleop.campaign.recordings import diagnose_files
+
+        diags = diagnose_files(args.recordings, args.map, args.holdout, args.scheduler, seed=args.seed,
+                               baseline=baseline, sindy=args.sindy)
+        docs, recs = [d.as_dict() for d in diags], []  # nothing left for the in-process loop below
+    total = sum(3 * len(applicable(link_data(r, L))) for r in recs for L in find_links(r))
     with progress(total, "diagnose", unit="fits", leave=False) as bar:
         for rec in recs:
             diag = diagnose(rec, args.holdout, progress=bar.update, seed=args.seed, baseline=baseline,
