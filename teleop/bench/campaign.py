@@ -7,7 +7,8 @@ measured with empty tasks, and from these, on paper, the wall time of a large gr
 c: one task's own CPU time (mean over the in-process run: what a dedicated core takes, whatever else runs
 on this machine), o: wall time per empty task through the scheduler and the store (the client writes every
 result: a serial cost), start: starting the scheduler. The estimate assumes the tasks outnumber the workers
-many times over and a scheduler that keeps up.
+many times over and a scheduler that keeps up. "cores used" (the tasks' CPU seconds over the wall time)
+says how much of the machine a run got: on a machine shared with other work a speed-up needs free cores.
 """
 
 from __future__ import annotations
@@ -76,6 +77,8 @@ def run(args) -> int:
                          "wall_s": rep.wall_s, "start_s": rep.start_s, "task_s_mean": sum(secs) / len(secs),
                          "task_s_sum": sum(secs),
                          "task_cpu_s_mean": sum(rep.task_cpu_seconds) / len(rep.task_cpu_seconds),
+                         # cores the tasks got on average: what the machine gave (its other users take the rest)
+                         "cores_used": sum(rep.task_cpu_seconds) / rep.wall_s,
                          "identical_to_first": _same_results(f"{tmp}/0", f"{tmp}/{i}")})
         noop = Campaign(source="empty tasks", kind="noop", seed=0, study=args.overhead_tasks)
         print(f"bench campaign: {args.overhead_tasks} empty tasks on {schedulers[-1]}", file=sys.stderr)
@@ -97,10 +100,10 @@ def run(args) -> int:
                     "start_s": overhead["start_s"], "compute_s": compute, "scheduler_s": sched,
                     "total_s": overhead["start_s"] + compute + sched}
     print(f"{'scheduler':>12} {'workers':>7} {'tasks':>5} {'wall s':>8} {'start s':>7} {'task s':>7} "
-          f"{'task CPU s':>10} {'speed-up':>8}  identical  load (1 min, before/after: the machine's other users)")
+          f"{'task CPU s':>10} {'cores used':>10} {'speed-up':>8}  identical  load (1 min, before/after)")
     for r in runs:
         print(f"{r['scheduler']:>12} {r['workers']:>7} {r['tasks']:>5} {r['wall_s']:8.1f} {r['start_s']:7.1f} "
-              f"{r['task_s_mean']:7.2f} {r['task_cpu_s_mean']:10.2f} {r['speedup']:8.2f}  "
+              f"{r['task_s_mean']:7.2f} {r['task_cpu_s_mean']:10.2f} {r['cores_used']:10.2f} {r['speedup']:8.2f}  "
               f"{'yes' if r['identical_to_first'] else 'NO':9}  {r['load_1min'][0]:.1f} / {r['load_1min'][1]:.1f}")
     print(f"scheduler cost per task ({overhead['tasks']} empty tasks on {overhead['scheduler']}): "
           f"{overhead['per_task_s'] * 1e3:.1f} ms; start {overhead['start_s']:.1f} s")
