@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.diagnosis.identify import Fit, LinkResult, identify_link, rms
+from teleop.diagnosis.identify import Fit, LinkResult, identify_link, rms, simulation_baseline
 from teleop.diagnosis.links import LinkData, find_links, link_data, predict
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
@@ -236,6 +236,15 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
     results, peer, corrections = [], {}, {}
     for link in find_links(rec):
         d = link_data(rec, link, corrections)
+        used = {link.input, link.load, link.drive} & set(corrections)
+        if used:
+            # a correction found on another link must make this one's baseline fit better, or it was that
+            # link's misfit (a stiffening spring read as a sensor hysteresis), not its sensor's
+            plain = link_data(rec, link)
+            with_c = simulation_baseline(d, fit_idx, hold_idx, tuple(baseline), seed)
+            without = simulation_baseline(plain, fit_idx, hold_idx, tuple(baseline), seed)
+            if without.rmse_hold <= with_c.rmse_hold:
+                d = plain
         res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed,
                                         baseline=tuple(baseline))
         if link.kind == "position" and "backlash" in res.final.names:

@@ -391,6 +391,8 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
                 delay = (tau, r_delay)   # a plain delay explains it better: name nothing
                 break
         pays = pick is not None and (pick.rmse_hold * ACCEPT <= current.rmse_hold) and delta_bic(pick, current) < 0
+        if pays and foreign(d, current, pick, hold_idx):
+            break
         if not pays and round_ == 0 and len(cands) >= 2:
             pair = _pair(d, current, cands, fit_idx, hold_idx, seed)
             if pair:
@@ -417,6 +419,22 @@ def _play_restarts(d: LinkData, start: LinkModel, fit_idx: slice, hold_idx: slic
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             pass
     return out
+
+
+#: conditions no catalogue effect has as its signature: an effect whose own contribution is best located there
+#: is absorbing physics outside the catalogue (a pulley's eccentricity, cogging) and is not named
+FOREIGN = ("periodic in position",)
+
+
+def foreign(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
+    """True when the effect `pick` adds to `current` acts where no catalogue effect does (FOREIGN)."""
+    from teleop.diagnosis.locate import locate
+
+    new = [n for n in pick.names if n not in current.names]
+    y1 = predict(d, pick.model)
+    y1_without = predict(d, pick.model.with_effects([(n, p) for n, p in pick.model.effects if n not in new]))
+    y0 = predict(d, current.model)
+    return locate(d, d.y - y0, d.y, index=hold_idx, change=y1 - y1_without).condition in FOREIGN
 
 
 PAIR_TOP = 3   # when no single effect pays, pairs of the best few singles are fitted jointly
