@@ -150,7 +150,7 @@ def default_estimator(frame_dt: float, cal=None):
 
 def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | None = None,
                 params: LoopParams | None = None, estimator=None, seed: int | None = None,
-                spin_us: float = 200.0, flush_interval: float = 0.1, haptic=None, robot=None,
+                spin_us: float | None = None, flush_interval: float = 0.1, haptic=None, robot=None,
                 robot_process_hz: float | None = 1000.0, realtime: bool = True,
                 robot_rt_priority: int | None = None, live: tuple | None = None,
                 live_scene: dict | None = None) -> SessionResult:
