@@ -1,13 +1,16 @@
 """Name the missing physics: fit catalogue effects on top of a link's baseline and rank them on held-out data.
 
-For each link: the baseline (gain, offset) is fitted on the first part of the recording (`fit`), every
-catalogue effect that the link's channels allow is fitted jointly with the baseline (scipy least_squares,
+For each link: the baseline (gain, offset, and the baseline effects the simulation already has, e.g. the
+sheath's capstan friction: `simulation_baseline`) is fitted on the first part of the recording (`fit`), every
+other catalogue effect that the link's channels allow is fitted jointly with it (scipy least_squares,
 parameters in the physics registry's bounded unit space), and all are scored by RMSE on the last part
 (`hold`), with the model run over the whole record so stateful effects carry their history. An effect is
 accepted when it lowers the held-out RMSE by at least ACCEPT and its information criterion (BIC with
 the residual's effective sample count, residuals being autocorrelated) improves; among candidates whose
 held-out RMSE is within PARSIMONY of the best, the one with the fewest parameters wins. Effects are added
-greedily while they pay.
+greedily while they pay. An effect whose own contribution is best located where no catalogue effect acts
+(FOREIGN: periodic in position) is not named; when no single effect pays, pairs of the PAIR_TOP best are
+fitted jointly (`_pair`); a pure delay that fits better than any effect names nothing (`delay_fit`).
 """
 
 from __future__ import annotations

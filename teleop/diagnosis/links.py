@@ -2,14 +2,19 @@
 
 A link maps recorded input channels to one recorded output channel:
 
-- position link: motor_pos -> tip_pos (load for cable stretch: tip_force, else motor_force);
+- position link: motor_pos -> tip_pos (load for cable stretch: tip_force, else motor_force; none with
+  `load = spring`, where the load is the tip's own travel);
+- spring law (`load = spring`, a position link through a spring): tip_pos (else motor_pos) -> tip_force;
+  position effects act on the travel in the input's units, the gain is the spring's, and the tip force
+  sensor's effects apply to the output;
 - force link: tip load -> motor_force, the motor motion (motor_pos, else tip_pos) giving the direction;
   with `load = spring` and no tip_force the spring's deflection (tip_pos, else motor_pos) is the load;
 - contact link: indentation -> force (a pad poke).
 
-Baseline (what every catalogue effect is an addition to): the ideal rigid, lossless transmission, an
-affine map y = g u + c (gain g: transmission ratio and units; offset c: sensor and encoder zeros). For
-the contact link the baseline is the linear contact law with the same gain/offset, F = g max(d, 0) + c.
+Baseline (what every finding is an addition to): an affine map y = g u + c (gain g: transmission ratio
+and units; offset c: sensor and encoder zeros) and the first `LinkModel.base` effects of the chain (the
+simulation the user already has: by default the sheath's capstan friction on force links). For the contact
+link the affine part is the linear contact law, F = g max(d, 0) + c.
 
 With effects, the link's model is a chain of registered physics effects (teleop.physics), run on the
 referred signals: position: z = g u + c -> E_1 -> E_2 ... = tip; force: L = g u -> E_1 ... + c -> sensor
