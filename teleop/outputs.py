@@ -95,6 +95,18 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
     return path
 
 
+def write_text_synced(path: str | Path, text: str) -> Path:
+    """Write `text` atomically and durably (temp file, fsync, rename): after a crash the file is either the
+    old one or the whole new one, never a part (resumable state, campaign results)."""
+    def write(tmp: Path) -> None:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+
+    return atomic_write(path, write)
+
+
 def dumps_json(obj: Any, sort_keys: bool = False, compact: bool = False) -> str:
     """Deterministic JSON text: insertion order (the documented order) unless `sort_keys`; floats as
     Python's shortest round-trip repr; indented, or on one line without spaces if `compact`."""

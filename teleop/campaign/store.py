@@ -24,17 +24,11 @@ from pathlib import Path
 
 from teleop.campaign.identity import Task
 from teleop.errors import InputError
-from teleop.outputs import atomic_write, dumps_json
+from teleop.outputs import dumps_json, write_text_synced
 
 
 def _write_synced(path: Path, text: str) -> None:
-    def write(tmp: Path) -> None:
-        with open(tmp, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-
-    atomic_write(path, write)
+    write_text_synced(path, text)
 
 
 class ResultStore:

@@ -9,12 +9,11 @@ resumes exactly where an interrupted study stopped.
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 from typing import Callable
 
 from teleop.errors import InputError
-from teleop.outputs import atomic_write, dumps_json
+from teleop.outputs import dumps_json, write_text_synced
 from teleop.protocols.blind.protocol import (ANSWERS, HARDER, SOFTER, UNSURE, Compare, Rate, check_ratings,
                                              next_step)
 from teleop.protocols.blind.study import ParticipantRecord, StudyResult, coordinator_draws
@@ -27,15 +26,7 @@ _ALIASES = {"h": HARDER, "harder": HARDER, "s": SOFTER, "softer": SOFTER,
 
 def save_state(path: Path, state: dict) -> None:
     """Write the state atomically (temp file, fsync, rename): the file is always a whole answer set."""
-    text = dumps_json(state)
-
-    def write(tmp: Path) -> None:
-        with open(tmp, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-
-    atomic_write(path, write)
+    write_text_synced(path, dumps_json(state))
 
 
 def new_state(seed: int, participants: int, areas) -> dict:
