@@ -87,6 +87,11 @@ class ReadingEstimator:
         t = self.tensions_into(np.ascontiguousarray(counts, dtype=float))
         return t, self.tick.estimate_into(np.ascontiguousarray(pose, dtype=float), t, float(dt))[1, :6]
 
+    @property
+    def compensated(self) -> np.ndarray:
+        """(n,) [N] the last update's friction-compensated tip-side tensions (a view of the tick's buffer)."""
+        return self.tick.out[2, :len(self.geom.B)]
+
     def update_floats(self, counts, pose, dt: float) -> tuple[list, list]:
         """(tensions [N], wrench [N, N m] in {B}) as lists of 6 floats from counts and pose (sequences)."""
         self._counts[:] = counts

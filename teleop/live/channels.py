@@ -23,8 +23,8 @@ WORLD = "world"  # the robot's base frame {B}
 # topic: (rate [Hz] on session time, row fields) for the JSON plot channels
 PLOTS = {
     "/live/stylus": (100.0, ("measured_cp", "measured_cv", "force_raw", "servo_cf", "buttons", "operator_present")),
-    "/live/cables": (100.0, ("servo_jp", "commanded_lengths", "position_steps")),
-    "/live/tensions": (100.0, ("fsr_counts", "tensions")),
+    "/live/cables": (100.0, ("servo_jp", "commanded_lengths", "position_steps", "measured_lengths")),
+    "/live/tensions": (100.0, ("fsr_counts", "tensions", "compensated_tensions")),
     "/live/wrench": (100.0, ("measured_cf", "wrench_truth")),
     "/live/loop": (100.0, ("state", "lateness_us", "tick_us", "read_us", "map_us", "robot_us", "estimate_us",
                            "render_us", "write_us", "record_us")),
@@ -40,6 +40,8 @@ RATES = {**{k: v[0] for k, v in PLOTS.items()}, TOPIC_TF: RATE_TF, TOPIC_SCENE: 
 def plot_schema(layout: Layout, topic: str) -> bytes:
     """JSON schema of a plot channel (numbers and arrays of numbers, with `t` [s] and `tick`)."""
     widths = {s.name: s.width for s in layout.signals}
+    if "position_steps" in widths:
+        widths["measured_lengths"] = widths["position_steps"]   # derived from the steps (RowMessages.plot)
     props = {"tick": {"type": "integer"}, "t": {"type": "number", "description": "session time [s]"}}
     for name in PLOTS[topic][1]:
         if name in widths:
@@ -66,6 +68,11 @@ class RowMessages:
     def __init__(self, layout: Layout, geometry: dict | None = None, pads: list | None = None):
         self.cols = layout.columns()
         self.plots = {topic: [n for n in names if n in self.cols] for topic, (_, names) in PLOTS.items()}
+        # the lengths the motors measure: home lengths minus the steps hauled in (needs both from the session)
+        self.L_home = (geometry or {}).get("L_home")
+        self.steps_per_m = (geometry or {}).get("steps_per_m")
+        if self.L_home is not None and self.steps_per_m and "position_steps" in self.cols:
+            self.plots["/live/cables"].append("measured_lengths")
         self.B = (geometry or {}).get("B")
         self.r = (geometry or {}).get("r")
         self.pads = list(pads or [])
@@ -74,6 +81,10 @@ class RowMessages:
         c = self.cols
         msg = {"tick": int(row[c["tick"]][0]), "t": float(row[c["t"]][0])}
         for name in self.plots[topic]:
+            if name == "measured_lengths":
+                steps = row[c["position_steps"]]
+                msg[name] = [float(L - n / self.steps_per_m) for L, n in zip(self.L_home, steps)]
+                continue
             v = row[c[name]].tolist()
             msg[name] = v[0] if len(v) == 1 else v
         if topic == "/live/loop":

@@ -109,9 +109,16 @@ def _start_live(tp, layout, extras, recorder, live: tuple, scene: dict | None):
     else:
         ring = Ring(layout.width, 4096, gated=False)
         tp.tap = RowTap(layout, ring.push, extras)
+    from teleop.kinematics import pose2lengths
+
     g = tp.geom
+    # home lengths and steps per metre turn the motors' steps into the lengths they measure
+    spec = getattr(tp.robot, "spec", None)
+    geometry = {"B": g.B.tolist(), "r": g.r.tolist(),
+                "L_home": np.asarray(pose2lengths(np.asarray(tp.params.mapping.home, dtype=float), g)).tolist(),
+                "steps_per_m": float(getattr(spec, "steps_per_m", 0.0) or 0.0)}
     view = LiveView(layout, ring, host=live[0], port=live[1],
-                    scene={"geometry": {"B": g.B.tolist(), "r": g.r.tolist()}, **(scene or {})}).start()
+                    scene={"geometry": geometry, **(scene or {})}).start()
     if view.failed:
         view.close()
         return None

@@ -42,7 +42,8 @@ def session_layout(extras: dict | None = None) -> Layout:
             Signal(TOPIC_ROBOT, "status", 1, INT), Signal(TOPIC_ROBOT, "boot_id", 1, INT),
             Signal(TOPIC_ROBOT, "wrench_truth", 6)]
     sig += [Signal(TOPIC_ROBOT, f"x_{k}", w) for k, w in (extras or {}).items()]
-    sig += [Signal("/estimation", "tensions", 6), Signal("/estimation", "measured_cf", 6)]
+    sig += [Signal("/estimation", "tensions", 6), Signal("/estimation", "measured_cf", 6),
+            Signal("/estimation", "compensated_tensions", 6)]
     sig += [Signal(TOPIC_FORCE, "force_raw", 3), Signal(TOPIC_FORCE, "ramp"),
             Signal(TOPIC_FORCE, "servo_cf", 3)]
     return Layout(tuple(sig), {TOPIC_ROBOT: "new"})
@@ -71,6 +72,7 @@ class RowTap:
         self.stage_sl = slice(self.sl["read_us"].start, self.sl["record_us"].stop)
         self.extras = dict(extras or {})
         self._x_sl = [(k, self.sl[f"x_{k}"]) for k in self.extras]
+        self._comp_sl = self.sl.get("compensated_tensions")
         self.o = np.array([self.sl[c].start for c in COLUMNS], dtype=np.int64)
         self.w = np.array([self.sl[c].stop - self.sl[c].start for c in COLUMNS], dtype=np.int64)
         self.w[KT.STAGES] = self.stage_sl.stop - self.stage_sl.start
@@ -98,6 +100,9 @@ class RowTap:
                          rd is not None, *r_args, _arr(tp.tensions), _arr(tp.wrench), fx, fy, fz, x.ramp, _arr(x.F))
         if bad >= 0:
             raise ValueError(f"signal {COLUMNS[bad]}: expected {self.w[bad]} numbers")
+        comp = getattr(tp, "compensated", None)
+        if self._comp_sl is not None and comp is not None:
+            r[self._comp_sl] = comp
         if rd is not None:
             ex = rd.extras
             for k, sl in self._x_sl:

@@ -44,6 +44,13 @@ def test_every_channel_arrives_at_its_rate(tmp_path):
     assert len(stylus["measured_cp"]) == 3 and len(stylus["servo_cf"]) == 3
     tensions = json.loads(by_topic["/live/tensions"][-1][1])
     assert len(tensions["tensions"]) == 6 and len(tensions["fsr_counts"]) == 6
+    # each cable's raw (at the FSR) and friction-compensated (tip-side) tension, both estimated this session
+    comp = np.array(tensions["compensated_tensions"])
+    assert comp.shape == (6,) and np.isfinite(comp).all() and (comp > 0).all()
+    # the lengths the motors measure (home lengths minus the steps hauled in) beside the commanded ones
+    cables = json.loads(by_topic["/live/cables"][-1][1])
+    measured, commanded = np.array(cables["measured_lengths"]), np.array(cables["commanded_lengths"])
+    assert measured.shape == (6,) and np.abs(measured - commanded).max() < 1e-5
     # the state changes (foxglove.Log, protobuf), sent again to a viewer that subscribed after them
     logs = [p for _, p in by_topic[lc.TOPIC_FAULTS]]
     assert any(b"DISABLED -> ALIGNING" in p for p in logs) and any(b"ALIGNING -> ENABLED" in p for p in logs)
