@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,7 +17,7 @@ from teleop.cli import main
 from teleop.errors import InputError
 from teleop.sensors import LOADING, UNLOADING, FbgParams, FsrCalibration, ProximalDistalModel, default_fsr_calibration
 
-EXAMPLE_MRDLAB = Path(__file__).resolve().parents[2] / "examples" / "mrdlab"
+from tests._data import EXAMPLE_MRDLAB
 
 
 def _write(tmp_path, name, text):

@@ -5,7 +5,6 @@ the project's simulation (capstan friction in the baseline): the play is still n
 named physics beats both generic peers.
 Contains data from the MRDLab mis-tool-characterization dataset, ODbL 1.0."""
 
-from pathlib import Path
 
 import pytest
 
@@ -13,8 +12,9 @@ from teleop.diagnosis.crossfile import cross_file
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.recording_io import read_recording
 
-MRDLAB = Path(__file__).resolve().parents[3] / "shared" / "data" / "mrdlab"  # beside the checkout
-pytestmark = pytest.mark.skipif(not MRDLAB.is_dir(), reason="the MRDLab runs (../shared/data/mrdlab) are absent")
+from tests._data import MRDLAB, needs_mrdlab
+
+pytestmark = needs_mrdlab
 RUNS = ["tool4_left_00.TXT", "tool4_left_43.TXT"]   # slowest/lightest and fastest/heaviest
 FRICTION = {"coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis", "capstan_friction"}
 

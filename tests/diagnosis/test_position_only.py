@@ -4,8 +4,6 @@ the same split, whatever the play's width (radians of a tendon-sheath joint) or 
 da Vinci runs with their force columns dropped it still names the jaw's play.
 Contains data from the MRDLab mis-tool-characterization dataset, ODbL 1.0."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
@@ -13,8 +11,7 @@ from scipy.optimize import least_squares
 from teleop.diagnosis.diagnose import diagnose, split
 from teleop.diagnosis.recording_io import read_interchange, read_recording, write_interchange
 from teleop.physics.backlash import backlash
-
-MRDLAB = Path("/work/shared/data/mrdlab")
+from tests._data import EXAMPLE_MRDLAB, MRDLAB, needs_mrdlab
 
 
 def _play_operator_rmse(u, y, fit, hold):
@@ -59,9 +56,11 @@ def test_never_worse_than_a_single_play_operator(tmp_path, seed, amp_deg, gain, 
     assert doc["channels"]["tip_pos"]["rmse_model"] <= 1.05 * play
 
 
-@pytest.mark.parametrize("run", ["tool4_left_20.TXT"])
-def test_mrdlab_position_columns_only(tmp_path, run):
-    full = read_recording(MRDLAB / run, "mrdlab")
+@pytest.mark.parametrize("path", [EXAMPLE_MRDLAB / "tool4_left_43_first8s.TXT",
+                                  pytest.param(MRDLAB / "tool4_left_20.TXT", marks=needs_mrdlab)],
+                         ids=["excerpt in examples/", "full run in ../shared"])
+def test_mrdlab_position_columns_only(tmp_path, path):
+    full = read_recording(path, "mrdlab")
     chans = {k: full.channels[k] for k in ("motor_pos", "tip_pos")}
     path = write_interchange(tmp_path / "pos.csv", full.t, chans, {"motor_pos": "rad", "tip_pos": "rad"},
                              {"load": "external"})

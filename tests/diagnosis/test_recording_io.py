@@ -1,7 +1,6 @@
 """Recordings in: interchange CSV round trip, the MRDLab column map, and malformed inputs."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +10,7 @@ from teleop.diagnosis.recording_io import (builtin_map, load_column_map, read_in
                                            write_interchange)
 from teleop.errors import InputError
 
-MRDLAB = Path(__file__).resolve().parents[3] / "shared" / "data" / "mrdlab"  # beside the checkout
+from tests._data import MRDLAB, needs_mrdlab
 
 
 def _csv(tmp_path, text, name="rec.csv"):
@@ -47,7 +46,7 @@ def test_units_convert_to_si(tmp_path):
     assert "extra_col" in rec.extra
 
 
-@pytest.mark.skipif(not MRDLAB.is_dir(), reason="the MRDLab runs (../shared/data/mrdlab) are absent")
+@needs_mrdlab
 def test_mrdlab_map_reads_all_runs():
     cmap = load_column_map(builtin_map("mrdlab"))
     assert {c.quantity for c in cmap.columns} == {"t", "motor_pos", "motor_force", "tip_pos", "tip_force"}

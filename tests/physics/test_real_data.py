@@ -3,15 +3,15 @@
 Contains data from the MRDLab mis-tool-characterization dataset, ODbL 1.0.
 """
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from teleop.physics import Signals, fit
 
-DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "mrdlab"
-pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="the MRDLab runs (../shared/data/mrdlab) are absent")
+from tests._data import MRDLAB as DATA, needs_mrdlab
+
+pytestmark = needs_mrdlab
 
 
 @pytest.mark.parametrize("run", ["tool4_left_03.TXT", "tool4_left_43.TXT"])
