@@ -118,7 +118,10 @@ class Teleop:
         self.pose = m.home.astype(float).copy()
         self.L_last = None  # last commanded lengths [m]
         self.tensions = np.zeros(len(self.geom.B))
-        self.compensated = np.zeros(len(self.geom.B))  # friction-compensated tip-side tensions [N] (0: none yet)
+        # friction-compensated tip-side tensions [N] of the last estimate (0: none yet): a view of the
+        # estimator's own buffer, which each estimate overwrites (no per-tick copy)
+        comp = getattr(estimator, "compensated", None)
+        self.compensated = comp if comp is not None else np.zeros(len(self.geom.B))
         self.wrench = np.zeros(6)
         self.anchor_stylus = np.zeros(3)
         self.anchor_robot = self.pose[:3].copy()
@@ -316,9 +319,6 @@ class Teleop:
                         if not (np.isfinite(t).all() and np.isfinite(f).all()):
                             raise ValueError("estimated tensions/wrench not finite")
                     self.tensions, self.wrench = t, f
-                    comp = getattr(self.estimator, "compensated", None)
-                    if comp is not None:
-                        self.compensated[:] = comp
                     if self.state != State.FAULT:
                         reason = self.range.update(now, t) if self.state != State.DISABLED else None
                         reason = reason or self.stuck.update(now, t, x.dL)
