@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from teleop.kernels.friction import clamp as _clamp_kernel
+
 
 def clamp_scan(y0: float, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """y (n,): y_k = min(max(y_{k-1}, lo_k), hi_k) with y_{-1} = y0; needs lo <= hi elementwise."""
@@ -57,6 +59,6 @@ def play(y0: float, u: np.ndarray, r) -> np.ndarray:
     return clamp_scan(y0, u - r, u + r)
 
 
-def clamp_step(y: float, lo: float, hi: float) -> float:
-    """One sample of `clamp_scan` (scalar)."""
-    return hi if y > hi else (lo if y < lo else y)
+#: one sample of `clamp_scan` (scalar): clamp_step(y, lo, hi) = min(max(y, lo), hi); the play operator's step
+#: has one home, the compiled kernel teleop.kernels.friction.clamp that the capstan kernels use too
+clamp_step = _clamp_kernel
