@@ -47,7 +47,7 @@ def run(args) -> int:
     if not (50 <= args.rate <= 20000 and 5 <= args.seconds <= 600 and 0 <= args.noise <= 20):
         raise InputError("--rate must be 50..20000 Hz, --seconds 5..600, --noise 0..20")
     cfg = GenConfig(args.rate, args.seconds, args.noise)
-    from teleop.bench.diagnose_rig import rig_plan, rig_text, run_rig_case, summarise_rig
+    from teleop.bench.diagnose_rig import rates, rig_plan, rig_text, run_rig_case, summarise_rig
 
     n_gen = {"all": args.cases // 2, "generator": args.cases, "rig": 0}[args.suite]
     rows, rig_rows = [], []
@@ -62,17 +62,7 @@ def run(args) -> int:
             bar.update()
     summary = summarise(rows) if rows else {}
     rig_summary = summarise_rig(rig_rows) if rig_rows else {}
-    allrows = [{"correct": r["correct"], "clean": r["truth"] == "none", "params_ok": r.get("params_ok"),
-                "improved_2x": r.get("improved_2x")} for r in rows]
-    allrows += [{"correct": r["correct"], "clean": r["truth"] == ["none"], "params_ok": r.get("params_ok"),
-                 "improved_2x": r.get("improved_2x")} for r in rig_rows]
-    eff = [r for r in allrows if not r["clean"]]
-    clean = [r for r in allrows if r["clean"]]
-    combined = {"cases": len(allrows),
-                "named_first_rate": sum(r["correct"] for r in eff) / len(eff) if eff else None,
-                "none_rate": sum(r["correct"] for r in clean) / len(clean) if clean else None,
-                "params_within_20pct_rate": sum(bool(r["params_ok"]) for r in eff) / len(eff) if eff else None,
-                "improved_2x_rate": sum(bool(r["improved_2x"]) for r in eff) / len(eff) if eff else None}
+    combined = rates(rows + rig_rows)
     if args.sindy:
         peers = [r["peer"] for r in rows if "peer" in r] + [p for r in rig_rows for p in r.get("peer", [])]
         le = [p for p in peers if p["model_le_sindy"]]

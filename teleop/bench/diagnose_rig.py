@@ -107,22 +107,25 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
     return row
 
 
+def rates(rows: list[dict]) -> dict:
+    """The bench's rates over scored rows of either source (a generator row's truth is a name, a rig row's
+    a list of names; "none" or ["none"] for an effect-free case)."""
+    eff = [r for r in rows if r["truth"] not in ("none", ["none"])]
+    clean = [r for r in rows if r["truth"] in ("none", ["none"])]
+
+    def rate(xs):
+        return float(np.mean(xs)) if xs else None
+    return {"cases": len(rows), "effect_cases": len(eff), "clean_cases": len(clean),
+            "named_first_rate": rate([r["correct"] for r in eff]),
+            "none_rate": rate([r["correct"] for r in clean]),
+            "params_within_20pct_rate": rate([bool(r["params_ok"]) for r in eff]),
+            "improved_2x_rate": rate([bool(r["improved_2x"]) for r in eff]),
+            "improvement_min": min((r["improvement"] for r in eff), default=None)}
+
+
 def summarise_rig(rows: list[dict]) -> dict:
     """Rates over rig rows, overall and per column subset (compounds apart), and each subset's confusion
     matrix (true effects -> first named)."""
-    def rates(rs):
-        eff = [r for r in rs if r["truth"] != ["none"]]
-        clean = [r for r in rs if r["truth"] == ["none"]]
-
-        def rate(xs):
-            return float(np.mean(xs)) if xs else None
-        return {"cases": len(rs), "effect_cases": len(eff), "clean_cases": len(clean),
-                "named_first_rate": rate([r["correct"] for r in eff]),
-                "none_rate": rate([r["correct"] for r in clean]),
-                "params_within_20pct_rate": rate([r["params_ok"] for r in eff]),
-                "improved_2x_rate": rate([r["improved_2x"] for r in eff]),
-                "improvement_min": min((r["improvement"] for r in eff), default=None)}
-
     groups: dict = {}
     for r in rows:
         key = "compound (two effects)" if len(r["switched_on"]) > 1 else f"{r['subset']} ({r['load']})"
