@@ -245,11 +245,6 @@ def clean_motion(x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return xc, sign * np.abs(v)
 
 
-def clean_rate(x: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """(n,) rate of x with its sign cleaned (see clean_motion)."""
-    return clean_motion(x, t)[1]
-
-
 def fast_replace(sig: Signals, **changes) -> Signals:
     """A copy of `sig` with channels replaced by arrays already known to be valid (n,) floats; unlike
     Signals.replace nothing is re-checked or re-derived (the fitting loop calls this thousands of times)."""

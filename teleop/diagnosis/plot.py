@@ -3,8 +3,6 @@ held-out part with the located windows shaded; plus the input-output loop (hyste
 
 from __future__ import annotations
 
-import numpy as np
-
 from teleop.diagnosis.links import predict
 
 ATTRIBUTION = "Contains data from the MRDLab mis-tool-characterization dataset, ODbL 1.0."
