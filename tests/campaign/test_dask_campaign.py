@@ -1,5 +1,6 @@
 """A tiny blind-study campaign on a real Dask LocalCluster (2 worker processes) against the in-process run:
-byte-identical results, a failing grid point reported with its parameters while the other finishes, and a
+byte-identical results, a failing grid point reported with its parameters while the other finishes, a
+worker process killed under a task (Dask runs the task again elsewhere; its result is written once), and a
 run killed with SIGKILL resumed with nothing lost and nothing repeated."""
 
 import os
@@ -9,10 +10,13 @@ import sys
 import time
 from pathlib import Path
 
+import dask
+import psutil
 import pytest
 
 from teleop.campaign.runner import run_campaign
 from teleop.campaign.spec import load_campaign
+from teleop.campaign.store import ResultStore
 
 # 2 grid points x 4 participants, one participant per task: the force = 4 N point asks 40 N of the robot's
 # tip and every press faults it (max_aborts = 0: the participant gives up at once), so its 4 tasks fail
@@ -109,3 +113,31 @@ def test_sigkill_mid_campaign_loses_nothing_and_repeats_nothing(reference, tmp_p
     assert {n: (out / "tasks" / n).stat().st_mtime_ns for n in survived} == stamps  # not written again
     assert files(out / "tasks") == reference_files
     assert (out / "summary.json").read_bytes() == (ref_dir / "summary.json").read_bytes()
+
+
+def test_a_worker_killed_under_a_task_loses_nothing_and_writes_each_result_once(reference, tmp_path, monkeypatch):
+    path, campaign, ref, ref_dir = reference
+    ok_tasks = [t for t in kind_tasks(campaign) if "force=0.2" in t.label]
+    marked = ok_tasks[1]  # a task that succeeds: its first attempt computes, then its worker dies
+    mark = tmp_path / "died"
+    monkeypatch.setenv("TELEOP_TEST_DIE_ONCE_TASK", marked.id)
+    monkeypatch.setenv("TELEOP_TEST_DIE_ONCE_MARK", str(mark))
+    saved = []
+    real_save = ResultStore.save
+    monkeypatch.setattr(ResultStore, "save", lambda self, task, result: (saved.append(task.id),
+                                                                         real_save(self, task, result)))
+    preload = str(Path(__file__).with_name("die_once_preload.py"))
+    with dask.config.set({"distributed.worker.preload": [preload]}):
+        report = run_campaign(campaign, tmp_path / "out", "local:2", bar=False)
+    died = int(mark.read_text())  # the first attempt ran and its worker process is gone
+    assert not psutil.pid_exists(died) or psutil.Process(died).status() == psutil.STATUS_ZOMBIE
+    assert report.ran == 8 and {t.id for t, _ in report.failed} == {t.id for t, _ in ref.failed}
+    assert sorted(saved) == sorted(t.id for t in ok_tasks)  # each finished task written once, the marked one too
+    assert files(tmp_path / "out" / "tasks") == files(ref_dir / "tasks")
+    assert (tmp_path / "out" / "summary.json").read_bytes() == (ref_dir / "summary.json").read_bytes()
+
+
+def kind_tasks(campaign):
+    from teleop.campaign.spec import kind_module
+
+    return kind_module(campaign.kind).tasks(campaign)
