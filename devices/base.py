@@ -131,6 +131,9 @@ class RobotReading:
         wrench_truth: (6,) ground-truth external wrench [N, N m] when the backend has one (the seed's
             Nano17 F/T sensor; the simulator's contact), else None.
         extras: backend-specific values (e.g. true tensions in simulation).
+        fbg_pm: (2, 6) Bragg wavelength shifts [pm] of the distal FBG force sensors (seed 001: row 0 FBG1,
+            strain-free, temperature only; row 1 FBG2, force and temperature), NaN on a cable without one;
+            None when the robot has no FBG (docs/formats.md "Robot readings: sensor kinds").
     """
 
     t: float
@@ -142,6 +145,7 @@ class RobotReading:
     boot_id: int = 0
     wrench_truth: np.ndarray | None = None
     extras: dict = field(default_factory=dict)
+    fbg_pm: np.ndarray | None = None
 
 
 @runtime_checkable

@@ -501,6 +501,14 @@ class ProximalDistalModel:
         a, b = self.Kp * Fp + self.bp, self.Kr * Fp + self.br
         return np.minimum(a, b), np.maximum(a, b)
 
+    def step(self, Fd: float, Fp: float) -> float:
+        """The distal tension [N] after proximal tension Fp [N] from the previous one Fd [N]: one sample of
+        `distal` (the same clamp, teleop.physics.scan.clamp_step)."""
+        from teleop.physics.scan import clamp_step
+
+        a, b = self.Kp * Fp + self.bp, self.Kr * Fp + self.br
+        return float(clamp_step(Fd, a, b) if a <= b else clamp_step(Fd, b, a))
+
     def distal(self, Fp, Fd0: float | None = None) -> np.ndarray:
         """(n,) distal tension estimate [N] from a proximal tension series Fp (n,) [N].
 
@@ -540,3 +548,59 @@ def fit_proximal_distal(Fp, Fd, min_step: float | None = None) -> ProximalDistal
 
     sol = least_squares(resid, [Kp, Kr, bp, br], x_scale=[0.1, 0.1, 0.1, 0.1])
     return ProximalDistalModel(*map(float, sol.x))
+
+
+def fit_proximal_distal_origin(Fp, Fd, direction=None) -> ProximalDistalModel:
+    """Kp, Kr of seed 001 eq 7 with lines through the origin (eqs 4-6: Fd = Fp e^(-+a), bp = br = 0) from one
+    instrumented cable's proximal and distal tensions Fp, Fd (n,) [N].
+
+    Unlike `fit_proximal_distal` it needs no distal force swing: a record at a constant distal load whose
+    cable is hauled in and paid out (the palpation's no-load runs) identifies both slopes, because the
+    proximal force swings between Fd / Kp and Fd / Kr. Start: medians of Fd / Fp over the samples of each
+    direction (`direction` (n,): +1 hauling in, -1 paying out; default from the sign of the change of Fp);
+    then least squares of the play-operator prediction (ProximalDistalModel.distal) against Fd.
+    """
+    from scipy.optimize import least_squares
+
+    Fp = np.asarray(Fp, dtype=float)
+    Fd = np.asarray(Fd, dtype=float)
+    if Fp.shape != Fd.shape or Fp.ndim != 1 or Fp.size < 20 or not (np.all(np.isfinite(Fp)) and np.all(np.isfinite(Fd))):
+        raise InputError("fit_proximal_distal_origin: Fp and Fd must be finite 1-D series of the same length (>= 20)")
+    if np.min(Fp) <= 0:
+        raise InputError("fit_proximal_distal_origin: the proximal tension must stay > 0 (a slack cable)")
+    d = np.sign(np.r_[0.0, np.diff(Fp)]) if direction is None else np.sign(np.asarray(direction, dtype=float))
+    ratio = Fd / Fp
+    if np.count_nonzero(d > 0) < 5 or np.count_nonzero(d < 0) < 5:
+        raise InputError("fit_proximal_distal_origin: the record needs both pulling and releasing phases")
+    k0 = sorted((float(np.median(ratio[d > 0])), float(np.median(ratio[d < 0]))))
+
+    def resid(z):
+        return ProximalDistalModel(z[0], z[1]).distal(Fp, Fd[0]) - Fd
+
+    sol = least_squares(resid, k0, x_scale=[0.1, 0.1])
+    Kp, Kr = sorted(map(float, sol.x))
+    return ProximalDistalModel(Kp, Kr)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Sensor kinds of the robot's reading path (docs/formats.md "Robot readings: sensor kinds")
+# --------------------------------------------------------------------------------------------------------
+
+#: fsr: the FSR array at the proximal ends of the sheaths (seed 000); fbg: a dual-grating FBG on the distal
+#: sheath of every cable (seed 001 sec. 2.1, temperature compensated by eq 3); one: the FSR array plus one
+#: cable's distal FBG, the other cables' distal tensions from the eq 7 model identified on it (seed 001 sec. 2.2)
+SENSOR_KINDS = ("fsr", "fbg", "one")
+
+
+def check_sensor_kind(kind: str, where: str = "sensor") -> str:
+    """`kind` if it is one of SENSOR_KINDS, else a one-line InputError naming `where`."""
+    if kind not in SENSOR_KINDS:
+        raise InputError(f"{where}: unknown sensor kind '{kind}' (expected one of: {', '.join(SENSOR_KINDS)})")
+    return kind
+
+
+def fbg_tensions(fbg_pm, p: FbgParams = FbgParams()) -> np.ndarray:
+    """(..., n) tensions [N] from Bragg shifts fbg_pm (..., 2, n) [pm] (row 0 FBG1, row 1 FBG2): eq 3,
+    `fbg2force`; NaN where a cable has no FBG."""
+    a = np.asarray(fbg_pm, dtype=float)
+    return fbg2force(a[..., 0, :], a[..., 1, :], p)

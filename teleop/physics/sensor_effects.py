@@ -19,10 +19,13 @@ from teleop.physics.base import Effect, ParamSpec, Signals, Step, register
 from teleop.physics.scan import clamp_step, play
 
 
-def hysteresis_offset(F: np.ndarray, h: float, delta: float) -> np.ndarray:
-    """(n,) reading offset [N] of a sensor with loading/unloading hysteresis h [N], switch half-width delta [N]."""
+def hysteresis_offset(F: np.ndarray, h: float, delta: float, z0=None) -> np.ndarray:
+    """(n,) reading offset [N] of a sensor with loading/unloading hysteresis h [N], switch half-width delta [N].
+
+    F may be (n, k) (k sensors along the columns). z0: the switch state [N] before F[0] ((k,) or a float;
+    default F[0], neutral); the state after the last sample is F[-1] - offset[-1] delta / h."""
     F = np.asarray(F, dtype=float)
-    z = play(float(F[0]), F, delta)
+    z = play(F[0] if z0 is None else np.asarray(z0, dtype=float), F, delta)
     return h * (F - z) / delta
 
 
