@@ -11,9 +11,6 @@ One reading = `substeps` physics steps of dt. Per reading:
      transitions of stiffness k at reversals
   -> FSR: hysteresis as friction lag between the calibration's loading and unloading branches
      (teleop.sensors.FsrBranchLag), divider -> ADC counts + Gaussian noise, rounded.
-With `backlash` (URL `backlash_mm=W`) each cable's motor-to-cable transmission has play: the realized
-lengths are the play operator (teleop.physics backlash) of the commanded ones, cable by cable, and the pose
-is their least-squares forward kinematics (the elastic equilibrium of six equally stiff taut cables).
 The batch path `run(lengths)` does the same with the array forms of those models (fast); `read()` uses
 their per-sample Step forms; both give the same counts for the same seed (tested).
 """
@@ -29,7 +26,6 @@ from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes.pads import Pad, z_test_pad
 from scenes.pose_follow import PoseFollower
 from scenes.sim_sensors import FbgArray, fbg_cables
-from scenes.rich_plant import RichPlant, RichPlantParams
 from scenes.world import PadWorld, WorldParams
 from teleop.errors import InputError
 from teleop.geometry import Geometry, default_geometry
@@ -37,8 +33,6 @@ from teleop.kernels import sim as KS
 from teleop.kernels import tension as KT
 from teleop.kernels.friction import capstan_play_run, capstan_play_step
 from teleop.kinematics import FREE_AXIAL, check_lengths, poses2lengths
-from teleop.physics import get_effect
-from teleop.physics.backlash import backlash
 from teleop.robot_status import robot_status
 from teleop.sensors import FsrBranchLag, FsrCalibration, default_fsr_calibration
 from teleop.tension import TensionSolver, wrench2tensions
@@ -80,8 +74,6 @@ class SimRobotParams:
             "an estimated 0.5 mm/s"), so palpation reproduces its loads instead (teleop.protocols.palpation).
             None = rigid (the tip tracks exactly).
         ee_damping_ratio: damping ratio of the contact tip on its series spring [-].
-        plant: effects the estimators do not model, switched on in every cable (scenes.rich_plant
-            RichPlantParams: sheath float, Stribeck, Dahl, guide pulley, FSR creep); None: the matched plant.
         capstan_k: stick stiffness of the capstan transition at reversals [N/m]: the sensor tension
             crosses the friction band [t e^-mu Theta, t e^mu Theta] (~1 N at the pretension) over
             band / k of cable travel, 0.2 mm at 5e3 N/m, i.e. ~0.7 s at the seed's 0.5 mm/s (cable speed
@@ -92,11 +84,6 @@ class SimRobotParams:
             between the FSR and the effector is the FSR press block's silicone film (seed 000 §2)
             rather than the 30 mm of steel (~2e5 N/m).
         noise_counts: RMS ADC noise [counts] (ATmega2560 10-bit ADC, +-2 LSB absolute accuracy).
-        backlash: total play (dead band) width of each cable's motor-to-cable transmission (spool, gear)
-            [m]; 0: none. The realized cable length is the play operator of the commanded (motor-side)
-            length; the pose follows the six realized lengths by least squares (equally stiff cables in
-            pretension pull toward their lengths; a cable with slack on one side of its play is the one
-            the others move). The motor's step count still reports the commanded length.
     """
 
     geometry: Geometry = field(default_factory=default_geometry)
@@ -107,16 +94,11 @@ class SimRobotParams:
     pretension: float = 2.85
     tip_stiffness: float | None = 1.0e4
     ee_damping_ratio: float = 0.7
-    plant: RichPlantParams | None = None
     capstan_k: float = 5e3
     noise_counts: float = 1.0
-    backlash: float = 0.0
 
     def __post_init__(self):
         g = self.geometry
-        if not (math.isfinite(self.backlash) and 0 <= self.backlash < g.l_max - g.l_min):
-            raise InputError(f"sim robot: backlash must be a play width in [0, {g.l_max - g.l_min:g}) m, got "
-                             f"{self.backlash}")
         if self.substeps < 1 or not g.t_min < self.pretension < g.t_max:
             raise InputError(f"sim robot: need substeps >= 1 and t_min < pretension < t_max, got "
                              f"{self.substeps}, {self.pretension}")
@@ -128,12 +110,6 @@ class SimRobotParams:
     def dt(self) -> float:
         """Time between readings [s]."""
         return self.world.dt * self.substeps
-
-    @property
-    def fk_residual(self) -> float:
-        """Largest length residual [m] the forward kinematics accepts: 1 um, plus, with play, the 2-norm of a
-        full width on every cable (realized lengths that no pose has exactly)."""
-        return 1e-6 + math.sqrt(6.0) * self.backlash
 
 
 HOME_POSE = np.zeros(6)
@@ -149,16 +125,15 @@ def home_pose() -> np.ndarray:
 # pure helpers (batched over samples)
 # --------------------------------------------------------------------------------------------------------
 
-def lengths2poses(L, geom: Geometry, guess=None, iters: int = 12, tol: float = 1e-12,
-                  max_residual: float = 1e-6) -> np.ndarray:
+def lengths2poses(L, geom: Geometry, guess=None, iters: int = 12, tol: float = 1e-12) -> np.ndarray:
     """(n, 6) poses for (n, 6) cable lengths [m] (axial geometry, alpha = 0): each sample by the forward
-    kinematics kernel from the previous one (the first from `guess`), least squares; raises InputError if
-    any sample misses by more than max_residual [m]."""
+    kinematics kernel from the previous one (the first from `guess`); raises InputError if any sample misses
+    by more than 1 um."""
     L = np.ascontiguousarray(np.atleast_2d(np.asarray(L, dtype=float)))
     q0 = np.zeros(6) if guess is None else np.array(guess, dtype=float).reshape(6)
     out = np.empty((len(L), 6))
     worst = KS.forward_kinematics_batch(L, q0, FREE_AXIAL, geom.r, geom.B, tol, iters, out)
-    if not worst <= max_residual:
+    if not worst <= 1e-6:
         raise InputError(f"sim robot: no pose reproduces the commanded lengths (residual {worst:.3g} m)")
     return out
 
@@ -277,12 +252,7 @@ class SimRobot(ContextDevice):
         self.L_home = poses2lengths(HOME_POSE, self.geom)[0]
         self.L_cmd = self.L_home.copy()
         self.pose = HOME_POSE.copy()
-        self._fk = PoseFollower(self.geom, self.pose, max_residual=p.fk_residual)
-        # per-cable play (physics backlash Steps), starting centred on the home lengths
-        self._play = [get_effect("backlash").make_step({"width": p.backlash}) for _ in self.L_home] \
-            if p.backlash > 0 else None
-        if self._play is not None:
-            self._L_real = np.array([st.step(x=float(v)) for st, v in zip(self._play, self.L_home)])
+        self._fk = PoseFollower(self.geom, self.pose)
         self._terms = None
         self.t = 0.0
         self.seq = 0
@@ -293,14 +263,10 @@ class SimRobot(ContextDevice):
         self._A, self._theta, self._tip_off = np.empty((6, n)), np.empty(n), np.empty(3)
         self._off = np.empty((n, 6))
         self._v, self._tip = np.asarray(self.geom.v, dtype=float), np.asarray(self.geom.tip, dtype=float)
-        kc = np.empty(KS.N_READING_CONST)  # the constants of kernel sim.reading
-        kc[[KS.MU, KS.T_MIN, KS.T_MAX, KS.T_REF, KS.CAPSTAN_K, KS.STEPS_PER_M]] = (
-            self.geom.mu, self.geom.t_min, self.geom.t_max, p.pretension, p.capstan_k, self.spec.steps_per_m)
-        self._kc = kc
+        self._f = np.empty(6)
         self._fbg = FbgArray(p.sensor, n, self.seed, cable=p.fbg_cable) if p.sensor != "fsr" else None
         self._lag = FsrBranchLag(self.cal)
         self._added = _AddedEffects(self.model, n) if self.model is not None else None
-        self._rich = RichPlant(p.plant, n) if p.plant is not None else None
         self.is_open = True
 
     def close(self) -> None:
@@ -318,17 +284,10 @@ class SimRobot(ContextDevice):
         self._require_open()
         L = check_lengths(lengths, self.geom)
         if not self.stopped:
-            pose = self._fk.solve_into(np.ascontiguousarray(L) if self._play is None else self._realize(L))
+            pose = self._fk.solve_into(np.ascontiguousarray(L))
             if pose.tolist() != self.pose.tolist():  # np.array_equal, for six floats
                 self.pose, self._terms = pose.copy(), None
             self.L_cmd = L.copy()
-
-    def _realize(self, L: np.ndarray) -> np.ndarray:
-        """Realized cable lengths (6,) [m]: each cable's play operator stepped to its commanded length."""
-        out = self._L_real
-        for i, st in enumerate(self._play):
-            out[i] = st.step(x=float(L[i]))
-        return out
 
     def set_pad_offset(self, xy) -> None:
         """Move the pad so its centre sits at xy (2,) [m] in {B} (a positioning stage; pads wider than the
@@ -350,28 +309,26 @@ class SimRobot(ContextDevice):
             self._terms = (self._tip_off, self.pose[:3] + self._tip_off)
         return self._terms
 
-    def _physics(self) -> tuple[np.ndarray, tuple]:
-        """Advance `substeps` steps toward the commanded pose; (tip (3,) [m], contact force (fx, fy, fz) [N] on
-        the tip)."""
+    def _physics(self) -> tuple[np.ndarray, np.ndarray]:
+        """Advance `substeps` steps toward the commanded pose; (tip (3,), wrench (6,))."""
         w = self.world
-        target = self._pose_terms()[1]
+        tip_offset, target = self._pose_terms()
         for _ in range(self.params.substeps):
             w.step(target)
-        return w.tip(), w.contact_force_xyz()
+        # force at the tool tip, moments about p
+        f = np.empty(6)
+        KS.contact_moment(tip_offset, np.asarray(w.contact_force(), dtype=float), f)
+        return w.tip(), f
 
     def read(self) -> RobotReading:
         """Advance one reading period and return the raw reading."""
         self._require_open()
         p, g = self.params, self.geom
-        tip, F = self._physics()
+        tip, f = self._physics()
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
-        if self._rich is not None:  # the sheath's travel (scenes.rich_plant)
-            x = self._rich.travel(x[None])[0]
-        n = len(x)
-        t_tip, t_fsr, f, steps = np.empty(n), np.empty(n), np.empty(6), np.empty(n, np.int64)
-        # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable chain
-        if KS.reading(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc, self._cap, f,
-                      t_tip, t_fsr, steps) != KT.OK:
+        t_tip, t_fsr = np.empty(len(x)), np.empty(len(x))
+        if KS.cable_sensor(f, self._A, float(g.mu), self._theta, x, float(g.t_min), float(g.t_max),
+                           float(p.pretension), float(p.capstan_k), self._cap, t_tip, t_fsr) != KT.OK:
             # not the one-dimensional null space, or infeasible: teleop.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
             for i in range(len(x)):
@@ -381,13 +338,13 @@ class SimRobot(ContextDevice):
                 self._cap[:, i] = t_fsr[i], x[i]
         if self._added is not None:
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
-        if self._rich is not None:
-            t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + p.dt])[0]
         noise = self.rng.normal(0.0, p.noise_counts, 6) if p.noise_counts > 0 else np.zeros(6)
         counts = self._lag.counts(t_fsr, noise)  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
         fbg = None if self._fbg is None else self._fbg.read(t_tip, self.t + p.dt)  # distal FBGs (sim_sensors)
         self.t += p.dt
         self.seq += 1
+        steps = np.empty(len(x), np.int64)
+        KS.position_steps(self.L_home, self.L_cmd, float(self.spec.steps_per_m), steps)
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
                             boot_id=self.boot_id, wrench_truth=f, fbg_pm=fbg,
@@ -403,13 +360,7 @@ class SimRobot(ContextDevice):
         for row in (L[0], L[-1], L.min(axis=0), L.max(axis=0)):
             check_lengths(row, g)
         n = len(L)
-        if self._play is None:
-            poses = lengths2poses(L, g, guess=self.pose)
-        else:  # the play operator along each cable from its current state (physics backlash, array form)
-            Lr = np.column_stack([backlash(L[:, i], p.backlash, y0=self._play[i].y) for i in range(L.shape[1])])
-            for i, st in enumerate(self._play):
-                st.y = self._L_real[i] = float(Lr[-1, i])
-            poses = lengths2poses(Lr, g, guess=self.pose, max_residual=p.fk_residual)
+        poses = lengths2poses(L, g, guess=self.pose)
         tips = np.empty((n, 3))
         F = np.empty((n, 3))
         w = self.world
@@ -427,8 +378,6 @@ class SimRobot(ContextDevice):
         f = np.concatenate([F, np.cross(R_tip, F)], axis=1)
         t_tip = wrenches2tensions(f, A, g.t_min, g.t_max, p.pretension)
         x = -L  # motor positions: hauling in (shortening) is +
-        if self._rich is not None:  # the sheath's travel (scenes.rich_plant)
-            x = self._rich.travel(x)
         t_fsr = np.empty((n, 6))
         for i in range(6):
             F0, x0 = self._cap[:, i]
@@ -438,8 +387,6 @@ class SimRobot(ContextDevice):
                              np.ascontiguousarray(g.mu * theta[:, i]), float(p.capstan_k), float(F0), float(x0),
                              t_fsr[:, i])
             self._cap[:, i] = t_fsr[-1, i], x[-1, i]
-        if self._rich is not None:
-            t_fsr = self._rich.forces(t_fsr, x, self.t + p.dt * np.arange(1, n + 1))
         u = self._lag.run(t_fsr)
         noise = self.rng.normal(0.0, p.noise_counts, (n, 6)) if p.noise_counts > 0 else np.zeros((n, 6))
         counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
@@ -499,12 +446,11 @@ class _AddedEffects:
 
 
 def from_url(parsed, options: dict) -> SimRobot:
-    """`sim://robot?pad=z60&seed=3&substeps=1&model=M.json&backlash_mm=0.5`: build (not open) a SimRobot;
-    `model`: an identified link model (teleop diagnose --save-model) whose findings are switched on in every
-    cable; `backlash_mm`: each cable's play width [mm] (SimRobotParams.backlash)."""
+    """`sim://robot?pad=z60&seed=3&substeps=1&model=M.json`: build (not open) a SimRobot; `model`: an
+    identified link model (teleop diagnose --save-model) whose findings are switched on in every cable."""
     from scenes import pads as pads_mod
 
-    known = {"pad", "seed", "substeps", "letter", "model", "backlash_mm", "sensor", "cable"}
+    known = {"pad", "seed", "substeps", "letter", "model", "sensor", "cable"}
     for k in options:
         if k not in known:
             raise InputError(f"sim://robot: unknown option '{k}' (expected one of: {', '.join(sorted(known))})")
@@ -519,10 +465,6 @@ def from_url(parsed, options: dict) -> SimRobot:
         substeps = int(options.get("substeps", 1))
     except ValueError:
         raise InputError("sim://robot: seed and substeps must be integers") from None
-    try:
-        play_w = float(options.get("backlash_mm", 0.0)) * 1e-3
-    except ValueError:
-        raise InputError(f"sim://robot: backlash_mm must be a play width in mm, got {options['backlash_mm']!r}") from None
     try:  # sensor=fsr|fbg|one, cable=I: the FBG of sensor=one (scenes.sim_sensors)
         sensing = {"sensor": str(options.get("sensor", "fsr")), "fbg_cable": int(options.get("cable", 0))}
     except ValueError:
@@ -531,4 +473,4 @@ def from_url(parsed, options: dict) -> SimRobot:
     if "model" in options:
         from teleop.diagnosis.model_io import load_model
         model = load_model(str(options["model"]))
-    return SimRobot(makers[name](), SimRobotParams(substeps=substeps, backlash=play_w, **sensing), seed=seed, model=model)
+    return SimRobot(makers[name](), SimRobotParams(substeps=substeps, **sensing), seed=seed, model=model)
