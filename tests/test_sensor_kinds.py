@@ -165,3 +165,18 @@ def test_fbg_estimator_needs_fbg_reading():
     est = make_estimator(default_geom(), "one", model=ProximalDistalModel(0.85, 1.18))
     with pytest.raises(InputError, match="no FBG shifts"):
         est.tensions_into(np.zeros(6), None)
+
+
+@pytest.mark.parametrize("kind", ["fbg", "one"])
+def test_blind_rig_estimator_per_sensor_kind(kind):
+    """`teleop blind-test --sensor K`: the rig's robot carries the kind and its estimator reads it (for one,
+    with Kp < 1 < Kr identified on the simulated robot)."""
+    from teleop.estimation.sensor_reading import FbgReadingEstimator
+    from teleop.protocols.blind.rig import RigOptions, _Station
+    from scenes.pads import blind_test_pad
+
+    st = _Station(blind_test_pad(), RigOptions(sensor=kind), (1, 2))
+    assert st.robot.params.sensor == kind
+    assert isinstance(st.estimator, FbgReadingEstimator) and st.estimator.kind == kind
+    if kind == "one":
+        assert st.estimator.model.Kp < 1.0 < st.estimator.model.Kr

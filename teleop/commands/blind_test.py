@@ -55,6 +55,9 @@ def add_rig_options(p) -> None:
                    help="participants' mean stylus push depth [mm]")
     p.add_argument("--speed-mm-s", type=float, default=None, metavar="MM_S",
                    help="participants' mean stylus push speed [mm/s]")
+    p.add_argument("--sensor", default="fsr", choices=("fsr", "fbg", "one"),
+                   help="the robot's tension sensors: fsr (the FSR array, default), fbg (seed 001's distal FBG on "
+                        "every cable) or one (the FSR array plus one cable's FBG, seed 001's sensor-model approach)")
     p.add_argument("--press-force", type=float, default=None, metavar="N",
                    help="participants press until the stylus force reaches about N newtons, capped by the "
                         "depth (default 0.2 N; 0: push by depth only)")
@@ -117,6 +120,7 @@ def rig_options(args):
         kw["kalman_bandwidth"] = args.kalman_bandwidth
     if getattr(args, "robot_substeps", None) is not None:
         kw["robot_substeps"] = args.robot_substeps
+    kw["sensor"] = getattr(args, "sensor", "fsr")
     return RigOptions(**kw)
 
 

@@ -100,6 +100,7 @@ class RigOptions:
             --kalman-bandwidth 20`): its presses spread with the participants' speed, and `teleop
             blind-test --participants 10 --seed 1 --kalman-bandwidth 20` ranks 70 % fully correct
             (rigid / Dragon Skin 30 rendered at 1.70, 2.27 transparent) against 100 % at 80 Hz.
+        sensor: the robot's tension sensors (teleop.sensors.SENSOR_KINDS: fsr, fbg, one; scenes.sim_sensors).
     """
 
     compensation: bool = True
@@ -115,6 +116,7 @@ class RigOptions:
     seed: int = 0
     tip_stiffness: float | None = None
     kalman_bandwidth: float = 80.0
+    sensor: str = "fsr"
 
     def __post_init__(self):
         from teleop.errors import InputError
@@ -133,6 +135,19 @@ class RigOptions:
             raise InputError(f"blind-test rig: kalman_bandwidth must be > 0 Hz, got {self.kalman_bandwidth!r}")
         if int(self.robot_substeps) < 1:
             raise InputError(f"blind-test rig: robot_substeps must be >= 1, got {self.robot_substeps}")
+
+
+def _sensor_estimator(geom, o, robot_params, name: str, noise):
+    """The estimator of the rig's sensor kind (teleop.estimation.sensor_reading.make_estimator); for "one" the
+    eq 7 model is identified once on the simulated robot (scenes.sim_sensors.identify_one_sensor_on)."""
+    from teleop.estimation.sensor_reading import make_estimator
+
+    kw = {}
+    if o.sensor == "one":
+        from scenes.sim_sensors import identify_one_sensor_on
+
+        kw = {"model": identify_one_sensor_on(robot_params, 0, 0), "cable": 0}
+    return make_estimator(geom, o.sensor, name, kalman=noise, **kw)
 
 
 class _ManualClock:
@@ -154,7 +169,6 @@ class _Station:
         from scenes.world import WorldParams
         from teleop.geometry import default_geometry
         from teleop.estimation.kalman import KalmanNoise
-        from teleop.estimation.reading import ReadingEstimator
         from teleop.loop import LoopParams
         from teleop.loop.params import LOOP_RENDER
         from teleop.mapping import MappingParams
@@ -166,7 +180,7 @@ class _Station:
         robot_seed, stylus_seed = (int(s) for s in ss.generate_state(2) % (2 ** 31))
         home_tip_z = WorldParams().surface_z - 0.005  # the sim robot's home: tip 5 mm before the surface
         world = WorldParams(surface_z=home_tip_z + o.gap)
-        robot_params = SimRobotParams(world=world, substeps=int(o.robot_substeps))
+        robot_params = SimRobotParams(world=world, substeps=int(o.robot_substeps), sensor=o.sensor)
         if o.tip_stiffness is not None:
             robot_params = dataclasses.replace(robot_params, tip_stiffness=float(o.tip_stiffness))
         self.robot = SimRobot(pad, robot_params, seed=robot_seed)
@@ -181,9 +195,9 @@ class _Station:
                                  mapping=mapping)
         if o.compensation:  # the Kalman gain is designed for the period the estimator actually runs at
             noise = KalmanNoise(dt=self.params.dt * self.params.robot_every, bandwidth_hz=float(o.kalman_bandwidth))
-            self.estimator = ReadingEstimator(geom, o.estimator, kalman=noise)
-        else:  # the raw FSR wrench: no friction compensation, no Kalman filter
-            self.estimator = ReadingEstimator(geom, "non_compensated", kalman=None)
+            self.estimator = _sensor_estimator(geom, o, robot_params, o.estimator, noise)
+        else:  # the raw sensor wrench: no friction compensation, no Kalman filter
+            self.estimator = _sensor_estimator(geom, o, robot_params, "non_compensated", None)
         self.geom = geom
         self.tp = None
         self.rest = None
