@@ -4,6 +4,8 @@
   the latest command and the latest reading through shared memory (a seqlock), so a slow robot link or a
   physics step never stalls the haptic tick and shares no interpreter lock with it.
 - `DelayedRobot`: readings arrive `delay` reads late (link latency).
+- `BacklashCompensatedRobot`: the inverse of each cable's play added to the commanded lengths (backlash
+  feed-forward, teleop.diagnosis.feedforward), within the robot's length and speed limits.
 - `NoisyStylus`: Gaussian noise on the stylus position (seeded).
 - `LoggedDevice`: keeps every call and result (for tests and debugging).
 """
@@ -71,6 +73,49 @@ class DelayedRobot(Wrapper):
     def read(self) -> RobotReading:
         self.queue.append(self.device.read())
         return self.queue[0]
+
+
+class BacklashCompensatedRobot(Wrapper):
+    """Commands each cable half its play `width` [m] ahead of the wanted length in the wanted direction
+    (teleop.diagnosis.feedforward.BacklashFeedforward): the loop commands the lengths it wants at the cable,
+    the robot gets the motor-side lengths that make a play of `width` deliver them. Each command moves at
+    most v_max * `period` [s] (the robot spec's v_max; `period` the time between commands) and stays inside
+    [l_min, l_max]. Readings pass through unchanged (their commanded lengths are the motor-side ones).
+    The feed-forward starts afresh at open() and after stop()."""
+
+    def __init__(self, robot, width, period: float, deadband: float | None = None):
+        super().__init__(robot)
+        if not period > 0:
+            raise ValueError("period must be > 0")
+        self.width, self.period, self.deadband = width, float(period), deadband
+        self.ff = None
+
+    @property
+    def compensation(self) -> dict:
+        """What is added to the commands (stored in the session metadata)."""
+        w = np.broadcast_to(np.asarray(self.width, dtype=float), (6,))
+        return {"kind": "backlash_feedforward", "width_mm": (w * 1e3).tolist(), "period_s": self.period,
+                "deadband_mm": None if self.ff is None else self.ff.deadband * 1e3}
+
+    def open(self):
+        from teleop.diagnosis.feedforward import DEADBAND_M, BacklashFeedforward
+
+        self.device.open()
+        s = self.device.spec
+        self.ff = BacklashFeedforward(self.width, 6, float(s.v_max) * self.period, float(s.l_min), float(s.l_max),
+                                      DEADBAND_M if self.deadband is None else self.deadband)
+
+    def command_lengths(self, lengths):
+        L = np.asarray(lengths, dtype=float)
+        if L.shape != (6,) or not all_finite(L):  # the robot's own check names the bad input
+            self.device.command_lengths(lengths)
+            return
+        self.device.command_lengths(self.ff.step(L))
+
+    def stop(self):
+        self.device.stop()
+        if self.ff is not None:
+            self.ff.reset()
 
 
 class NoisyStylus(Wrapper):

@@ -26,12 +26,14 @@ class PoseFollower:
     Args:
         geom: the robot geometry (axial: roll not set by the cables).
         pose: (6,) starting pose [m, rad].
-        tol: length residual [m] at which Newton stops; `solve` raises InputError above 1e-6 m.
+        tol: length residual [m] at which Newton stops.
+        max_residual: `solve` raises InputError when the least-squares pose misses a length by more [m]
+            (lengths that no pose has exactly, e.g. after per-cable play, need more than the 1e-6 default).
     """
 
-    def __init__(self, geom: Geometry, pose, tol: float = 1e-12):
+    def __init__(self, geom: Geometry, pose, tol: float = 1e-12, max_residual: float = 1e-6):
         self.r, self.B = geom.r, geom.B
-        self.tol = float(tol)
+        self.tol, self.max_residual = float(tol), float(max_residual)
         self._q = np.array(pose, dtype=float).reshape(6)
         self._L = np.zeros(len(geom.B))
 
@@ -47,7 +49,7 @@ class PoseFollower:
     def solve_into(self, L: np.ndarray) -> np.ndarray:
         """The pose (its (6,) array, updated in place) whose cable lengths are L (n,) float64 [m]."""
         worst = forward_kinematics(L, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12)
-        if not worst <= 1e-6:
+        if not worst <= self.max_residual:
             raise InputError(f"sim robot: no pose reproduces the commanded lengths (residual {worst:.3g} m)")
         return self._q
 

@@ -11,6 +11,9 @@ One reading = `substeps` physics steps of dt. Per reading:
      transitions of stiffness k at reversals
   -> FSR: hysteresis as friction lag between the calibration's loading and unloading branches
      (teleop.sensors.FsrBranchLag), divider -> ADC counts + Gaussian noise, rounded.
+With `backlash` (URL `backlash_mm=W`) each cable's motor-to-cable transmission has play: the realized
+lengths are the play operator (teleop.physics backlash) of the commanded ones, cable by cable, and the pose
+is their least-squares forward kinematics (the elastic equilibrium of six equally stiff taut cables).
 The batch path `run(lengths)` does the same with the array forms of those models (fast); `read()` uses
 their per-sample Step forms; both give the same counts for the same seed (tested).
 """
@@ -33,6 +36,8 @@ from teleop.kernels import sim as KS
 from teleop.kernels import tension as KT
 from teleop.kernels.friction import capstan_play_run, capstan_play_step
 from teleop.kinematics import FREE_AXIAL, check_lengths, poses2lengths
+from teleop.physics import get_effect
+from teleop.physics.backlash import backlash
 from teleop.robot_status import robot_status
 from teleop.sensors import FsrBranchLag, FsrCalibration, default_fsr_calibration
 from teleop.tension import TensionSolver, wrench2tensions
@@ -84,6 +89,11 @@ class SimRobotParams:
             between the FSR and the effector is the FSR press block's silicone film (seed 000 §2)
             rather than the 30 mm of steel (~2e5 N/m).
         noise_counts: RMS ADC noise [counts] (ATmega2560 10-bit ADC, +-2 LSB absolute accuracy).
+        backlash: total play (dead band) width of each cable's motor-to-cable transmission (spool, gear)
+            [m]; 0: none. The realized cable length is the play operator of the commanded (motor-side)
+            length; the pose follows the six realized lengths by least squares (equally stiff cables in
+            pretension pull toward their lengths; a cable with slack on one side of its play is the one
+            the others move). The motor's step count still reports the commanded length.
     """
 
     geometry: Geometry = field(default_factory=default_geometry)
@@ -96,9 +106,13 @@ class SimRobotParams:
     ee_damping_ratio: float = 0.7
     capstan_k: float = 5e3
     noise_counts: float = 1.0
+    backlash: float = 0.0
 
     def __post_init__(self):
         g = self.geometry
+        if not (math.isfinite(self.backlash) and 0 <= self.backlash < g.l_max - g.l_min):
+            raise InputError(f"sim robot: backlash must be a play width in [0, {g.l_max - g.l_min:g}) m, got "
+                             f"{self.backlash}")
         if self.substeps < 1 or not g.t_min < self.pretension < g.t_max:
             raise InputError(f"sim robot: need substeps >= 1 and t_min < pretension < t_max, got "
                              f"{self.substeps}, {self.pretension}")
@@ -110,6 +124,12 @@ class SimRobotParams:
     def dt(self) -> float:
         """Time between readings [s]."""
         return self.world.dt * self.substeps
+
+    @property
+    def fk_residual(self) -> float:
+        """Largest length residual [m] the forward kinematics accepts: 1 um, plus, with play, the 2-norm of a
+        full width on every cable (realized lengths that no pose has exactly)."""
+        return 1e-6 + math.sqrt(6.0) * self.backlash
 
 
 HOME_POSE = np.zeros(6)
@@ -125,15 +145,16 @@ def home_pose() -> np.ndarray:
 # pure helpers (batched over samples)
 # --------------------------------------------------------------------------------------------------------
 
-def lengths2poses(L, geom: Geometry, guess=None, iters: int = 12, tol: float = 1e-12) -> np.ndarray:
+def lengths2poses(L, geom: Geometry, guess=None, iters: int = 12, tol: float = 1e-12,
+                  max_residual: float = 1e-6) -> np.ndarray:
     """(n, 6) poses for (n, 6) cable lengths [m] (axial geometry, alpha = 0): each sample by the forward
-    kinematics kernel from the previous one (the first from `guess`); raises InputError if any sample misses
-    by more than 1 um."""
+    kinematics kernel from the previous one (the first from `guess`), least squares; raises InputError if
+    any sample misses by more than max_residual [m]."""
     L = np.ascontiguousarray(np.atleast_2d(np.asarray(L, dtype=float)))
     q0 = np.zeros(6) if guess is None else np.array(guess, dtype=float).reshape(6)
     out = np.empty((len(L), 6))
     worst = KS.forward_kinematics_batch(L, q0, FREE_AXIAL, geom.r, geom.B, tol, iters, out)
-    if not worst <= 1e-6:
+    if not worst <= max_residual:
         raise InputError(f"sim robot: no pose reproduces the commanded lengths (residual {worst:.3g} m)")
     return out
 
@@ -252,7 +273,12 @@ class SimRobot(ContextDevice):
         self.L_home = poses2lengths(HOME_POSE, self.geom)[0]
         self.L_cmd = self.L_home.copy()
         self.pose = HOME_POSE.copy()
-        self._fk = PoseFollower(self.geom, self.pose)
+        self._fk = PoseFollower(self.geom, self.pose, max_residual=p.fk_residual)
+        # per-cable play (physics backlash Steps), starting centred on the home lengths
+        self._play = [get_effect("backlash").make_step({"width": p.backlash}) for _ in self.L_home] \
+            if p.backlash > 0 else None
+        if self._play is not None:
+            self._L_real = np.array([st.step(x=float(v)) for st, v in zip(self._play, self.L_home)])
         self._terms = None
         self.t = 0.0
         self.seq = 0
@@ -284,10 +310,17 @@ class SimRobot(ContextDevice):
         self._require_open()
         L = check_lengths(lengths, self.geom)
         if not self.stopped:
-            pose = self._fk.solve_into(np.ascontiguousarray(L))
+            pose = self._fk.solve_into(np.ascontiguousarray(L) if self._play is None else self._realize(L))
             if pose.tolist() != self.pose.tolist():  # np.array_equal, for six floats
                 self.pose, self._terms = pose.copy(), None
             self.L_cmd = L.copy()
+
+    def _realize(self, L: np.ndarray) -> np.ndarray:
+        """Realized cable lengths (6,) [m]: each cable's play operator stepped to its commanded length."""
+        out = self._L_real
+        for i, st in enumerate(self._play):
+            out[i] = st.step(x=float(L[i]))
+        return out
 
     def set_pad_offset(self, xy) -> None:
         """Move the pad so its centre sits at xy (2,) [m] in {B} (a positioning stage; pads wider than the
@@ -360,7 +393,13 @@ class SimRobot(ContextDevice):
         for row in (L[0], L[-1], L.min(axis=0), L.max(axis=0)):
             check_lengths(row, g)
         n = len(L)
-        poses = lengths2poses(L, g, guess=self.pose)
+        if self._play is None:
+            poses = lengths2poses(L, g, guess=self.pose)
+        else:  # the play operator along each cable from its current state (physics backlash, array form)
+            Lr = np.column_stack([backlash(L[:, i], p.backlash, y0=self._play[i].y) for i in range(L.shape[1])])
+            for i, st in enumerate(self._play):
+                st.y = self._L_real[i] = float(Lr[-1, i])
+            poses = lengths2poses(Lr, g, guess=self.pose, max_residual=p.fk_residual)
         tips = np.empty((n, 3))
         F = np.empty((n, 3))
         w = self.world
@@ -446,11 +485,12 @@ class _AddedEffects:
 
 
 def from_url(parsed, options: dict) -> SimRobot:
-    """`sim://robot?pad=z60&seed=3&substeps=1&model=M.json`: build (not open) a SimRobot; `model`: an
-    identified link model (teleop diagnose --save-model) whose findings are switched on in every cable."""
+    """`sim://robot?pad=z60&seed=3&substeps=1&model=M.json&backlash_mm=0.5`: build (not open) a SimRobot;
+    `model`: an identified link model (teleop diagnose --save-model) whose findings are switched on in every
+    cable; `backlash_mm`: each cable's play width [mm] (SimRobotParams.backlash)."""
     from scenes import pads as pads_mod
 
-    known = {"pad", "seed", "substeps", "letter", "model", "sensor", "cable"}
+    known = {"pad", "seed", "substeps", "letter", "model", "backlash_mm", "sensor", "cable"}
     for k in options:
         if k not in known:
             raise InputError(f"sim://robot: unknown option '{k}' (expected one of: {', '.join(sorted(known))})")
@@ -465,6 +505,10 @@ def from_url(parsed, options: dict) -> SimRobot:
         substeps = int(options.get("substeps", 1))
     except ValueError:
         raise InputError("sim://robot: seed and substeps must be integers") from None
+    try:
+        play_w = float(options.get("backlash_mm", 0.0)) * 1e-3
+    except ValueError:
+        raise InputError(f"sim://robot: backlash_mm must be a play width in mm, got {options['backlash_mm']!r}") from None
     try:  # sensor=fsr|fbg|one, cable=I: the FBG of sensor=one (scenes.sim_sensors)
         sensing = {"sensor": str(options.get("sensor", "fsr")), "fbg_cable": int(options.get("cable", 0))}
     except ValueError:
@@ -473,4 +517,4 @@ def from_url(parsed, options: dict) -> SimRobot:
     if "model" in options:
         from teleop.diagnosis.model_io import load_model
         model = load_model(str(options["model"]))
-    return SimRobot(makers[name](), SimRobotParams(substeps=substeps, **sensing), seed=seed, model=model)
+    return SimRobot(makers[name](), SimRobotParams(substeps=substeps, backlash=play_w, **sensing), seed=seed, model=model)

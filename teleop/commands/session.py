@@ -34,6 +34,11 @@ def register(subparsers) -> None:
     p.add_argument("--fsr-calibration", type=input_file, metavar="CSV|TOML",
                    help="FSR calibration for the estimator: a CSV (columns tension_N, conductance_uS, branch) or "
                         "the .toml of `teleop calibrate fsr` (default: the built-in synthetic calibration)")
+    p.add_argument("--compensation", type=input_file, metavar="MODEL",
+                   help="backlash feed-forward: a link model (JSON) with a backlash finding on its position link, "
+                        "from `teleop diagnose REC --save-model MODEL` or hand-written (docs/feedforward.md); each "
+                        "cable is commanded half the play ahead in its direction of motion, within v_max and the "
+                        "length limits")
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20; docs/safety.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
@@ -97,13 +102,17 @@ def run(args) -> int:
         cal = load_fsr(args.fsr_calibration)
     else:
         cal = load_fsr_calibration(args.fsr_calibration) if args.fsr_calibration else None
+    wrapper = None
+    if args.compensation:
+        wrapper = compensation_wrapper(args.compensation, params.dt * params.robot_every)
     robot_hz = None if args.robot_inline else args.robot_rate
     estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
     with _CtrlC() as ctrl_c:
         res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
                           estimator=estimator, robot_process_hz=robot_hz, realtime=not args.no_realtime,
                           robot_rt_priority=args.robot_rt or None,
-                          live=(args.live_host, args.live) if args.live is not None else None)
+                          live=(args.live_host, args.live) if args.live is not None else None,
+                          robot_wrapper=wrapper)
     t = res.timing
     if ctrl_c.pressed:
         print(f"session: INTERRUPTED (Ctrl-C) after {t['ticks'] / t['rate_hz']:.3f} s of {args.seconds:g} s")
@@ -111,6 +120,8 @@ def run(args) -> int:
           f"{t['lateness_us']['p50']:.0f}/{t['lateness_us']['p99']:.0f}/{t['lateness_us']['max']:.0f} us, "
           f"{t['deadline_misses']} misses; final state {res.final_state}"
           + (f" ({res.fault_reason})" if res.fault_reason else "") + f"; {res.scheduling}")
+    if wrapper is not None:
+        print(f"compensation: backlash feed-forward of {wrapper.width * 1e3:.4g} mm per cable ({args.compensation})")
     for ev in res.events:
         print(f"  t={ev['t']:.3f} s  {ev['src']} -> {ev['dst']}" + (f": {ev['reason']}" if ev["reason"] else ""))
     if res.live:
@@ -125,13 +136,30 @@ def run(args) -> int:
         write_json(args.json, {"timing": t, "events": res.events, "final_state": res.final_state,
                                "scheduling": res.scheduling,
                                "fault_reason": res.fault_reason, "drops": res.drops, "alarm": res.alarm,
-                               "live": res.live, "interrupted": ctrl_c.pressed})
+                               "live": res.live, "interrupted": ctrl_c.pressed,
+                               "compensation": None if wrapper is None else
+                               {"model": str(args.compensation), "backlash_width_mm": wrapper.width * 1e3}})
     if ctrl_c.pressed:
         closed = f"; {args.record} is closed and readable up to there" if args.record else ""
         print(f"teleop: interrupted (Ctrl-C) after {t['ticks']} of {round(args.seconds * t['rate_hz'])} ticks"
               f"{closed}", file=sys.stderr)
         return 130
     return 0
+
+
+def compensation_wrapper(path, period: float):
+    """robot -> devices.wrappers.BacklashCompensatedRobot with the backlash width of the link model at `path`
+    (read now: a bad file is one line, before any device opens); `period` [s] between commands."""
+    from devices.wrappers import BacklashCompensatedRobot
+    from teleop.diagnosis.feedforward import model_backlash_width
+    from teleop.diagnosis.model_io import load_model
+
+    width = model_backlash_width(load_model(path), f"--compensation {path}")
+
+    def wrap(robot):
+        return BacklashCompensatedRobot(robot, width, period)
+    wrap.width = width  # [m]
+    return wrap
 
 
 class _CtrlC:

@@ -13,6 +13,9 @@ simulated robot, the loop's tick) keep the state.
 - `capstan_band`: (lo, hi) = (F e^-mu Theta, F e^+mu Theta) sorted.
 - `capstan_hold`: the seed's compensation (seed 000 eq 7, physics.capstan.motor2tip): t e^-mu Theta while
   pulling (shortening or unmoved), t e^+mu Theta while paying out.
+- `play_inverse_step`: the inverse of the play operator (backlash feed-forward, seed 002): the command
+  x = y_d + r d leads the wanted output y_d by the half-width r in its direction d (direction_step with a
+  dead band, so noise does not chatter), rate-limited and kept within limits.
 - `capstan_state_step`: the friction state phi in [-1, 1] of the `dynamic` estimator: the sensor tension
   t e^(phi mu Theta) moves by k dx while the cable sticks, d phi = k dx / (mu Theta t_sensor), clipped at
   +-1 where it slips (a slack cable, t <= 1e-6 N, slips at once).
@@ -59,6 +62,18 @@ def dahl_step(F, dx, sigma, Fc):
     a = math.exp(-sigma * abs(dx) / Fc)
     return a * F + sgn(dx) * Fc * (1.0 - a)
 
+
+@njit
+def play_inverse_step(y_d, r, deadband, max_step, lo, hi, d, e, x_prev):
+    """(x, d, e): the command x making a play of half-width r [m] output y_d [m]: x = y_d + r d, with d the
+    direction of y_d (direction_step: flips once y_d has come back more than `deadband` from its extreme;
+    0 before the first motion: x = y_d, the play centred), the change from x_prev limited to +-max_step
+    (x_prev NaN: none yet) and x clamped into [lo, hi]."""
+    d, e, _ = direction_step(d, e, y_d, deadband)
+    x = y_d + r * d
+    if x_prev == x_prev:
+        x = clamp(x, x_prev - max_step, x_prev + max_step)
+    return clamp(x, lo, hi), d, e
 
 @njit
 def capstan_band(F, mu_theta):
@@ -137,6 +152,27 @@ def capstan_play_run(x, F_tip, mu_theta, k, F0, x0, out):
         out[j] = F
     return out
 
+
+@njit
+def play_inverse_into(y_d, r, deadband, max_step, lo, hi, state, out):
+    """out (n,): play_inverse_step on each of n channels (cables) at one sample; y_d, r, lo, hi (n,) [m];
+    state (3, n): direction d, extreme e (NaN: none yet), previous command x (NaN: none), updated in place."""
+    for i in range(y_d.shape[0]):
+        x, d, e = play_inverse_step(y_d[i], r[i], deadband, max_step, lo[i], hi[i], state[0, i], state[1, i],
+                                    state[2, i])
+        state[0, i], state[1, i], state[2, i] = d, e, x
+        out[i] = x
+    return out
+
+
+@njit
+def play_inverse_run(y_d, r, deadband, max_step, out):
+    """out (n,): play_inverse_step along the samples y_d (n,) [m] of one channel, from rest (no limits)."""
+    d, e, x = 0.0, math.nan, math.nan
+    for k in range(y_d.shape[0]):
+        x, d, e = play_inverse_step(y_d[k], r, deadband, max_step, -math.inf, math.inf, d, e, x)
+        out[k] = x
+    return out
 
 @njit
 def capstan_tip_run(F_motor, mu_theta, F0, out):

@@ -63,7 +63,8 @@ def session_metadata(tp: Teleop, haptic_url: str, robot_url: str, seconds: float
                                        "l_min": g.l_min, "l_max": g.l_max, "v_max": g.v_max},
                           "haptic_spec": vars(tp.haptic.spec) if hasattr(tp.haptic.spec, "__dict__") else
                           str(tp.haptic.spec),
-                          "robot_spec": vars(robot.spec) if hasattr(robot.spec, "__dict__") else str(robot.spec)},
+                          "robot_spec": vars(robot.spec) if hasattr(robot.spec, "__dict__") else str(robot.spec),
+                          "compensation": getattr(robot, "compensation", None)},
         "calibration": tp.estimator.describe(),
         "firmware_version": str(getattr(robot, "firmware_version", None) or f"n/a ({type(robot).__name__})"),
         "software_version": software_version(),
@@ -160,7 +161,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 spin_us: float | None = None, flush_interval: float = 0.1, haptic=None, robot=None,
                 robot_process_hz: float | None = 1000.0, realtime: bool = True,
                 robot_rt_priority: int | None = None, live: tuple | None = None,
-                live_scene: dict | None = None) -> SessionResult:
+                live_scene: dict | None = None, robot_wrapper=None) -> SessionResult:
     """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
 
     With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
@@ -169,7 +170,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     SCHED_FIFO 50 when the OS allows it; the robot process (SCHED_FIFO `robot_rt_priority` if given, else nice -10)
     and the recorder (nice -10) stay behind it. `live` = (host, port) serves the session to Foxglove from
     another process reading the same ring (teleop.live; port 0 picks a free one, printed on stdout);
-    `live_scene` adds pads to its 3D scene.
+    `live_scene` adds pads to its 3D scene. `robot_wrapper(robot)` wraps the robot the loop talks to (on the
+    loop's side of the robot process), e.g. the backlash feed-forward devices.wrappers.BacklashCompensatedRobot.
     """
     params = params or LoopParams()
     if estimator is None:
@@ -185,6 +187,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                                  rt_priority=robot_rt_priority if realtime else None)
         else:
             robot = built = open_device(robot_url)
+    if robot_wrapper is not None:
+        robot = robot_wrapper(robot)
     recorder = live_view = None
     old = signal.signal(signal.SIGTERM, _on_sigterm)
     try:

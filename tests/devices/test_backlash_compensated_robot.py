@@ -1,0 +1,61 @@
+"""devices.wrappers.BacklashCompensatedRobot on the simulated robot with play."""
+
+import numpy as np
+import pytest
+
+from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
+from scenes.sim_robot import SimRobot, SimRobotParams
+from teleop.kinematics import poses2lengths
+
+W = 0.5e-3
+DT = 1e-3
+
+
+def _sine_poses(n=1200):
+    t = np.arange(n) * DT
+    q = np.zeros((n, 6))
+    q[:, 0] = 2e-3 * np.sin(2 * np.pi * 1.0 * t)
+    q[:, 1] = 1e-3 * np.sin(2 * np.pi * 0.7 * t)
+    return q
+
+
+def _pose_error(robot, q):
+    err = []
+    with robot:
+        L = poses2lengths(q, robot.geom)
+        for k in range(len(q)):
+            robot.command_lengths(L[k])
+            robot.read()
+            err.append(np.linalg.norm(robot.pose[:3] - q[k, :3]))
+    return float(np.sqrt(np.mean(np.square(err[300:]))))
+
+
+def test_compensation_cuts_the_pose_error_of_the_play():
+    q = _sine_poses()
+    plain = _pose_error(SimRobot(params=SimRobotParams(backlash=W)), q)
+    comp = _pose_error(BacklashCompensatedRobot(SimRobot(params=SimRobotParams(backlash=W)), W, DT), q)
+    assert plain > 0.1e-3
+    assert comp < plain / 5
+
+
+def test_commands_keep_the_speed_and_length_limits():
+    inner = LoggedDevice(SimRobot(params=SimRobotParams(backlash=W)))
+    robot = BacklashCompensatedRobot(inner, W, DT)
+    q = _sine_poses(800)
+    with robot:
+        spec = robot.spec
+        L = poses2lengths(q, robot.geom)
+        for k in range(len(q)):
+            robot.command_lengths(np.minimum(L[k], spec.l_max))
+            robot.read()
+    sent = np.array([a for name, a in inner.log if name == "command_lengths"])
+    assert np.abs(np.diff(sent, axis=0)).max() <= spec.v_max * DT * (1 + 1e-9)
+    assert sent.min() >= spec.l_min and sent.max() <= spec.l_max
+    assert np.abs(sent - L).max() == pytest.approx(W / 2, rel=1e-6)    # half the play ahead, no more
+    assert robot.compensation["width_mm"] == [0.5] * 6
+
+
+def test_a_bad_command_still_reaches_the_robot_check():
+    with BacklashCompensatedRobot(SimRobot(params=SimRobotParams(backlash=W)), W, DT) as robot:
+        with pytest.raises(Exception, match="6 finite numbers"):
+            robot.command_lengths([np.nan] * 6)
