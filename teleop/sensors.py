@@ -414,8 +414,12 @@ class FbgParams:
 
 
 def fbg2force(dl1_pm, dl2_pm, p: FbgParams = FbgParams()) -> np.ndarray:
-    """Force [N] F = (dl2 - r dl1) / S from Bragg shifts of FBG1 (temperature) and FBG2 (force + temperature) [pm]."""
-    return (np.asarray(dl2_pm, dtype=float) - p.r * np.asarray(dl1_pm, dtype=float)) / p.S_pm_N
+    """Force [N] F = (dl2 - r dl1) / S from Bragg shifts of FBG1 (temperature) and FBG2 (force + temperature) [pm]
+    (kernel sensor.fbg_force, array-broadcast)."""
+    from teleop.kernels.jit import broadcast_call
+    from teleop.kernels.sensor import fbg_force_loop
+
+    return np.asarray(broadcast_call(fbg_force_loop, dl1_pm, dl2_pm, p.r, p.S_pm_N))
 
 
 def fbg2force_uncompensated(dl2_pm, p: FbgParams = FbgParams()) -> np.ndarray:
@@ -500,14 +504,6 @@ class ProximalDistalModel:
         Fp = np.asarray(Fp, dtype=float)
         a, b = self.Kp * Fp + self.bp, self.Kr * Fp + self.br
         return np.minimum(a, b), np.maximum(a, b)
-
-    def step(self, Fd: float, Fp: float) -> float:
-        """The distal tension [N] after proximal tension Fp [N] from the previous one Fd [N]: one sample of
-        `distal` (the same clamp, teleop.physics.scan.clamp_step)."""
-        from teleop.physics.scan import clamp_step
-
-        a, b = self.Kp * Fp + self.bp, self.Kr * Fp + self.br
-        return float(clamp_step(Fd, a, b) if a <= b else clamp_step(Fd, b, a))
 
     def distal(self, Fp, Fd0: float | None = None) -> np.ndarray:
         """(n,) distal tension estimate [N] from a proximal tension series Fp (n,) [N].

@@ -29,8 +29,9 @@ from teleop.errors import InputError
 from teleop.estimation.kalman import KalmanNoise
 from teleop.estimation.tick import TickComputer
 from teleop.geometry import Geometry
-from teleop.sensors import (FbgParams, FsrCalibration, ProximalDistalModel, check_sensor_kind, fbg2force,
-                            fbg_tensions, fit_proximal_distal_origin)
+from teleop.kernels import sensor as KS
+from teleop.sensors import (FbgParams, FsrCalibration, ProximalDistalModel, check_sensor_kind, fbg_tensions,
+                            fit_proximal_distal_origin)
 
 
 class FbgReadingEstimator:
@@ -62,7 +63,7 @@ class FbgReadingEstimator:
         self.reset()
 
     def reset(self) -> None:
-        self._fd = [math.nan] * self.n  # eq 7 state per cable: the last distal tension [N]
+        self._fd = np.full(self.n, math.nan)  # eq 7 state per cable: the last distal tension [N]
         if self.fsr is not None:
             self.fsr.reset()
         self.tick.reset()
@@ -74,18 +75,14 @@ class FbgReadingEstimator:
         if fbg_pm is None:
             raise InputError(f"sensor kind '{self.kind}': the reading has no FBG shifts (fbg_pm); "
                              f"a robot with distal FBGs gives them (sim://robot?sensor={self.kind})")
-        fbg = np.asarray(fbg_pm, dtype=float)
-        if self.kind == "fbg":
-            t[:] = fbg_tensions(fbg, self.fbg)
+        fbg = np.ascontiguousarray(fbg_pm, dtype=float)
+        p = self.fbg
+        if self.kind == "fbg":  # eq 3 per cable (kernel sensor.fbg_force)
+            KS.fbg_row(fbg, p.r, p.S_pm_N, t)
             return t
         Fp = self.fsr.tensions_into(np.ascontiguousarray(fsr_counts, dtype=float))
-        m, fd = self.model, self._fd
-        for i in range(self.n):
-            p = float(Fp[i])
-            fd[i] = m.step(fd[i], p) if fd[i] == fd[i] else min(m.Kp * p + m.bp, m.Kr * p + m.br)
-            t[i] = fd[i]
-        c = self.cable
-        t[c] = float(fbg2force(fbg[0, c], fbg[1, c], self.fbg))
+        m = self.model  # eq 7 per cable (kernel sensor.eq7_step = ProximalDistalModel.step), the FBG's on its own
+        KS.one_sensor_row(Fp, self._fd, m.Kp, m.Kr, m.bp, m.br, fbg, self.cable, p.r, p.S_pm_N, t)
         return t
 
     def update(self, reading, pose, dt: float) -> tuple[np.ndarray, np.ndarray]:

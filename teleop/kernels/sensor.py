@@ -76,3 +76,52 @@ def fsr_counts(t_fsr, u, first, grid, gap, c, r_divider, adc_max, noise, counts)
         u[i] = ui
         k = conductance2counts(loading_conductance(c, ui), r_divider, adc_max) + noise[i]
         counts[i] = int(adc_round(k, adc_max))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# FBG kinds (seed 001; teleop.sensors, teleop.estimation.sensor_reading)
+# ---------------------------------------------------------------------------------------------------------
+
+@njit
+def fbg_force(dl1, dl2, r, S):
+    """Force [N] of a dual-FBG sensor from the Bragg shifts of FBG1 (temperature) and FBG2 (force and
+    temperature) [pm]: (dl2 - r dl1) / S (seed 001 eq 3), r the temperature ratio, S [pm/N]."""
+    return (dl2 - r * dl1) / S
+
+
+@njit
+def fbg_force_loop(dl1, dl2, r, S, out):
+    """fbg_force element-wise (1-D arrays of one length, jit.broadcast_call)."""
+    for k in range(dl1.shape[0]):
+        out[k] = fbg_force(dl1[k], dl2[k], r[k], S[k])
+    return out
+
+
+@njit
+def eq7_step(fd, fp, Kp, Kr, bp, br):
+    """Distal tension [N] after proximal tension fp [N] from the previous fd [N] (seed 001 eq 7): flat
+    between the pulling line Kp fp + bp and the releasing line Kr fp + br, on whichever it is pushed to."""
+    a = Kp * fp + bp
+    b = Kr * fp + br
+    return clamp(fd, a, b) if a <= b else clamp(fd, b, a)
+
+
+@njit
+def fbg_row(dl, r, S, out):
+    """out (n,) [N] = fbg_force of each column of dl (2, n) [pm] (NaN where a cable has no FBG)."""
+    for i in range(dl.shape[1]):
+        out[i] = fbg_force(dl[0, i], dl[1, i], r, S)
+
+
+@njit
+def one_sensor_row(fp, fd, Kp, Kr, bp, br, dl, cable, r, S, out):
+    """One reading of the one-sensor kind: out (n,) [N] distal tensions = eq7_step of each cable's proximal
+    tension fp (n,) [N] from its state fd (n,) (updated; NaN: start on the lower line), the instrumented
+    `cable` its own FBG's fbg_force of dl (2, n) [pm]."""
+    for i in range(fp.shape[0]):
+        if fd[i] != fd[i]:
+            fd[i] = min(Kp * fp[i] + bp, Kr * fp[i] + br)
+        else:
+            fd[i] = eq7_step(fd[i], fp[i], Kp, Kr, bp, br)
+        out[i] = fd[i]
+    out[cable] = fbg_force(dl[0, cable], dl[1, cable], r, S)
