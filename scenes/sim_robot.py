@@ -28,6 +28,7 @@ import numpy as np
 from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes.pads import Pad, z_test_pad
 from scenes.pose_follow import PoseFollower
+from scenes.rich_plant import RichPlant, RichPlantParams
 from scenes.sim_sensors import FbgArray, fbg_cables
 from scenes.world import PadWorld, WorldParams
 from teleop.errors import InputError
@@ -79,6 +80,9 @@ class SimRobotParams:
             "an estimated 0.5 mm/s"), so palpation reproduces its loads instead (teleop.protocols.palpation).
             None = rigid (the tip tracks exactly).
         ee_damping_ratio: damping ratio of the contact tip on its series spring [-].
+        plant: effects the estimators do not model, switched on in every cable (scenes.rich_plant
+            RichPlantParams: Stribeck, Dahl, guide pulley, FSR creep; with the motor play `backlash` the
+            sheath's friction travels with the realized lengths); None: the matched plant.
         capstan_k: stick stiffness of the capstan transition at reversals [N/m]: the sensor tension
             crosses the friction band [t e^-mu Theta, t e^mu Theta] (~1 N at the pretension) over
             band / k of cable travel, 0.2 mm at 5e3 N/m, i.e. ~0.7 s at the seed's 0.5 mm/s (cable speed
@@ -104,6 +108,7 @@ class SimRobotParams:
     pretension: float = 2.85
     tip_stiffness: float | None = 1.0e4
     ee_damping_ratio: float = 0.7
+    plant: RichPlantParams | None = None
     capstan_k: float = 5e3
     noise_counts: float = 1.0
     backlash: float = 0.0
@@ -293,6 +298,7 @@ class SimRobot(ContextDevice):
         self._fbg = FbgArray(p.sensor, n, self.seed, cable=p.fbg_cable) if p.sensor != "fsr" else None
         self._lag = FsrBranchLag(self.cal)
         self._added = _AddedEffects(self.model, n) if self.model is not None else None
+        self._rich = RichPlant(p.plant, n) if p.plant is not None else None
         self.is_open = True
 
     def close(self) -> None:
@@ -359,6 +365,8 @@ class SimRobot(ContextDevice):
         p, g = self.params, self.geom
         tip, f = self._physics()
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
+        if self._rich is not None and self._play is not None:  # the cable moves with its realized length
+            x = -self._L_real
         t_tip, t_fsr = np.empty(len(x)), np.empty(len(x))
         if KS.cable_sensor(f, self._A, float(g.mu), self._theta, x, float(g.t_min), float(g.t_max),
                            float(p.pretension), float(p.capstan_k), self._cap, t_tip, t_fsr) != KT.OK:
@@ -371,6 +379,8 @@ class SimRobot(ContextDevice):
                 self._cap[:, i] = t_fsr[i], x[i]
         if self._added is not None:
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
+        if self._rich is not None:
+            t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + p.dt])[0]
         noise = self.rng.normal(0.0, p.noise_counts, 6) if p.noise_counts > 0 else np.zeros(6)
         counts = self._lag.counts(t_fsr, noise)  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
         fbg = None if self._fbg is None else self._fbg.read(t_tip, self.t + p.dt)  # distal FBGs (sim_sensors)
@@ -417,6 +427,8 @@ class SimRobot(ContextDevice):
         f = np.concatenate([F, np.cross(R_tip, F)], axis=1)
         t_tip = wrenches2tensions(f, A, g.t_min, g.t_max, p.pretension)
         x = -L  # motor positions: hauling in (shortening) is +
+        if self._rich is not None and self._play is not None:  # the cable moves with its realized length
+            x = -Lr
         t_fsr = np.empty((n, 6))
         for i in range(6):
             F0, x0 = self._cap[:, i]
@@ -426,6 +438,8 @@ class SimRobot(ContextDevice):
                              np.ascontiguousarray(g.mu * theta[:, i]), float(p.capstan_k), float(F0), float(x0),
                              t_fsr[:, i])
             self._cap[:, i] = t_fsr[-1, i], x[-1, i]
+        if self._rich is not None:
+            t_fsr = self._rich.forces(t_fsr, x, self.t + p.dt * np.arange(1, n + 1))
         u = self._lag.run(t_fsr)
         noise = self.rng.normal(0.0, p.noise_counts, (n, 6)) if p.noise_counts > 0 else np.zeros((n, 6))
         counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)

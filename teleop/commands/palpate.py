@@ -12,6 +12,10 @@ def register(subparsers) -> None:
     p.add_argument("--speed-profile", default="uniform", choices=("uniform", "variable"),
                    help="uniform 0.5 mm/s pokes, or variable speed with reversals (default uniform)")
     p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise and the variable profile")
+    p.add_argument("--plant", default="matched", choices=("matched", "rich"),
+                   help="matched: the robot's physics is the estimators' model; rich: with effects none of them "
+                        "models (sheath float, Stribeck, Dahl, guide pulley, FSR creep; scenes/rich_plant.py), "
+                        "drawn per cable from --seed (default matched)")
     p.add_argument("--repeats", type=int, default=None, help="z test repetitions (default 5, as the seed)")
     p.add_argument("--limit", type=int, default=None, help="keep only the first N pokes of each run (quick look)")
     p.add_argument("--sensor", default="fsr", choices=("fsr", "fbg", "one"),
@@ -38,7 +42,8 @@ def run(args) -> int:
         params = dataclasses.replace(params, repeats_z=args.repeats)
     if args.limit is not None and args.limit < 1:
         raise InputError(f"--limit must be >= 1, got {args.limit}")
-    res = run_test(args.test, args.speed_profile, args.seed, params, limit=args.limit, progress=True)
+    res = run_test(args.test, args.speed_profile, args.seed, params, limit=args.limit, progress=True,
+                   plant=args.plant)
     print(res.table())
     if args.json:
         write_json(args.json, res.to_json())

@@ -65,6 +65,10 @@ class PalpationParams:
             it does only within 1 mm of the axis).
         variable_speeds: (min, max) speeds of the variable profile [m/s].
         variable_reversal: (min, max) length of a reversal in the variable profile [m].
+        turn_deadband: dead band of `double`'s turn detectors [m] (teleop.estimation.turn): 1 nm, far above
+            the forward kinematics' round-off (along an axis the tip does not move, the pose wiggles by
+            ~1e-17 m; with no dead band every wiggle was a turn, so the x and y fits fired through every z
+            move: x/y MAE 0.41 N) and far below one reading's travel (>= 2.5 um at 100 Hz and 0.25 mm/s).
         sensor: the robot's tension sensors (teleop.sensors.SENSOR_KINDS): fsr (the FSR array, the four
             estimators), fbg (a distal FBG per cable) or one (the FSR array and cable 0's FBG, seed 001's
             sensor-model approach); teleop.protocols.palpation_sensors.
@@ -89,6 +93,7 @@ class PalpationParams:
     reach: float = 0.006
     fit_dynamic: bool = True
     surface_z: float = 0.0235
+    turn_deadband: float = 1e-9
     sensor: str = "fsr"
 
 
@@ -389,6 +394,8 @@ class PalpationResult:
             lines.append(f"{i:>3} {pk['label']:<8} {pk['direction']:<3} "
                          + " ".join(f"{v:{w}.3f}" for v, w in zip(vals, widths)))
         lines.append("")
+        if "plant" in self.extra:
+            lines.append(f"plant: {self.extra['plant']['name']}")
         lines.append(f"{'estimator':<16} {'MAE [N]':>8} {'RMSE [N]':>9}")
         for n in ESTIMATORS:
             s = self.summary[n]
@@ -422,10 +429,13 @@ class PalpationResult:
 
 
 def run_test(test: str, profile: str = "uniform", seed: int = 0, params: PalpationParams = PalpationParams(),
-             limit: int | None = None, progress: bool = False) -> PalpationResult:
-    """Run a palpation test on the simulated robot (see the module docstring)."""
+             limit: int | None = None, progress: bool = False, plant: str = "matched") -> PalpationResult:
+    """Run a palpation test on the simulated robot (see the module docstring). `plant`: "matched" (the
+    robot's physics is the estimators' model) or "rich" (scenes.rich_plant's effects on top, drawn from
+    `seed`)."""
     import time
 
+    from scenes.rich_plant import RichPlant, plant_params, with_plant
     from scenes.sim_robot import SimRobot, SimRobotParams, home_pose
     from teleop.estimation.turn import TurnCompensation, fit_turn_compensation
     from teleop.kinematics import poses2lengths
@@ -434,7 +444,9 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
         raise InputError(f"unknown speed profile '{profile}' (expected one of: {', '.join(PROFILES)})")
     from scenes.world import WorldParams
 
-    sim = SimRobotParams(substeps=params.substeps, world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt))
+    sim = with_plant(SimRobotParams(substeps=params.substeps,
+                                    world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt)),
+                     plant_params(plant, seed))
     sessions = sessions_for(test, params, limit, sim.tip_stiffness, sim.world.tip_radius)
     from dataclasses import replace
 
@@ -476,7 +488,8 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
             poke_trace = _concat(parts)
             # the seed's step 3 fit on the no-load runs (single-compensated, unfiltered wrench)
             single = estimate(fit_trace, geom, dt, names=("single",), kalman=False, progress=bar.update)["single"]
-            fits = tuple(fit_turn_compensation(fit_trace.t[a:b], fit_trace.poses[a:b], single[a:b], axis=axis)
+            fits = tuple(fit_turn_compensation(fit_trace.t[a:b], fit_trace.poses[a:b], single[a:b], axis=axis,
+                                               deadband=params.turn_deadband)
                          for axis, (a, b) in spans.items())
             dyn = None
             if params.fit_dynamic:  # the project's estimator calibrated on the same no-load runs
@@ -519,6 +532,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     elif test == "scan":
         extra = scan_extras(extra_grids)
     extra["calibration"] = calib
+    extra["plant"] = {"name": plant, **({} if sim.plant is None else RichPlant(sim.plant).describe())}
     pdict = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(params).items()}
     pdict.update({"reading_rate_hz": _num(1.0 / dt), "physics_dt_s": sim.world.dt, "pretension_N": sim.pretension,
                   "tip_stiffness_N_per_m": sim.tip_stiffness, "capstan_k_N_per_m": sim.capstan_k,
