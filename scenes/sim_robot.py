@@ -294,7 +294,10 @@ class SimRobot(ContextDevice):
         self._A, self._theta, self._tip_off = np.empty((6, n)), np.empty(n), np.empty(3)
         self._off = np.empty((n, 6))
         self._v, self._tip = np.asarray(self.geom.v, dtype=float), np.asarray(self.geom.tip, dtype=float)
-        self._f = np.empty(6)
+        kc = np.empty(KS.N_READING_CONST)  # the constants of kernel sim.reading
+        kc[[KS.MU, KS.T_MIN, KS.T_MAX, KS.T_REF, KS.CAPSTAN_K, KS.STEPS_PER_M]] = (
+            self.geom.mu, self.geom.t_min, self.geom.t_max, p.pretension, p.capstan_k, self.spec.steps_per_m)
+        self._kc = kc
         self._fbg = FbgArray(p.sensor, n, self.seed, cable=p.fbg_cable) if p.sensor != "fsr" else None
         self._lag = FsrBranchLag(self.cal)
         self._added = _AddedEffects(self.model, n) if self.model is not None else None
@@ -348,28 +351,28 @@ class SimRobot(ContextDevice):
             self._terms = (self._tip_off, self.pose[:3] + self._tip_off)
         return self._terms
 
-    def _physics(self) -> tuple[np.ndarray, np.ndarray]:
-        """Advance `substeps` steps toward the commanded pose; (tip (3,), wrench (6,))."""
+    def _physics(self) -> tuple[np.ndarray, tuple]:
+        """Advance `substeps` steps toward the commanded pose; (tip (3,) [m], contact force (fx, fy, fz) [N] on
+        the tip)."""
         w = self.world
-        tip_offset, target = self._pose_terms()
+        target = self._pose_terms()[1]
         for _ in range(self.params.substeps):
             w.step(target)
-        # force at the tool tip, moments about p
-        f = np.empty(6)
-        KS.contact_moment(tip_offset, np.asarray(w.contact_force(), dtype=float), f)
-        return w.tip(), f
+        return w.tip(), w.contact_force_xyz()
 
     def read(self) -> RobotReading:
         """Advance one reading period and return the raw reading."""
         self._require_open()
         p, g = self.params, self.geom
-        tip, f = self._physics()
+        tip, F = self._physics()
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
         if self._rich is not None and self._play is not None:  # the cable moves with its realized length
             x = -self._L_real
-        t_tip, t_fsr = np.empty(len(x)), np.empty(len(x))
-        if KS.cable_sensor(f, self._A, float(g.mu), self._theta, x, float(g.t_min), float(g.t_max),
-                           float(p.pretension), float(p.capstan_k), self._cap, t_tip, t_fsr) != KT.OK:
+        n = len(x)
+        t_tip, t_fsr, f, steps = np.empty(n), np.empty(n), np.empty(6), np.empty(n, np.int64)
+        # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable chain
+        if KS.reading(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc, self._cap, f,
+                      t_tip, t_fsr, steps) != KT.OK:
             # not the one-dimensional null space, or infeasible: teleop.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
             for i in range(len(x)):
@@ -386,8 +389,6 @@ class SimRobot(ContextDevice):
         fbg = None if self._fbg is None else self._fbg.read(t_tip, self.t + p.dt)  # distal FBGs (sim_sensors)
         self.t += p.dt
         self.seq += 1
-        steps = np.empty(len(x), np.int64)
-        KS.position_steps(self.L_home, self.L_cmd, float(self.spec.steps_per_m), steps)
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
                             boot_id=self.boot_id, wrench_truth=f, fbg_pm=fbg,

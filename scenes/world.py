@@ -77,6 +77,11 @@ def _quiet_stdout():
 
 
 N_RING = 4  # square hole: each poke direction meets one flat wall (a 16-gon let the tip touch 3 faces)
+# pybullet keeps no contact point farther apart than its contact breaking threshold (1e-4 m, set in open:
+# Bullet drops a manifold point beyond it and adds none); with the sphere's lowest point this far above the
+# pad's top face before and after a step (every pad body lies below that face) the step has no contact point
+CLEAR_GAP = 1e-3  # [m], 10x the threshold
+_NO_FORCE = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -172,13 +177,18 @@ class PadWorld:
             self._cid = c.createConstraint(self.body, -1, -1, -1, pb.JOINT_FIXED, [0, 0, 0], [0, 0, 0], start)
             c.changeConstraint(self._cid, start, maxForce=1e4)
         cid = c._client
-        self._get_pos = functools.partial(pb.getBasePositionAndOrientation, physicsClientId=cid)
-        self._get_vel = functools.partial(pb.getBaseVelocity, physicsClientId=cid)
-        self._apply_force = functools.partial(pb.applyExternalForce, physicsClientId=cid)
+        # pybullet's calls with their arguments bound by position (keywords cost ~0.3-0.9 us more a call:
+        # five calls per step); the tip's own queries bind the body too
+        self._tip_pos = functools.partial(pb.getBasePositionAndOrientation, self.body, cid)
+        self._tip_vel = functools.partial(pb.getBaseVelocity, self.body, cid)
+        self._push_tip = functools.partial(pb.applyExternalForce, self.body, -1)  # (force, position, flags, client)
+        self._client_id = cid
         self._change_constraint = functools.partial(pb.changeConstraint, physicsClientId=cid)
-        self._step = functools.partial(pb.stepSimulation, physicsClientId=cid)
-        self._contacts = functools.partial(pb.getContactPoints, physicsClientId=cid)
+        self._step = functools.partial(pb.stepSimulation, cid)
+        self._tip_contacts = functools.partial(pb.getContactPoints, self.body, -1, -2, -2, cid)  # any body, any link
         self._world_frame = pb.WORLD_FRAME
+        self._z_clear = p.surface_z - self.proxy_radius - CLEAR_GAP  # sphere centres above it touch nothing
+        self._z_before = start[2]  # the sphere centre's z before the last step [m]
         if self.K is not None:
             self._implicit = implicit_spring(self.K, self.C, p.indenter_mass, p.dt)
             self._D, self._Mi, self._dtm = self.C, np.eye(3), 0.0
@@ -189,6 +199,7 @@ class PadWorld:
                 self._Mi = np.linalg.inv(np.eye(3) + D * (p.dt / p.indenter_mass))
                 self._D = D
                 self._dtm = p.dt / p.indenter_mass
+            self._KDM = np.ascontiguousarray(np.stack([self.K, self._D, self._Mi]))  # the kernel's matrices
         self._r = self.proxy_radius
         self._steps = 0  # stepSimulation calls so far; the contact force is cached per step
         self._fc, self._fc_step = None, -1
@@ -262,7 +273,7 @@ class PadWorld:
         for b, (pos, orn) in self._home.items():
             self.client.resetBasePositionAndOrientation(b, [pos[0] + self.offset[0], pos[1] + self.offset[1], pos[2]], orn)
         if self.slab is not None:
-            self._update_slab(np.asarray(self._get_pos(self.body)[0][:2]), force=True)
+            self._update_slab(np.asarray(self._tip_pos()[0][:2]), force=True)
 
     @property
     def proxy_radius(self) -> float:
@@ -283,11 +294,11 @@ class PadWorld:
     def _position(self) -> tuple:
         """The sphere centre (x, y, z) [m], queried once per step (only stepping moves the tip)."""
         if self._pos_step != self._steps:
-            self._pos, self._pos_step = self._get_pos(self.body)[0], self._steps
+            self._pos, self._pos_step = self._tip_pos()[0], self._steps
         return self._pos
 
     def velocity(self) -> np.ndarray:
-        return np.asarray(self.client.getBaseVelocity(self.body)[0])
+        return np.asarray(self._tip_vel()[0])
 
     def indentation(self) -> float:
         """Depth of the touching point below the pad surface [m] (negative: above it)."""
@@ -295,17 +306,20 @@ class PadWorld:
 
     def step(self, target) -> None:
         """Advance one dt with the tip (touching point) commanded to `target` (3,) [m]."""
-        tgt = (float(target[0]), float(target[1]), float(target[2]) - self._r)  # sphere centre target
         pos = self._position()
         if self.slab is not None and (abs(pos[0] - self._xc) > 5e-5 or abs(pos[1] - self._yc) > 5e-5):
             self._update_slab(np.array(pos[:2]))
         if self.K is None:
-            self._change_constraint(self._cid, list(tgt), maxForce=1e4)
+            self._change_constraint(self._cid, [float(target[0]), float(target[1]), float(target[2]) - self._r],
+                                    maxForce=1e4)  # the sphere centre's target
         else:  # the series spring-damper (kernel sim.series_spring_force)
-            fc = self._contact_force_tuple() if self._implicit else (0.0, 0.0, 0.0)
-            f = series_spring_force(pos, self._get_vel(self.body)[0], tgt, self.K, self._D, self._Mi, self._dtm, fc,
+            fc = self._contact_force_tuple() if self._implicit else _NO_FORCE
+            if type(target) is not np.ndarray or target.dtype != np.float64 or not target.flags.c_contiguous:
+                target = np.array(target, dtype=np.float64).reshape(3)  # the kernel's one argument type
+            f = series_spring_force(pos, self._tip_vel()[0], target, self._r, self._KDM, self._dtm, fc,
                                     self._implicit)
-            self._apply_force(self.body, -1, f, pos, self._world_frame)
+            self._push_tip(f, pos, self._world_frame, self._client_id)
+        self._z_before = pos[2]
         self._step()
         self._steps += 1
 
@@ -313,12 +327,20 @@ class PadWorld:
         """(3,) force of the pad on the tip [N]: normal plus friction forces of every contact point."""
         return np.array(self._contact_force_tuple())
 
+    def contact_force_xyz(self) -> tuple:
+        """contact_force as a tuple (fx, fy, fz) [N] (no array: the simulated robot's reading kernel takes it)."""
+        return self._contact_force_tuple()
+
     def _contact_force_tuple(self) -> tuple:
-        """contact_force as a tuple, summed once per step (the contact points change only when stepping)."""
+        """contact_force as a tuple, summed once per step (the contact points change only when stepping); no
+        query while the sphere is clear of the pad (CLEAR_GAP: pybullet would return no point)."""
         if self._fc_step == self._steps:
             return self._fc
+        if self._position()[2] < self._z_clear and self._z_before < self._z_clear:
+            self._fc, self._fc_step = _NO_FORCE, self._steps
+            return self._fc
         F = [0.0, 0.0, 0.0]
-        for cp in self._contacts(bodyA=self.body):
+        for cp in self._tip_contacts():
             # cp[7] normal on B pointing towards A, cp[9] its force; cp[10..13] friction magnitudes and
             # directions as applied to B (measured: a tip sliding +x reads +x), so A gets the opposite
             n, d1, d2 = cp[7], cp[11], cp[13]
@@ -329,4 +351,4 @@ class PadWorld:
 
     def n_contacts(self) -> int:
         """Number of contact points between the tip and the pad (1 while touching, by construction)."""
-        return len(self._contacts(bodyA=self.body))
+        return len(self._tip_contacts())

@@ -106,7 +106,7 @@ def _meter_world(world, meter: _Meter, solver: _Meter) -> bool:
     inside them, pybullet's stepSimulation (PadWorld keeps it as `_step`) with `solver`. Only that one call
     is timed inside: a timer costs about as much as one of pybullet's small state queries on a slow
     machine. False when PadWorld no longer has `_step` (`solver` then stays at 0)."""
-    for name in ("step", "contact_force", "tip"):
+    for name in ("step", "contact_force", "contact_force_xyz", "tip"):
         setattr(world, name, meter.wrap(getattr(world, name)))
     if not callable(getattr(world, "_step", None)):
         return False

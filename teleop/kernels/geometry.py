@@ -79,6 +79,15 @@ def pose2lengths_into(q, r, B, off, out):
 
 
 @njit
+def lengths_at(x, y, z, off, out):
+    """out (n,): cable lengths [m] at position (x, y, z) [m] for the orientation whose platform_offsets are off
+    (n, 6). Returns out."""
+    for i in range(off.shape[0]):
+        out[i] = cable(x, y, z, off, i)[0]
+    return out
+
+
+@njit
 def poses2lengths_batch(q, r, B, out):
     """out (m, n): cable lengths [m] for poses q (m, 6). Returns out."""
     off = np.empty((r.shape[0], 6))
@@ -92,10 +101,12 @@ def forward_kinematics(L, q, free, r, B, tol, max_iter):
     """Pose q (6,) [m, rad], updated in place from its value as the guess, whose cable lengths match L (n,)
     [m]; only the coordinates listed in `free` move (an axial geometry fixes the roll alpha). Gauss-Newton
     with a forward-difference Jacobian (h = 1e-7) and step halving while the residual grows. Returns the
-    largest length residual [m] reached."""
+    largest length residual [m] reached. (The Jacobian's position columns reuse the orientation's platform
+    offsets of q, `off_q`: the same numbers as recomputing them, without the trigonometry.)"""
     n, m = L.shape[0], free.shape[0]
     h = 1e-7
     off = np.empty((n, 6))
+    off_q = np.empty((n, 6))
     Lq = np.empty(n)
     Lh = np.empty(n)
     res = np.empty(n)
@@ -104,7 +115,7 @@ def forward_kinematics(L, q, free, r, B, tol, max_iter):
     JTr = np.empty(m)
     step = np.empty(m)
     qt = np.empty(6)
-    pose2lengths_into(q, r, B, off, Lq)
+    pose2lengths_into(q, r, B, off_q, Lq)
     worst = 0.0
     sse = 0.0
     for i in range(n):
@@ -117,7 +128,10 @@ def forward_kinematics(L, q, free, r, B, tol, max_iter):
         for j in range(m):
             qt[:] = q
             qt[free[j]] += h
-            pose2lengths_into(qt, r, B, off, Lh)
+            if free[j] < 3:
+                lengths_at(qt[0], qt[1], qt[2], off_q, Lh)
+            else:
+                pose2lengths_into(qt, r, B, off, Lh)
             for i in range(n):
                 J[i, j] = (Lh[i] - Lq[i]) / h
         for a in range(m):  # normal equations J^T J step = J^T res
@@ -144,6 +158,7 @@ def forward_kinematics(L, q, free, r, B, tol, max_iter):
                 break
             lam *= 0.5
         q[:] = qt
+        off_q[:] = off  # the offsets of the accepted trial, now q's
         worst = 0.0
         sse = 0.0
         for i in range(n):

@@ -4,6 +4,9 @@ the cable chain tip tensions -> FSR-side tensions, built from the shared kernels
     pose_terms: structure matrix A (eq 8), wraps Theta_i = |theta_i| (eq 6) + theta0, tool offset R tip
     cable_sensor: tension distribution at A (A t + f = 0, one-dimensional null space closest to t_ref),
         then per cable the capstan with stick transitions along the motor position x = -length
+    reading: one reading after the physics steps (contact wrench, motor steps, cable_sensor) in one call:
+        a kernel call costs ~1 us of argument handling, several per reading added up to a tenth of the
+        closed-loop simulation's tick
 """
 
 from __future__ import annotations
@@ -100,12 +103,15 @@ def conductance_loop(u, c, out):
 
 
 @njit
-def series_spring_force(pos, v, tgt, K, D, Mi, dtm, fc, implicit):
-    """(3,) force [N] of the series spring-damper pulling the contact tip (centre pos (3,) [m], velocity v
-    (3,) [m/s]) towards tgt (3,) [m]: explicit f = -K e - D v (D the damping C), e = pos - tgt; implicit
-    (stiff springs, scenes.world.implicit_spring) f = Mi (-K e - D v'), v' = v + dtm fc, with the contact
-    force fc (3,) [N] of the last step, D = dt K + C, Mi = (I + D dt/m)^-1 and dtm = dt/m [s/kg]."""
-    e0, e1, e2 = pos[0] - tgt[0], pos[1] - tgt[1], pos[2] - tgt[2]
+def series_spring_force(pos, v, target, r, KDM, dtm, fc, implicit):
+    """(3,) force [N] of the series spring-damper pulling the contact sphere (centre pos (3,) [m], velocity v
+    (3,) [m/s]) towards the centre target tgt = target - (0, 0, r), target (3,) the touching point's [m], r
+    the sphere's radius [m]. KDM (3, 3, 3): the stiffness K [N/m], the damping D [N s/m] and Mi [-].
+    Explicit f = -K e - D v (D the damping C), e = pos - tgt; implicit (stiff springs,
+    scenes.world.implicit_spring) f = Mi (-K e - D v'), v' = v + dtm fc, with the contact force fc (3,) [N] of
+    the last step, D = dt K + C, Mi = (I + D dt/m)^-1 and dtm = dt/m [s/kg]."""
+    K, D, Mi = KDM[0], KDM[1], KDM[2]
+    e0, e1, e2 = pos[0] - target[0], pos[1] - target[1], pos[2] - (target[2] - r)
     if implicit:
         w0, w1, w2 = v[0] + dtm * fc[0], v[1] + dtm * fc[1], v[2] + dtm * fc[2]
     else:
@@ -125,3 +131,21 @@ def position_steps(L_home, L, steps_per_m, out):
     rint((L_home - L) steps_per_m) (hauling in is +); returns nothing (the caller holds out)."""
     for i in range(L.shape[0]):
         out[i] = int(np.rint((L_home[i] - L[i]) * steps_per_m))
+
+
+# constants of `reading` (SimRobot.reading_constants): friction coefficient, tension range and reference,
+# capstan stick stiffness, motor steps per metre
+MU, T_MIN, T_MAX, T_REF, CAPSTAN_K, STEPS_PER_M, N_READING_CONST = 0, 1, 2, 3, 4, 5, 6
+
+
+@njit
+def reading(o, F, A, theta, x, L_home, L, c, cap, f, t_tip, t_fsr, steps):
+    """The simulated robot's reading after its physics steps, one call (scenes.sim_robot.SimRobot.read):
+    f (6,) the contact wrench (contact_moment of the contact force F (3,) [N] at the tool offset o (3,) [m]),
+    steps (n,) the motors' positions (position_steps of the commanded lengths L against L_home), then the
+    cable chain (cable_sensor: t_tip, t_fsr (n,) [N] at A, wraps theta, motor positions x, capstan state
+    cap). c (N_READING_CONST,): the constants named above. Returns cable_sensor's status (f and steps are
+    written whatever it is)."""
+    contact_moment(o, F, f)
+    position_steps(L_home, L, c[STEPS_PER_M], steps)
+    return cable_sensor(f, A, c[MU], theta, x, c[T_MIN], c[T_MAX], c[T_REF], c[CAPSTAN_K], cap, t_tip, t_fsr)

@@ -83,8 +83,12 @@ def warm_up(geom=None) -> float:
     KS.contact_moment(tip, np.zeros(3), np.empty(6))
     KS.position_steps(L, L, 1e5, np.empty(n, dtype=np.int64))
     for implicit in (True, False):  # scenes.world.PadWorld.step: pybullet's tuples in, a tuple out
-        KS.series_spring_force((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), np.eye(3), np.eye(3), np.eye(3),
-                               0.1, (0.0, 0.0, 0.0), implicit)
+        KS.series_spring_force((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), np.zeros(3), 0.005, np.zeros((3, 3, 3)), 0.1,
+                               (0.0, 0.0, 0.0), implicit)
+    # the sim robot's reading (scenes.sim_robot.SimRobot.read): the contact force as pybullet's tuple
+    kc = np.array([geom.mu, geom.t_min, geom.t_max, 2.85, 5e3, 1e5])
+    KS.reading(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6), np.empty(n),
+               np.empty(n), np.empty(n, dtype=np.int64))
     KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
     from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample
     from teleop.sensors import FsrBranchLag
