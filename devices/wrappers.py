@@ -76,34 +76,35 @@ class DelayedRobot(Wrapper):
 
 
 class BacklashCompensatedRobot(Wrapper):
-    """Commands each cable half its play `width` [m] ahead of the wanted length in the wanted direction
-    (teleop.diagnosis.feedforward.BacklashFeedforward): the loop commands the lengths it wants at the cable,
+    """Commands each cable up to half its play `width` [m] ahead of the wanted length on the side of the wanted
+    motion (teleop.diagnosis.feedforward.BacklashFeedforward): the loop commands the lengths it wants at the cable,
     the robot gets the motor-side lengths that make a play of `width` deliver them. Each command moves at
     most v_max * `period` [s] (the robot spec's v_max; `period` the time between commands) and stays inside
     [l_min, l_max]. Readings pass through unchanged (their commanded lengths are the motor-side ones).
     The feed-forward starts afresh at open() and after stop()."""
 
-    def __init__(self, robot, width, period: float, deadband: float | None = None):
+    def __init__(self, robot, width, period: float):
         super().__init__(robot)
         if not period > 0:
             raise ValueError("period must be > 0")
-        self.width, self.period, self.deadband = width, float(period), deadband
+        self.width, self.period = width, float(period)
         self.ff = None
 
     @property
     def compensation(self) -> dict:
         """What is added to the commands (stored in the session metadata)."""
         w = np.broadcast_to(np.asarray(self.width, dtype=float), (6,))
+        from teleop.diagnosis.feedforward import TAU_S, V0_M_S
+
         return {"kind": "backlash_feedforward", "width_mm": (w * 1e3).tolist(), "period_s": self.period,
-                "deadband_mm": None if self.ff is None else self.ff.deadband * 1e3}
+                "v0_mm_s": V0_M_S * 1e3, "tau_s": TAU_S}
 
     def open(self):
-        from teleop.diagnosis.feedforward import DEADBAND_M, BacklashFeedforward
+        from teleop.diagnosis.feedforward import BacklashFeedforward
 
         self.device.open()
         s = self.device.spec
-        self.ff = BacklashFeedforward(self.width, 6, float(s.v_max) * self.period, float(s.l_min), float(s.l_max),
-                                      DEADBAND_M if self.deadband is None else self.deadband)
+        self.ff = BacklashFeedforward(self.width, 6, self.period, float(s.v_max), float(s.l_min), float(s.l_max))
 
     def command_lengths(self, lengths):
         L = np.asarray(lengths, dtype=float)

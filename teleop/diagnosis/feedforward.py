@@ -7,14 +7,20 @@ step is the kernel teleop.kernels.friction.play_inverse_step (one definition for
 `backlash_inverse` and the robot's command path `BacklashFeedforward`).
 
 On the robot (`teleop session --compensation MODEL`, devices.wrappers.BacklashCompensatedRobot) each cable
-gets the inverse of its play, with two rules the offline form leaves out:
-- a dead band on the direction (`deadband`, default DEADBAND_M): the wanted length must come back more
-  than it from its extreme before the command crosses to the other side, so stylus tremor and sensor
-  noise never make the command chatter across the play;
-- the safety limits: the command's change per command period is at most v_max * period (the reversal's
-  jump of w is spread over w / (v_max period) periods, less the wanted motion's own share of the speed),
-  and each command stays in [l_min, l_max] (at a limit the compensation saturates: the cable falls short
-  of its wanted length by up to w/2 there, never beyond the limit).
+gets the inverse of its play, x = y_d + (w/2) s, with two rules the offline form leaves out:
+- a smooth side instead of the held sign: s = clip(v / v0, -1, 1), v the wanted length's rate low-passed
+  with time constant `tau` (default TAU_S), v0 = `v0` (default V0_M_S). Near a reversal the wanted length
+  slows down, so the command starts across the play before the reversal instead of after it; at rest s
+  goes to 0 (the play centred: either direction then costs half a crossing). Noise only moves the motor
+  inside the play: with x - w/2 <= y_d <= x + w/2 for every s, a wanted length that holds still holds the
+  cable still, so the cable never chatters;
+- the safety limits: the command's change per command period is at most v_max * period, so a reversal's
+  crossing of w takes at least w / v_max (25 ms for 0.5 mm at 20 mm/s; longer while the wanted length moves
+  the other way), and each command stays in [l_min, l_max] (at a limit the compensation saturates: the
+  cable falls short of its wanted length by up to w/2 there, never beyond the limit).
+The held sign (a Schmitt trigger on the direction) measured worse in closed loop: the operator's hand,
+pushed by the rendered force, reverses each cable several times a second, and every reversal then waits
+for a full rate-limited crossing after it (`teleop bench feedforward`; docs/feedforward.md).
 """
 
 from __future__ import annotations
@@ -33,7 +39,7 @@ def backlash_inverse(y_d: np.ndarray, width: float, max_step: float | None = Non
     per-sample change of x while crossing the dead band (None: cross in one sample)."""
     y_d = np.ascontiguousarray(y_d, dtype=float)
     step = math.inf if max_step is None else float(max_step)
-    return KF.play_inverse_run(y_d, 0.5 * float(width), 0.0, step, np.empty(y_d.shape[0]))
+    return KF.play_inverse_run(y_d, 0.5 * float(width), step, np.empty(y_d.shape[0]))
 
 
 def precompensate(model: LinkModel, tip_target: np.ndarray, max_step: float | None = None) -> np.ndarray:
@@ -49,10 +55,13 @@ def precompensate(model: LinkModel, tip_target: np.ndarray, max_step: float | No
     return (z - model.offset) / model.gain
 
 
-#: default dead band on the wanted length's direction [m]: well above the stylus tremor at the robot (the
-#: operator model's 5 mN tremor on a 150 N/m hand, ~30 um, times the 0.25 motion scale: ~8 um) and small
-#: beside a play worth compensating (0.1 mm and up)
-DEADBAND_M = 20e-6
+#: rate [m/s] at which the command drives on the full side of the play: about ten times the rate noise of
+#: the operator's tremor at the robot (devices.simulated: 5 mN on a 150 N/m hand with a 50 ms correlation
+#: time, ~30 um over 50 ms at the stylus, x 0.25 motion scale: ~0.2 mm/s); the best of 1, 2, 3 and 6 mm/s
+#: on `teleop bench feedforward` (seeds 0 and 1)
+V0_M_S = 2e-3
+#: time constant [s] of the low-pass on the wanted length's rate (10 ms: five 500 Hz commands)
+TAU_S = 0.01
 
 
 def model_backlash_width(model, where: str = "model") -> float:
@@ -74,20 +83,24 @@ class BacklashFeedforward:
     Args:
         width: (n,) or scalar total play per cable [m].
         n: number of cables.
-        max_step: largest change of a cable's command per call [m] (v_max * command period).
+        period: time between commands [s].
+        v_max: largest cable speed [m/s]: each command moves at most v_max * period.
         lo, hi: length limits [m] (scalars).
-        deadband: dead band of the direction rule [m].
+        v0: rate [m/s] from which the command drives on the full side of the play.
+        tau: time constant [s] of the low-pass on the wanted rate.
     """
 
-    def __init__(self, width, n: int, max_step: float, lo: float = -math.inf, hi: float = math.inf,
-                 deadband: float = DEADBAND_M):
+    def __init__(self, width, n: int, period: float, v_max: float, lo: float = -math.inf, hi: float = math.inf,
+                 v0: float = V0_M_S, tau: float = TAU_S):
         w = np.broadcast_to(np.asarray(width, dtype=float), (n,))
         if not (np.isfinite(w).all() and (w >= 0).all()):
             raise InputError(f"backlash feed-forward: play widths must be finite and >= 0, got {w.tolist()}")
-        if not (max_step > 0 and deadband >= 0 and lo < hi):
-            raise InputError("backlash feed-forward: need max_step > 0, deadband >= 0 and lo < hi")
+        if not (period > 0 and v_max > 0 and v0 > 0 and tau >= 0 and lo < hi):
+            raise InputError("backlash feed-forward: need period, v_max, v0 > 0, tau >= 0 and lo < hi")
         self.r = np.ascontiguousarray(0.5 * w)
-        self.max_step, self.deadband = float(max_step), float(deadband)
+        self.period, self.max_step = float(period), float(v_max) * float(period)
+        self.v0, self.tau = float(v0), float(tau)
+        self.alpha = self.period / (self.tau + self.period)  # v += alpha (rate - v): first-order low-pass
         self.lo, self.hi = np.full(n, float(lo)), np.full(n, float(hi))
         self.state = np.empty((3, n))
         self.out = np.empty(n)
@@ -96,11 +109,13 @@ class BacklashFeedforward:
         self.reset()
 
     def reset(self) -> None:
-        """Forget the directions and the last command (the next command starts with the play centred)."""
-        self.state[0] = 0.0
-        self.state[1:] = np.nan
+        """Forget the rates and the last command (the next command starts with the play centred)."""
+        self.state[0] = np.nan
+        self.state[1] = 0.0
+        self.state[2] = np.nan
 
     def step(self, lengths) -> np.ndarray:
         """Motor-side commands (n,) [m] (a buffer overwritten by the next call) for wanted lengths (n,) [m]."""
         y = np.ascontiguousarray(lengths, dtype=float)
-        return KF.play_inverse_into(y, self.r, self.deadband, self.max_step, self.lo, self.hi, self.state, self.out)
+        return KF.play_inverse_into(y, self.r, self.v0, self.alpha, self.period, self.max_step, self.lo, self.hi,
+                                    self.state, self.out)

@@ -14,8 +14,8 @@ simulated robot, the loop's tick) keep the state.
 - `capstan_hold`: the seed's compensation (seed 000 eq 7, physics.capstan.motor2tip): t e^-mu Theta while
   pulling (shortening or unmoved), t e^+mu Theta while paying out.
 - `play_inverse_step`: the inverse of the play operator (backlash feed-forward, seed 002): the command
-  x = y_d + r d leads the wanted output y_d by the half-width r in its direction d (direction_step with a
-  dead band, so noise does not chatter), rate-limited and kept within limits.
+  x = y_d + r s leads the wanted output y_d by up to the half-width r on the side s of its motion,
+  rate-limited and kept within limits.
 - `capstan_state_step`: the friction state phi in [-1, 1] of the `dynamic` estimator: the sensor tension
   t e^(phi mu Theta) moves by k dx while the cable sticks, d phi = k dx / (mu Theta t_sensor), clipped at
   +-1 where it slips (a slack cable, t <= 1e-6 N, slips at once).
@@ -64,16 +64,16 @@ def dahl_step(F, dx, sigma, Fc):
 
 
 @njit
-def play_inverse_step(y_d, r, deadband, max_step, lo, hi, d, e, x_prev):
-    """(x, d, e): the command x making a play of half-width r [m] output y_d [m]: x = y_d + r d, with d the
-    direction of y_d (direction_step: flips once y_d has come back more than `deadband` from its extreme;
-    0 before the first motion: x = y_d, the play centred), the change from x_prev limited to +-max_step
-    (x_prev NaN: none yet) and x clamped into [lo, hi]."""
-    d, e, _ = direction_step(d, e, y_d, deadband)
-    x = y_d + r * d
+def play_inverse_step(y_d, r, s, max_step, lo, hi, x_prev):
+    """The command x [m] making a play of half-width r [m] output y_d [m]: x = y_d + r s, s in [-1, 1] the
+    side of the play to drive on (+1 while y_d rises), its change from x_prev limited to +-max_step (x_prev
+    NaN: none yet) and x clamped into [lo, hi]. Since x - r <= y_d <= x + r, a y_d that holds still keeps
+    the output still whatever s does."""
+    x = y_d + r * s
     if x_prev == x_prev:
         x = clamp(x, x_prev - max_step, x_prev + max_step)
-    return clamp(x, lo, hi), d, e
+    return clamp(x, lo, hi)
+
 
 @njit
 def capstan_band(F, mu_theta):
@@ -154,25 +154,32 @@ def capstan_play_run(x, F_tip, mu_theta, k, F0, x0, out):
 
 
 @njit
-def play_inverse_into(y_d, r, deadband, max_step, lo, hi, state, out):
-    """out (n,): play_inverse_step on each of n channels (cables) at one sample; y_d, r, lo, hi (n,) [m];
-    state (3, n): direction d, extreme e (NaN: none yet), previous command x (NaN: none), updated in place."""
+def play_inverse_into(y_d, r, v0, alpha, dt, max_step, lo, hi, state, out):
+    """out (n,): play_inverse_step on n channels (cables) at one command, the side s = clip(v / v0, -1, 1)
+    from the low-passed rate v of y_d (v += alpha ((y_d - y_prev) / dt - v), dt [s] between commands, v0
+    [m/s]); y_d, r, lo, hi (n,) [m]; state (3, n): previous y_d (NaN: none), v [m/s], previous command x
+    (NaN: none), updated in place."""
     for i in range(y_d.shape[0]):
-        x, d, e = play_inverse_step(y_d[i], r[i], deadband, max_step, lo[i], hi[i], state[0, i], state[1, i],
-                                    state[2, i])
-        state[0, i], state[1, i], state[2, i] = d, e, x
+        y_prev = state[0, i]
+        if y_prev == y_prev:
+            state[1, i] += alpha * ((y_d[i] - y_prev) / dt - state[1, i])
+        x = play_inverse_step(y_d[i], r[i], clamp(state[1, i] / v0, -1.0, 1.0), max_step, lo[i], hi[i], state[2, i])
+        state[0, i], state[2, i] = y_d[i], x
         out[i] = x
     return out
 
 
 @njit
-def play_inverse_run(y_d, r, deadband, max_step, out):
-    """out (n,): play_inverse_step along the samples y_d (n,) [m] of one channel, from rest (no limits)."""
+def play_inverse_run(y_d, r, max_step, out):
+    """out (n,): play_inverse_step along the samples y_d (n,) [m] of one channel from rest, on the side of
+    y_d's held direction (direction_step without dead band: the exact inverse of the play operator)."""
     d, e, x = 0.0, math.nan, math.nan
     for k in range(y_d.shape[0]):
-        x, d, e = play_inverse_step(y_d[k], r, deadband, max_step, -math.inf, math.inf, d, e, x)
+        d, e, _ = direction_step(d, e, y_d[k], 0.0)
+        x = play_inverse_step(y_d[k], r, d, max_step, -math.inf, math.inf, x)
         out[k] = x
     return out
+
 
 @njit
 def capstan_tip_run(F_motor, mu_theta, F0, out):
