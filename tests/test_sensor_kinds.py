@@ -180,3 +180,20 @@ def test_blind_rig_estimator_per_sensor_kind(kind):
     assert isinstance(st.estimator, FbgReadingEstimator) and st.estimator.kind == kind
     if kind == "one":
         assert st.estimator.model.Kp < 1.0 < st.estimator.model.Kr
+
+
+def test_palpate_with_sensor_one_short():
+    """`teleop palpate --sensor one` end to end on two pokes: the identified eq 7 slopes straddle 1, every
+    estimator name reports the one tip-side estimate, and the error stays within the seed's model RMSE."""
+    import dataclasses
+
+    from teleop.protocols.palpation import ESTIMATORS, PalpationParams, run_test
+
+    res = run_test("z", "uniform", 1, dataclasses.replace(PalpationParams(), sensor="one", repeats_z=1), limit=2)
+    js = res.to_json()
+    assert js["params"]["sensor"] == "one"
+    one = js["calibration"]["z60"]["sensor"]["one_sensor"]
+    assert one["Kp"] < 1.0 < one["Kr"]
+    maes = {js["summary"][n]["mean_abs_error_N"] for n in ESTIMATORS}
+    assert len(maes) == 1 and maes.pop() <= SEED_MODEL_RMSE_N
+    assert "sensor-model RMSE" in res.table()
