@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import collections
+import dataclasses
 import multiprocessing as mp
 import os
 import pickle
@@ -80,8 +81,9 @@ class BacklashCompensatedRobot(Wrapper):
     motion (teleop.diagnosis.feedforward.BacklashFeedforward): the loop commands the lengths it wants at the cable,
     the robot gets the motor-side lengths that make a play of `width` deliver them. Each command moves at
     most v_max * `period` [s] (the robot spec's v_max; `period` the time between commands) and stays inside
-    [l_min, l_max]. Readings pass through unchanged (their commanded lengths are the motor-side ones).
-    The feed-forward starts afresh at open() and after stop()."""
+    [l_min, l_max]. Readings report the wanted lengths as their commanded lengths (the loop's own commands:
+    wrapper and robot together are a robot without play, so re-engaging from a reading finds a pose); the
+    motor-side lengths show in their position steps. The feed-forward starts afresh at open() and after stop()."""
 
     def __init__(self, robot, width, period: float):
         super().__init__(robot)
@@ -89,6 +91,7 @@ class BacklashCompensatedRobot(Wrapper):
             raise ValueError("period must be > 0")
         self.width, self.period = width, float(period)
         self.ff = None
+        self.wanted = None  # the last wanted lengths (6,) [m]
 
     @property
     def compensation(self) -> dict:
@@ -112,6 +115,13 @@ class BacklashCompensatedRobot(Wrapper):
             self.device.command_lengths(lengths)
             return
         self.device.command_lengths(self.ff.step(L))
+        self.wanted = L.copy()
+
+    def read(self) -> RobotReading:
+        r = self.device.read()
+        if r is None or self.wanted is None:
+            return r
+        return dataclasses.replace(r, commanded_lengths=self.wanted.copy())
 
     def stop(self):
         self.device.stop()

@@ -46,8 +46,12 @@ def test_commands_keep_the_speed_and_length_limits():
         spec = robot.spec
         L = poses2lengths(q, robot.geom)
         for k in range(len(q)):
-            robot.command_lengths(np.minimum(L[k], spec.l_max))
-            robot.read()
+            robot.command_lengths(L[k])
+            r = robot.read()
+            # the loop sees its own commands; the motor's steps show what the motor was sent
+            np.testing.assert_array_equal(r.commanded_lengths, L[k])
+            np.testing.assert_allclose(r.position_steps, np.rint((robot.L_home - inner.log[-2][1]) * spec.steps_per_m),
+                                       atol=1)
     sent = np.array([a for name, a in inner.log if name == "command_lengths"])
     assert np.abs(np.diff(sent, axis=0)).max() <= spec.v_max * DT * (1 + 1e-9)
     assert sent.min() >= spec.l_min and sent.max() <= spec.l_max

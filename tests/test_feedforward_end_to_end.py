@@ -1,0 +1,28 @@
+"""How a user gets the compensation MODEL: a session on the robot with play, recorded; exported per cable;
+`teleop diagnose --save-model` names the play and measures its width; that file is what --compensation takes."""
+
+import json
+
+import pytest
+
+from teleop.cli import main
+from teleop.diagnosis.feedforward import model_backlash_width
+from teleop.diagnosis.model_io import load_model
+
+
+def test_session_recording_to_diagnosed_backlash_model(tmp_path, capsys):
+    rec, csv, model = tmp_path / "s.mcap", tmp_path / "c1.csv", tmp_path / "m.json"
+    assert main(["session", "--haptic", "sim://?script=sine&amp_mm=12&axis=x&period_s=2",
+                 "--robot", "sim://robot?substeps=2&backlash_mm=0.5", "--robot-inline", "--no-realtime",
+                 "--seconds", "8", "--record", str(rec)]) == 0
+    assert main(["export", str(rec), "--csv", str(csv), "--cable", "1"]) == 0
+    assert main(["diagnose", str(csv), "--save-model", str(model), "--seed", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "backlash on tip_pos" in out
+    width = model_backlash_width(load_model(model), str(model))
+    assert width == pytest.approx(0.5e-3, rel=0.1)
+    # and the file drives the feed-forward
+    js = tmp_path / "ff.json"
+    assert main(["bench", "feedforward", "--compensation", str(model), "--seconds", "2", "--settle-s", "0.5",
+                 "--json", str(js)]) == 0
+    assert json.loads(js.read_text())["compensation"]["width_mm"] == pytest.approx(width * 1e3)
