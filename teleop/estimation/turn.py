@@ -59,12 +59,14 @@ class TurnCompensation:
 
 
 def fit_turn_compensation(t, poses, wrench, axis: int = 2, degree: int = 4, duration: float | None = None,
-                          deadband: float = 0.0, settle: float = 0.02) -> AxisTurnFit:
+                          deadband: float = 0.0, settle: float = 0.02, level_tail: float = 0.5) -> AxisTurnFit:
     """Fit the jump segments of a no-load back-and-forth run along `axis`.
 
     t (n,) [s]; poses (n, 6) end-effector poses; wrench (n, 6) the single-compensated wrench (the truth is 0).
     For every turn, the error in the segment is the wrench minus its settled level in that half cycle (mean
-    of the second half of the half cycle), so the correction fades to zero at the segment end. duration:
+    of its last `level_tail` fraction, the wrench before the next turn), so the correction fades to zero at
+    the segment end. A run where cables reverse mid-stroke (off the z axis, where a cable's length passes an
+    extremum) needs a short tail: that reversal's transition must not count as the level. duration:
     segment length [s]; default: the median time after a turn until the error falls below `settle` of its
     peak (first crossing after
     the peak). Needs at least one turn each way.
@@ -78,12 +80,14 @@ def fit_turn_compensation(t, poses, wrench, axis: int = 2, degree: int = 4, dura
         tracker.update(p[k:k + 1])
         if tracker.flipped[0]:
             turns.append((k, int(tracker.direction[0])))
+    if not 0.0 < level_tail <= 1.0:
+        raise InputError(f"turn-compensation fit: level_tail must be in (0, 1], got {level_tail}")
     if not any(d == FORWARD for _, d in turns) or not any(d == BACKWARD for _, d in turns):
         raise InputError(f"turn-compensation fit: the run needs turns both ways along axis {axis}")
     ends = [k for k, _ in turns[1:]] + [t.size]
     segments = []
     for (k0, d), k1 in zip(turns, ends):
-        level = w[k0 + (k1 - k0) // 2:k1].mean(axis=0)
+        level = w[min(k0 + int((k1 - k0) * (1.0 - level_tail)), k1 - 1):k1].mean(axis=0)
         segments.append((d, t[k0:k1] - t[k0], w[k0:k1] - level))
     if duration is None:
         settle_times = []

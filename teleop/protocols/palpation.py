@@ -69,6 +69,11 @@ class PalpationParams:
             the forward kinematics' round-off (along an axis the tip does not move, the pose wiggles by
             ~1e-17 m; with no dead band every wiggle was a turn, so the x and y fits fired through every z
             move: x/y MAE 0.41 N) and far below one reading's travel (>= 2.5 um at 100 Hz and 0.25 mm/s).
+        turn_level_tail: the last fraction of each half cycle of the no-load run whose mean is the settled
+            level of `double`'s turn fit: 0.1, the wrench just before the next turn. Along y two cables'
+            lengths pass an extremum at the hole's centre and reverse mid-stroke; the second half of the half
+            cycle (the former level) held their transition, so the y fit never settled (a 20 s jump segment)
+            and `double` read the y pokes +0.07 to +0.11 N high.
         sensor: the robot's tension sensors (teleop.sensors.SENSOR_KINDS): fsr (the FSR array, the four
             estimators), fbg (a distal FBG per cable) or one (the FSR array and cable 0's FBG, seed 001's
             sensor-model approach); teleop.protocols.palpation_sensors.
@@ -94,6 +99,7 @@ class PalpationParams:
     fit_dynamic: bool = True
     surface_z: float = 0.0235
     turn_deadband: float = 1e-9
+    turn_level_tail: float = 0.1
     sensor: str = "fsr"
 
 
@@ -489,7 +495,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
             # the seed's step 3 fit on the no-load runs (single-compensated, unfiltered wrench)
             single = estimate(fit_trace, geom, dt, names=("single",), kalman=False, progress=bar.update)["single"]
             fits = tuple(fit_turn_compensation(fit_trace.t[a:b], fit_trace.poses[a:b], single[a:b], axis=axis,
-                                               deadband=params.turn_deadband)
+                                               deadband=params.turn_deadband, level_tail=params.turn_level_tail)
                          for axis, (a, b) in spans.items())
             dyn = None
             if params.fit_dynamic:  # the project's estimator calibrated on the same no-load runs

@@ -52,3 +52,25 @@ def test_rich_plant_run_is_deterministic_and_reported(tmp_path, capsys):
 def test_cli_plant_option(capsys):
     assert main(["palpate", "--test", "z", "--plant", "fancy"]) == 2
     assert "--plant" in capsys.readouterr().err
+
+
+def test_turn_fit_level_before_the_next_turn_ignores_a_mid_stroke_transition():
+    from teleop.estimation.turn import fit_turn_compensation
+
+    dt, half = 0.01, 20.0                                   # 20 s half cycles along y, four of them
+    t = np.arange(0.0, 4 * half, dt)
+    s = (t % half) / half
+    y = np.where((t // half) % 2 == 0, s, 1.0 - s) * 0.01
+    poses = np.zeros((t.size, 6))
+    poses[:, 1] = y
+    tau = t % half
+    w = np.zeros((t.size, 6))
+    w[:, 1] = np.exp(-tau / 0.3) * np.where((t // half) % 2 == 0, 1.0, -1.0)   # the jump after each turn
+    w[:, 0] = np.where((s > 0.5) & (s < 0.8), -0.4, 0.0)                       # a cable reversing mid-stroke
+    old = fit_turn_compensation(t, poses, w, axis=1, deadband=1e-9)
+    new = fit_turn_compensation(t, poses, w, axis=1, deadband=1e-9, level_tail=0.1)
+    assert old.duration > 0.9 * half                        # never settles: the plateau went into the level
+    assert new.duration < 2.0                               # the jump's own settling (0.3 s time constant)
+    assert new.correction(1, 0.0)[1] == pytest.approx(1.0, abs=0.05)
+    with pytest.raises(Exception, match="level_tail"):
+        fit_turn_compensation(t, poses, w, axis=1, level_tail=0.0)
