@@ -126,3 +126,18 @@ def test_bad_plant_options_say_what_was_expected():
         RichPlantParams(effects=("gremlins",))
     with pytest.raises(InputError, match="spread"):
         RichPlantParams(spread=-1.0)
+
+
+def test_url_option_switches_the_rich_plant_on():
+    from devices.base import open_device
+
+    with open_device("sim://robot?plant=rich&seed=3") as robot:
+        assert robot.params.plant == RichPlantParams(seed=3)
+        assert robot.params.backlash == RichPlantParams().backlash_width
+        robot.read()
+    with open_device("sim://robot?plant=rich&seed=3&backlash_mm=0") as robot:
+        assert robot.params.backlash == 0.0 and robot.params.plant is not None
+    with open_device("sim://robot?plant=matched") as robot:
+        assert robot.params.plant is None
+    with pytest.raises(InputError, match="unknown plant 'fancy'"):
+        open_device("sim://robot?plant=fancy")
