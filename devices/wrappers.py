@@ -92,6 +92,7 @@ class BacklashCompensatedRobot(Wrapper):
         self.width, self.period = width, float(period)
         self.ff = None
         self.wanted = None  # the last wanted lengths (6,) [m]
+        self._src = self._out = None  # the last reading read and the one returned for it
 
     @property
     def compensation(self) -> dict:
@@ -121,7 +122,9 @@ class BacklashCompensatedRobot(Wrapper):
         r = self.device.read()
         if r is None or self.wanted is None:
             return r
-        return dataclasses.replace(r, commanded_lengths=self.wanted.copy())
+        if r is not self._src:  # a robot process repeats its last reading until a new one arrives
+            self._src, self._out = r, dataclasses.replace(r, commanded_lengths=self.wanted.copy())
+        return self._out
 
     def stop(self):
         self.device.stop()
