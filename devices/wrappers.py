@@ -107,6 +107,7 @@ class BacklashCompensatedRobot(Wrapper):
         from teleop.diagnosis.feedforward import BacklashFeedforward
 
         self.device.open()
+        self.wanted = self._src = self._out = None
         s = self.device.spec
         self.ff = BacklashFeedforward(self.width, 6, self.period, float(s.v_max), float(s.l_min), float(s.l_max))
 

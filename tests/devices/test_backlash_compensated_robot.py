@@ -63,3 +63,21 @@ def test_a_bad_command_still_reaches_the_robot_check():
     with BacklashCompensatedRobot(SimRobot(params=SimRobotParams(backlash=W)), W, DT) as robot:
         with pytest.raises(Exception, match="6 finite numbers"):
             robot.command_lengths([np.nan] * 6)
+
+
+def test_readings_carry_lengths_the_loop_can_anchor_on():
+    """After a FAULT reset the loop anchors on the reading's commanded lengths (Teleop.anchor, lengths2pose):
+    through the compensation those are the loop's own, a pose's; the motor's (half the play apart) are none."""
+    from teleop.errors import InfeasibleError
+    from teleop.kinematics import lengths2pose
+
+    q = _sine_poses(400)
+    inner = SimRobot(params=SimRobotParams(backlash=W))
+    with BacklashCompensatedRobot(inner, W, DT) as robot:
+        L = poses2lengths(q, robot.geom)
+        for k in range(len(q)):
+            robot.command_lengths(L[k])
+            r = robot.read()
+        np.testing.assert_allclose(lengths2pose(r.commanded_lengths, robot.geom, guess=q[-1]), q[-1], atol=1e-9)
+        with pytest.raises(InfeasibleError):
+            lengths2pose(inner.L_cmd, robot.geom, guess=q[-1])
