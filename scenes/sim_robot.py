@@ -269,6 +269,7 @@ class SimRobot(ContextDevice):
         p = self.params
         self.geom = p.geometry
         self.rng = np.random.default_rng(self.seed)
+        self._nbuf, self._nbuf_i = np.empty((0, len(self.geom.B))), 0  # ADC noise rows drawn ahead (_noise_rows)
         K = C = None
         if p.tip_stiffness is not None:
             K = np.eye(3) * p.tip_stiffness
@@ -291,7 +292,7 @@ class SimRobot(ContextDevice):
         self.stopped = False
         n = len(self.geom.B)
         self._cap = np.full((2, n), np.nan)  # capstan state per cable: motor-side force [N], motor position [m]
-        self._A, self._theta, self._tip_off = np.empty((6, n)), np.empty(n), np.empty(3)
+        self._A, self._theta, self._tip_off, self._target = np.empty((6, n)), np.empty(n), np.empty(3), np.empty(3)
         self._off = np.empty((n, 6))
         self._v, self._tip = np.asarray(self.geom.v, dtype=float), np.asarray(self.geom.tip, dtype=float)
         kc = np.empty(KS.N_READING_CONST)  # the constants of kernel sim.reading
@@ -346,19 +347,15 @@ class SimRobot(ContextDevice):
         with its structure matrix and capstan wraps (kernel sim.pose_terms, held in _A, _theta)."""
         if self._terms is None:
             g = self.geom
-            KS.pose_terms(self.pose, g.r, g.B, self._v, float(g.theta0), self._tip, self._off, self._A,
-                          self._theta, self._tip_off)
-            self._terms = (self._tip_off, self.pose[:3] + self._tip_off)
+            KS.pose_target(self.pose, g.r, g.B, self._v, float(g.theta0), self._tip, self._off, self._A,
+                           self._theta, self._tip_off, self._target)
+            self._terms = (self._tip_off, self._target)
         return self._terms
 
     def _physics(self) -> tuple[np.ndarray, tuple]:
         """Advance `substeps` steps toward the commanded pose; (tip (3,) [m], contact force (fx, fy, fz) [N] on
         the tip)."""
-        w = self.world
-        target = self._pose_terms()[1]
-        for _ in range(self.params.substeps):
-            w.step(target)
-        return w.tip(), w.contact_force_xyz()
+        return self.world.advance(self._pose_terms()[1], self.params.substeps)
 
     def read(self) -> RobotReading:
         """Advance one reading period and return the raw reading."""
@@ -384,7 +381,7 @@ class SimRobot(ContextDevice):
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + p.dt])[0]
-        noise = self.rng.normal(0.0, p.noise_counts, 6) if p.noise_counts > 0 else np.zeros(6)
+        noise = self._noise_rows(1)[0] if p.noise_counts > 0 else np.zeros(6)
         counts = self._lag.counts(t_fsr, noise)  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
         fbg = None if self._fbg is None else self._fbg.read(t_tip, self.t + p.dt)  # distal FBGs (sim_sensors)
         self.t += p.dt
@@ -393,6 +390,18 @@ class SimRobot(ContextDevice):
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
                             boot_id=self.boot_id, wrench_truth=f, fbg_pm=fbg,
                             extras={"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy()})
+
+    def _noise_rows(self, m: int) -> np.ndarray:
+        """(m, n) ADC noise [counts], N(0, noise_counts): the next m rows of the seeded stream, drawn 1024 rows
+        at a time (Generator.normal fills element by element: the numbers of drawing m rows when needed; a
+        draw costs ~1 us whatever its size). The rows are views of a block that is replaced, never written."""
+        buf, i = self._nbuf, self._nbuf_i
+        if i + m > len(buf):
+            fresh = self.rng.normal(0.0, self.params.noise_counts, (max(m, 1024), buf.shape[1]))
+            buf, i = (np.concatenate([buf[i:], fresh]) if i < len(buf) else fresh), 0
+            self._nbuf = buf
+        self._nbuf_i = i + m
+        return buf[i:i + m]
 
     # batch path ------------------------------------------------------------------------------------
     def run(self, lengths, progress=None) -> SimTrace:
@@ -442,7 +451,7 @@ class SimRobot(ContextDevice):
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr, x, self.t + p.dt * np.arange(1, n + 1))
         u = self._lag.run(t_fsr)
-        noise = self.rng.normal(0.0, p.noise_counts, (n, 6)) if p.noise_counts > 0 else np.zeros((n, 6))
+        noise = self._noise_rows(n) if p.noise_counts > 0 else np.zeros((n, 6))
         counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
         t = self.t + p.dt * np.arange(1, n + 1)
         fbg = np.empty((n, 0, 6)) if self._fbg is None else self._fbg.run(t_tip, t)

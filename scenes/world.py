@@ -286,10 +286,12 @@ class PadWorld:
         """(3,) sphere centre [m]."""
         return np.asarray(self.client.getBasePositionAndOrientation(self.body)[0])
 
-    def tip(self) -> np.ndarray:
+    def _touching_point(self) -> np.ndarray:
         """(3,) touching point (sphere centre + r z) [m]."""
         x, y, z = self._position()
         return np.array([x, y, z + self._r])
+
+    tip = _touching_point  # the public name (advance calls _touching_point: a wrapper on `tip` times it once)
 
     def _position(self) -> tuple:
         """The sphere centre (x, y, z) [m], queried once per step (only stepping moves the tip)."""
@@ -304,7 +306,14 @@ class PadWorld:
         """Depth of the touching point below the pad surface [m] (negative: above it)."""
         return float(self.tip()[2] - self.params.surface_z)
 
-    def step(self, target) -> None:
+    def advance(self, target, steps: int = 1) -> tuple:
+        """`steps` steps toward `target` (3,) [m]; (tip (3,) [m] as `tip`, contact force (fx, fy, fz) [N] as
+        `contact_force`): a robot reading's physics in one call."""
+        for _ in range(steps):
+            self._step_to(target)
+        return self._touching_point(), self._contact_force_tuple()
+
+    def _step_to(self, target) -> None:
         """Advance one dt with the tip (touching point) commanded to `target` (3,) [m]."""
         pos = self._position()
         if self.slab is not None and (abs(pos[0] - self._xc) > 5e-5 or abs(pos[1] - self._yc) > 5e-5):
@@ -314,8 +323,8 @@ class PadWorld:
                                     maxForce=1e4)  # the sphere centre's target
         else:  # the series spring-damper (kernel sim.series_spring_force)
             fc = self._contact_force_tuple() if self._implicit else _NO_FORCE
-            if type(target) is not np.ndarray or target.dtype != np.float64 or not target.flags.c_contiguous:
-                target = np.array(target, dtype=np.float64).reshape(3)  # the kernel's one argument type
+            if type(target) is not np.ndarray:  # the kernel takes an array (float64, contiguous: its one type)
+                target = np.array(target, dtype=np.float64)
             f = series_spring_force(pos, self._tip_vel()[0], target, self._r, self._KDM, self._dtm, fc,
                                     self._implicit)
             self._push_tip(f, pos, self._world_frame, self._client_id)
@@ -323,13 +332,11 @@ class PadWorld:
         self._step()
         self._steps += 1
 
+    step = _step_to  # the public name (advance calls _step_to: a wrapper put on `step` times it once)
+
     def contact_force(self) -> np.ndarray:
         """(3,) force of the pad on the tip [N]: normal plus friction forces of every contact point."""
         return np.array(self._contact_force_tuple())
-
-    def contact_force_xyz(self) -> tuple:
-        """contact_force as a tuple (fx, fy, fz) [N] (no array: the simulated robot's reading kernel takes it)."""
-        return self._contact_force_tuple()
 
     def _contact_force_tuple(self) -> tuple:
         """contact_force as a tuple, summed once per step (the contact points change only when stepping); no

@@ -269,9 +269,10 @@ class FsrBranchLag:
         if first:
             self.u = np.empty(t.shape[0])
             self._c = np.asarray(self.cal.loading, dtype=float)
+            self._r_adc = float(self.cal.r_divider), float(self.cal.adc_max)
         counts = np.empty(t.shape[0], dtype=np.int64)
-        fsr_counts(t, self.u, first, self._t, self._gap, self._c, float(self.cal.r_divider), float(self.cal.adc_max),
-                   np.ascontiguousarray(noise, dtype=float), counts)
+        fsr_counts(t, self.u, first, self._t, self._gap, self._c, *self._r_adc, np.ascontiguousarray(noise, dtype=float),
+                   counts)
         return counts
 
     def conductance(self, u) -> np.ndarray:

@@ -16,7 +16,8 @@ per tick [us] p50/p99), in the order of the data flow:
   map           the loop's MAP stage: stylus -> target -> cable lengths
   kinematics    SimRobot.command_lengths: forward kinematics (lengths -> pose)
   pybullet_step pybullet's stepSimulation (the contact solver; 1 ms per step)
-  physics_other the rest of PadWorld.step / contact_force / tip: series spring, contact and state queries
+  physics_other the rest of PadWorld.advance (the steps, the contact force, the tip): series spring, contact
+                and state queries
   cable_sensor  SimRobot.read minus PadWorld: per-pose terms (structure matrix, tension solver, wrap
                 angles), tension distribution, capstan friction, FSR hysteresis and ADC
   robot_io      the rest of the loop's ROBOT stage
@@ -106,7 +107,7 @@ def _meter_world(world, meter: _Meter, solver: _Meter) -> bool:
     inside them, pybullet's stepSimulation (PadWorld keeps it as `_step`) with `solver`. Only that one call
     is timed inside: a timer costs about as much as one of pybullet's small state queries on a slow
     machine. False when PadWorld no longer has `_step` (`solver` then stays at 0)."""
-    for name in ("step", "contact_force", "contact_force_xyz", "tip"):
+    for name in ("advance", "step", "contact_force", "tip"):
         setattr(world, name, meter.wrap(getattr(world, name)))
     if not callable(getattr(world, "_step", None)):
         return False

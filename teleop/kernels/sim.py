@@ -149,3 +149,11 @@ def reading(o, F, A, theta, x, L_home, L, c, cap, f, t_tip, t_fsr, steps):
     contact_moment(o, F, f)
     position_steps(L_home, L, c[STEPS_PER_M], steps)
     return cable_sensor(f, A, c[MU], theta, x, c[T_MIN], c[T_MAX], c[T_REF], c[CAPSTAN_K], cap, t_tip, t_fsr)
+
+
+@njit
+def pose_target(q, r, B, v, theta0, tip, off, A, theta, tip_off, target):
+    """pose_terms at pose q, and target (3,) = p + R tip [m], where the tool tip is commanded."""
+    pose_terms(q, r, B, v, theta0, tip, off, A, theta, tip_off)
+    for j in range(3):
+        target[j] = q[j] + tip_off[j]

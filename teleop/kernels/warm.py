@@ -85,6 +85,8 @@ def warm_up(geom=None) -> float:
     for implicit in (True, False):  # scenes.world.PadWorld.step: pybullet's tuples in, a tuple out
         KS.series_spring_force((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), np.zeros(3), 0.005, np.zeros((3, 3, 3)), 0.1,
                                (0.0, 0.0, 0.0), implicit)
+    KS.pose_target(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
+                   np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip, np.empty(3))
     # the sim robot's reading (scenes.sim_robot.SimRobot.read): the contact force as pybullet's tuple
     kc = np.array([geom.mu, geom.t_min, geom.t_max, 2.85, 5e3, 1e5])
     KS.reading(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6), np.empty(n),
