@@ -94,6 +94,8 @@ def _param_block(rec: Recording, d: LinkData, name: str, params: dict, stderr: d
                           "unit": si_unit(spec.unit, pos, force)}
         if se is None:
             out[spec.name]["fixed"] = True
+        if spec.name in d.known.get(name, {}):
+            out[spec.name]["known"] = True   # from the recording's metadata: the user's simulation has it
     return out
 
 

@@ -42,14 +42,16 @@ ALTERNATIVES_TO_CAPSTAN = ("pulley_friction",)
 def fixed_params(d: LinkData, name: str) -> dict:
     """Parameters held fixed when fitting `name` on link data d: those identifiable only as a product or
     sum with another (capstan theta with mu, unless a bend-angle channel is recorded; a pulley chain's
-    wrap with its mu; the thermal T0 with the baseline offset)."""
+    wrap with its mu; the thermal T0 with the baseline offset), and those the recording's metadata says the
+    user's simulation already has (`LinkData.known`)."""
+    out = {}
     if name == "capstan_friction":
-        return {"theta": get_effect(name).spec("theta").default}
-    if name in ("pulley_friction", "pulley_elongation"):   # mu and the wrap: only their product shows
-        return {"wrap": get_effect(name).spec("wrap").default}
-    if name == "thermal_drift" and d.temperature is not None:
-        return {"T0": float(np.mean(d.temperature))}
-    return {}
+        out = {"theta": get_effect(name).spec("theta").default}
+    elif name in ("pulley_friction", "pulley_elongation"):   # mu and the wrap: only their product shows
+        out = {"wrap": get_effect(name).spec("wrap").default}
+    elif name == "thermal_drift" and d.temperature is not None:
+        out = {"T0": float(np.mean(d.temperature))}
+    return {**out, **d.known.get(name, {})}
 
 
 @dataclass(frozen=True)
@@ -331,7 +333,7 @@ def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tup
         for g_s, c_s, mu_theta in starts_:
             band = 2.0 * float(np.mean(np.abs(d.u))) * abs(g_s) * math.sinh(max(mu_theta, 0.02))
             p0 = {"mu": min(mu_theta / th, 1.4), "theta": get_effect("capstan_friction").spec("theta").default,
-                  "k": max(band / (0.05 * span), 1.0)}
+                  "k": max(band / (0.05 * span), 1.0), **fixed_params(d, "capstan_friction")}
             try:
                 seeded = LinkModel(start.link, float(g_s), float(c_s), start.direction, start.load_sign,
                                    (("capstan_friction", p0),))

@@ -33,6 +33,7 @@ import numpy as np
 from teleop.diagnosis.recording_io import Recording
 from teleop.errors import InputError
 from teleop.physics import Signals, get_effect
+from teleop.physics.base import REGISTRY
 
 # width [s] of the zero-phase moving average on the recorded inputs (drive position, load, indentation):
 # encoder quantisation and sensor noise on an input would otherwise reach the rate estimates (sign(v)
@@ -143,6 +144,7 @@ class LinkData:
     temperature: np.ndarray | None
     theta: np.ndarray | None
     resolution_s: float = 0.0
+    known: dict = field(default_factory=dict)   # {effect: {param: value}} the user's simulation already knows
     cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property
@@ -153,7 +155,7 @@ class LinkData:
         def cut(a):
             return None if a is None else a[sl]
         return LinkData(self.link, self.t[sl], self.u[sl], self.y[sl], cut(self.x), cut(self.load),
-                        cut(self.temperature), cut(self.theta), self.resolution_s)
+                        cut(self.temperature), cut(self.theta), self.resolution_s, self.known)
 
 
 def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_input: bool = False) -> LinkData:
@@ -179,7 +181,33 @@ def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_i
     u = ch[link.input] if raw_input else sm(link.input)
     load = sm(link.load) if link.load else None
     temp = sm("temperature") if "temperature" in ch else None
-    return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"), max(widths) * dt)
+    return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"), max(widths) * dt,
+                    known_params(rec))
+
+
+def known_params(rec: Recording) -> dict:
+    """{effect: {param: value}} from the recording's metadata keys `EFFECT.PARAM = VALUE` (SI, the
+    catalogue's parameter units): parameters the user's simulation already has, held at that value
+    wherever the effect is fitted (a simulated robot's sheath friction coefficient, say). Keys whose prefix
+    is not a catalogue effect are other metadata; an unknown parameter of a catalogue effect, or a value
+    that is not a number, raises InputError naming the key."""
+    out = {}
+    for key, text in rec.metadata.items():
+        name, _, param = str(key).partition(".")
+        if not param or name not in REGISTRY:
+            continue
+        eff = get_effect(name)
+        if param not in {s.name for s in eff.params}:
+            raise InputError(f"{rec.path}: metadata '{key}': effect '{name}' has no parameter '{param}' "
+                             f"(expected one of {', '.join(s.name for s in eff.params)})")
+        try:
+            value = float(text)
+        except ValueError:
+            raise InputError(f"{rec.path}: metadata '{key}' = '{text}': expected a number") from None
+        if not np.isfinite(value):
+            raise InputError(f"{rec.path}: metadata '{key}' = '{text}': expected a finite number")
+        out.setdefault(name, {})[param] = value
+    return out
 
 
 @dataclass(frozen=True)
