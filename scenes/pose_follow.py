@@ -48,10 +48,20 @@ class PoseFollower:
 
     def solve_into(self, L: np.ndarray) -> np.ndarray:
         """The pose (its (6,) array, updated in place) whose cable lengths are L (n,) float64 [m]."""
-        worst = forward_kinematics(L, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12)
+        self._check(forward_kinematics(L, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12))
+        return self._q
+
+    def follow(self, L: np.ndarray, terms: tuple) -> np.ndarray | None:
+        """solve_into, and when the pose moved, the pose terms at it written into `terms` (v, theta0, tip, off,
+        A, theta, tip_off, target: the arguments of kernel sim.pose_target after the pose and the geometry's
+        anchors) in the same kernel call (sim.follow_pose); the pose's (6,) array if it moved, else None."""
+        worst, moved = KS.follow_pose(L, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12, self.max_residual, *terms)
+        self._check(worst)
+        return self._q if moved else None
+
+    def _check(self, worst: float) -> None:
         if not worst <= self.max_residual:
             raise InputError(f"sim robot: no pose reproduces the commanded lengths (residual {worst:.3g} m)")
-        return self._q
 
     def solve(self, L) -> list:
         """Pose (6 floats) [m, rad] whose cable lengths are L (6,) [m]."""

@@ -295,6 +295,8 @@ class SimRobot(ContextDevice):
         self._A, self._theta, self._tip_off, self._target = np.empty((6, n)), np.empty(n), np.empty(3), np.empty(3)
         self._off = np.empty((n, 6))
         self._v, self._tip = np.asarray(self.geom.v, dtype=float), np.asarray(self.geom.tip, dtype=float)
+        self._term_out = (self._v, float(self.geom.theta0), self._tip, self._off, self._A, self._theta, self._tip_off,
+                          self._target)  # where PoseFollower.follow writes a new pose's terms
         kc = np.empty(KS.N_READING_CONST)  # the constants of kernel sim.reading
         kc[[KS.MU, KS.T_MIN, KS.T_MAX, KS.T_REF, KS.CAPSTAN_K, KS.STEPS_PER_M]] = (
             self.geom.mu, self.geom.t_min, self.geom.t_max, p.pretension, p.capstan_k, self.spec.steps_per_m)
@@ -320,9 +322,10 @@ class SimRobot(ContextDevice):
         self._require_open()
         L = check_lengths(lengths, self.geom)
         if not self.stopped:
-            pose = self._fk.solve_into(np.ascontiguousarray(L) if self._play is None else self._realize(L))
-            if pose.tolist() != self.pose.tolist():  # np.array_equal, for six floats
-                self.pose, self._terms = pose.copy(), None
+            # forward kinematics and, if the pose moved, its terms (A, wraps, tool offset, tip target): one call
+            pose = self._fk.follow(np.ascontiguousarray(L) if self._play is None else self._realize(L), self._term_out)
+            if pose is not None:
+                self.pose, self._terms = pose.copy(), (self._tip_off, self._target)
             self.L_cmd = L.copy()
 
     def _realize(self, L: np.ndarray) -> np.ndarray:

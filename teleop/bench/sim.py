@@ -14,12 +14,13 @@ pass/fail against the 20x budget, and where the wall time goes, stage by stage (
 per tick [us] p50/p99), in the order of the data flow:
   stylus        the loop's READ stage: simulated operator (hand model) + state machine
   map           the loop's MAP stage: stylus -> target -> cable lengths
-  kinematics    SimRobot.command_lengths: forward kinematics (lengths -> pose)
+  kinematics    SimRobot.command_lengths: forward kinematics (lengths -> pose) and the new pose's terms
+                (structure matrix, capstan wraps, tip target)
   pybullet_step pybullet's stepSimulation (the contact solver; 1 ms per step)
   physics_other the rest of PadWorld.advance (the steps, the contact force, the tip): series spring, contact
                 and state queries
-  cable_sensor  SimRobot.read minus PadWorld: per-pose terms (structure matrix, tension solver, wrap
-                angles), tension distribution, capstan friction, FSR hysteresis and ADC
+  cable_sensor  SimRobot.read minus PadWorld: contact wrench, tension distribution, capstan friction, FSR
+                hysteresis and ADC, motor steps, the reading record
   robot_io      the rest of the loop's ROBOT stage
   estimate      the loop's ESTIMATE stage: FSR calibration, friction compensation, Kalman, safety monitors
   render, write, record   the loop's stages of those names

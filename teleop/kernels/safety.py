@@ -28,6 +28,12 @@ def all_finite(a):
 
 
 @njit
+def all_finite2(a, b):
+    """all_finite of both arrays (the loop's estimated tensions and wrench in one call)."""
+    return all_finite(a) and all_finite(b)
+
+
+@njit
 def all_finite3(a, b, c, t):
     """all_finite of the three arrays and the float t (a reading's or a sample's numbers in one call)."""
     return np.isfinite(t) and all_finite(a) and all_finite(b) and all_finite(c)

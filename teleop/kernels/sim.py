@@ -157,3 +157,17 @@ def pose_target(q, r, B, v, theta0, tip, off, A, theta, tip_off, target):
     pose_terms(q, r, B, v, theta0, tip, off, A, theta, tip_off)
     for j in range(3):
         target[j] = q[j] + tip_off[j]
+
+
+@njit
+def follow_pose(L, q, free, r, B, tol, max_iter, max_residual, v, theta0, tip, off, A, theta, tip_off, target):
+    """The simulated robot's command (scenes.sim_robot.SimRobot.command_lengths) in one call: forward
+    kinematics from the pose q (6,) (updated in place) to the lengths L (n,) [m], then, if q moved and the
+    lengths are met within max_residual [m], pose_target at the new pose (else the terms are left as they
+    were). Returns (the largest length residual [m], whether q moved)."""
+    q0, q1, q2, q3, q4, q5 = q[0], q[1], q[2], q[3], q[4], q[5]
+    worst = forward_kinematics(L, q, free, r, B, tol, max_iter)
+    moved = q[0] != q0 or q[1] != q1 or q[2] != q2 or q[3] != q3 or q[4] != q4 or q[5] != q5
+    if moved and worst <= max_residual:
+        pose_target(q, r, B, v, theta0, tip, off, A, theta, tip_off, target)
+    return worst, moved

@@ -87,6 +87,9 @@ def warm_up(geom=None) -> float:
                                (0.0, 0.0, 0.0), implicit)
     KS.pose_target(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
                    np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip, np.empty(3))
+    KS.follow_pose(np.ascontiguousarray(L), q.copy(), FREE_AXIAL, geom.r, geom.B, 1e-12, 12, 1e-6,
+                   np.asarray(geom.v, dtype=float), float(geom.theta0), np.asarray(geom.tip, dtype=float),
+                   np.empty((n, 6)), A, theta, tip, np.empty(3))
     # the sim robot's reading (scenes.sim_robot.SimRobot.read): the contact force as pybullet's tuple
     kc = np.array([geom.mu, geom.t_min, geom.t_max, 2.85, 5e3, 1e5])
     KS.reading(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6), np.empty(n),
@@ -108,10 +111,11 @@ def warm_up(geom=None) -> float:
     is_finite_sample(check)
     check.fsr_counts, check.position_steps = np.zeros(n), np.zeros(n)  # a ProcessRobot's reading: floats
     is_finite_reading(check)
-    from teleop.kernels.safety import all_finite
+    from teleop.kernels.safety import all_finite, all_finite2
 
     for a in (np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros((3, n))[1, :6]):  # the loop's estimate check
         all_finite(a)
+    all_finite2(np.zeros(n), np.zeros((3, n))[1, :6])  # the loop's estimate check (tensions, wrench)
     # the simulated operator (devices.simulated): one step with and without tremor
     from teleop.kernels import operator as KO
 

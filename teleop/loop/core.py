@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from teleop.geometry import Geometry, default_geometry
-from teleop.kernels.safety import all_finite
+from teleop.kernels.safety import all_finite2
 from teleop.kernels.warm import warm_up
 from teleop.kinematics import lengths2pose
 from teleop.loop.params import LoopParams
@@ -310,8 +310,8 @@ class Teleop:
                         p.dt * p.robot_every
                     self._est_seq, self._est_t = r.seq, r.t
                     if self.fast_estimate:
-                        t, f = self.estimator.update_arrays(np.asarray(r.fsr_counts, dtype=float), self.pose, dt)
-                        if not (all_finite(t) and all_finite(f)):
+                        t, f = self.estimator.update_arrays(r.fsr_counts, self.pose, dt)  # converts the counts
+                        if not all_finite2(t, f):
                             raise ValueError("estimated tensions/wrench not finite")
                         t, f = t.copy(), f.copy()
                     else:
