@@ -83,13 +83,17 @@ class BacklashCompensatedRobot(Wrapper):
     most v_max * `period` [s] (the robot spec's v_max; `period` the time between commands) and stays inside
     [l_min, l_max]. Readings report the wanted lengths as their commanded lengths (the loop's own commands:
     wrapper and robot together are a robot without play, so re-engaging from a reading finds a pose); the
-    motor-side lengths show in their position steps. The feed-forward starts afresh at open() and after stop()."""
+    motor-side lengths show in their position steps. The feed-forward starts afresh at open() and after stop().
+    `clock()` [s] (default time.perf_counter; a simulation passes its own) times the commands for the wanted
+    rate: a loop running late sends them unevenly."""
 
-    def __init__(self, robot, width, period: float):
+    def __init__(self, robot, width, period: float, clock=None):
         super().__init__(robot)
         if not period > 0:
             raise ValueError("period must be > 0")
         self.width, self.period = width, float(period)
+        self.clock = clock if clock is not None else time.perf_counter
+        self._t = None  # clock of the previous command [s]
         self.ff = None
         self.wanted = None  # the last wanted lengths (6,) [m]
         self._src = self._out = None  # the last reading read and the one returned for it
@@ -107,7 +111,7 @@ class BacklashCompensatedRobot(Wrapper):
         from teleop.diagnosis.feedforward import BacklashFeedforward
 
         self.device.open()
-        self.wanted = self._src = self._out = None
+        self.wanted = self._src = self._out = self._t = None
         s = self.device.spec
         self.ff = BacklashFeedforward(self.width, 6, self.period, float(s.v_max), float(s.l_min), float(s.l_max))
 
@@ -116,7 +120,10 @@ class BacklashCompensatedRobot(Wrapper):
         if L.shape != (6,) or not all_finite(L):  # the robot's own check names the bad input
             self.device.command_lengths(lengths)
             return
-        self.device.command_lengths(self.ff.step(L))
+        now = self.clock()
+        x = self.ff.step(L, None if self._t is None else now - self._t)
+        self._t = now
+        self.device.command_lengths(x)
         self.wanted = L.copy()
 
     def read(self) -> RobotReading:
@@ -129,6 +136,7 @@ class BacklashCompensatedRobot(Wrapper):
 
     def stop(self):
         self.device.stop()
+        self._t = None
         if self.ff is not None:
             self.ff.reset()
 

@@ -3,6 +3,7 @@ and with the backlash feed-forward, in one run.
 
     teleop bench feedforward --backlash-mm 0.5 --seconds 10 --seed 0 --json ff.json --plot ff.png
     teleop bench feedforward --compensation MODEL.json      # the width from a link model (teleop diagnose)
+    teleop bench feedforward --recordings PLAIN.mcap COMP.mcap   # the same error in recorded paced sessions
 
 Three sessions run on a manual clock (simulated time, as `teleop bench sim`), each the whole chain: the
 simulated operator (devices.simulated, `sine` script: the stylus moved back and forth along --axis, with its
@@ -26,6 +27,11 @@ JSON: {"seed", "seconds", "settle_s", "backlash_mm", "compensation": {"source", 
 {"axis", "amp_mm", "period_s"}, "rate_hz", "robot_rate_hz", "sessions": {name: {"tip_error_mm": {"rms",
 "p95", "max"}, "readings", "final_state", "fault_reason", "max_command_step_mm"}}, "v_max_step_mm",
 "ratio_rms" (plain / compensated), "pass" (ratio_rms >= 2 and no session faulted)}.
+
+With --recordings the same error is read from recorded `teleop session --record` files instead (simulated
+robot: its `x_tip` beside the loop's `/teleop/setpoint`, one value per robot frame after --settle-s; paced
+sessions, the robot in its own process) and nothing is simulated: JSON {"settle_s", "recordings": {path:
+{"tip_error_mm", "readings", "compensation"}}, "ratio_rms" (first / second file, with two)}.
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ import math
 
 import numpy as np
 
+from teleop.argtypes import input_file
 from teleop.errors import InputError
 
 RATE_HZ = 1000.0      # loop rate [Hz]
@@ -58,6 +65,9 @@ def register(subparsers) -> None:
                    help="stylus amplitude [mm] (x motion scale 0.25 at the robot; default 12)")
     p.add_argument("--period-s", type=float, default=2.0, help="stylus period [s] (default 2)")
     p.add_argument("--seed", type=int, default=0, help="seeds the operator's tremor and the ADC noise (default 0)")
+    p.add_argument("--recordings", nargs="+", metavar="MCAP", type=input_file,
+                   help="measure recorded sessions of the simulated robot instead (e.g. without, then with "
+                        "--compensation); the ratio is first / second")
     p.add_argument("--json", metavar="F", help="write the result JSON here")
     p.add_argument("--plot", metavar="F", help="write the tip error over time (PNG)")
     p.set_defaults(func=run)
@@ -89,8 +99,9 @@ def run_session(backlash: float, width: float | None, seconds: float, seed: int,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     sim = SimRobot(params=SimRobotParams(substeps=SUBSTEPS, backlash=backlash), seed=robot_seed)
     logged = LoggedDevice(sim)  # what reaches the robot: the speed check
-    robot = logged if width is None else BacklashCompensatedRobot(logged, width, params.dt * params.robot_every)
     clock_t = [0.0]
+    robot = logged if width is None else BacklashCompensatedRobot(logged, width, params.dt * params.robot_every,
+                                                                  clock=lambda: clock_t[0])
     ax = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}[axis]
     stylus = SimulatedStylus(Script(kind="sine", axis=ax, amplitude=amp, period=period), OperatorParams(),
                              seed=stylus_seed, clock=lambda: clock_t[0])
@@ -122,6 +133,44 @@ def run_session(backlash: float, width: float | None, seconds: float, seed: int,
     return {"t": np.array(t_log), "err": np.array(err), "enabled": np.array(on, dtype=bool),
             "final_state": final_state, "fault_reason": fault_reason, "max_command_step": step,
             "v_max_step": float(sim.spec.v_max) * params.dt * params.robot_every}
+
+
+def recorded_tip_errors(path: str, settle: float = 1.0) -> tuple[np.ndarray, dict | None]:
+    """(tip errors (n,) [m] per robot frame at or after `settle` [s], the session's compensation metadata)
+    of a `teleop session` recording on the simulated robot: |setpoint_cp + R(home) tip - x_tip|."""
+    from teleop.kinematics import rotation_zyx
+    from teleop.loop.replay import geometry_from
+    from teleop.recording import TOPIC_ROBOT, TOPIC_SETPOINT, read_session
+
+    s = read_session(path)
+    conf = s.metadata.get("session", {}).get("configuration")
+    if conf is None:
+        raise InputError(f"{path}: no session metadata (is this a teleop session recording?)")
+    geom = geometry_from(conf.get("geometry"))
+    home = np.asarray(((conf.get("loop") or {}).get("mapping") or {}).get("home", [0.0] * 6), dtype=float)
+    tool = rotation_zyx(*home[3:]) @ np.asarray(geom.tip, dtype=float)
+    sp = {m["tick"]: m["setpoint_cp"] for m in s.messages(TOPIC_SETPOINT)}
+    err, last = [], None
+    for m in s.messages(TOPIC_ROBOT):
+        if m["seq"] == last or m["tick"] not in sp or "x_tip" not in m:
+            continue  # one value per robot frame (the loop sees a frame on several ticks)
+        last = m["seq"]
+        if m["t"] >= settle:
+            err.append(float(np.linalg.norm(np.asarray(m["x_tip"], dtype=float) - (np.asarray(sp[m["tick"]]) + tool))))
+    if not err:
+        raise InputError(f"{path}: no robot frames with the simulator's tip (x_tip) after {settle:g} s")
+    return np.array(err), conf.get("compensation")
+
+
+def bench_recordings(paths: list, settle: float = 1.0) -> dict:
+    """The result dict for recorded sessions (module docstring)."""
+    rec = {}
+    for path in paths:
+        e, comp = recorded_tip_errors(str(path), settle)
+        rec[str(path)] = {"tip_error_mm": _stats_mm(e), "readings": int(e.size), "compensation": comp}
+    rms = [v["tip_error_mm"]["rms"] for v in rec.values()]
+    return {"settle_s": settle, "recordings": rec,
+            "ratio_rms": round(rms[0] / rms[1], 4) if len(rms) == 2 and rms[1] else None}
 
 
 def _stats_mm(e: np.ndarray) -> dict:
@@ -230,6 +279,18 @@ def run(args) -> int:
     from teleop.outputs import save_figure, write_json
 
     _check(args)
+    if args.recordings:
+        out = bench_recordings(args.recordings, args.settle_s)
+        print(f"tip tracking error of recorded sessions after {args.settle_s:g} s [mm]:")
+        for path, v in out["recordings"].items():
+            e, c = v["tip_error_mm"], v["compensation"]
+            print(f"  rms {e['rms']:.4f}  p95 {e['p95']:.4f}  max {e['max']:.4f}  ({v['readings']} frames) {path}"
+                  + (f"  [feed-forward {c['width_mm'][0]:.4g} mm]" if c else ""))
+        if out["ratio_rms"] is not None:
+            print(f"ratio first / second (rms): {out['ratio_rms']:.2f}x")
+        if args.json:
+            write_json(args.json, out)
+        return 0
     width, source = None, "the plant's own width"
     if args.compensation:
         from teleop.diagnosis.feedforward import model_backlash_width

@@ -114,8 +114,16 @@ class BacklashFeedforward:
         self.state[1] = 0.0
         self.state[2] = np.nan
 
-    def step(self, lengths) -> np.ndarray:
-        """Motor-side commands (n,) [m] (a buffer overwritten by the next call) for wanted lengths (n,) [m]."""
+    def step(self, lengths, dt: float | None = None) -> np.ndarray:
+        """Motor-side commands (n,) [m] (a buffer overwritten by the next call) for wanted lengths (n,) [m];
+        dt: time since the previous command [s] for the rate (None: `period`; a loop that runs late sends
+        commands unevenly, and the wanted rate is their change over the time that really passed; at least a
+        tenth of `period`)."""
         y = np.ascontiguousarray(lengths, dtype=float)
-        return KF.play_inverse_into(y, self.r, self.v0, self.alpha, self.period, self.max_step, self.lo, self.hi,
-                                    self.state, self.out)
+        if dt is None or dt == self.period:
+            dt, alpha = self.period, self.alpha
+        else:
+            dt = max(float(dt), 0.1 * self.period)
+            alpha = dt / (self.tau + dt)
+        return KF.play_inverse_into(y, self.r, self.v0, alpha, dt, self.max_step, self.lo, self.hi, self.state,
+                                    self.out)

@@ -83,3 +83,23 @@ def test_the_width_comes_from_the_position_link_of_a_model():
     bare = LinkModel(Link("position", "tip_pos", "motor_pos", "motor_pos"), 1.0, 0.0)
     with pytest.raises(InputError, match="M.json: no backlash"):
         model_backlash_width(IdentifiedModel("x", {"position": bare}), "M.json")
+
+
+def test_uneven_commands_take_the_rate_over_the_time_that_passed():
+    """A loop running late sends commands unevenly: the same path, sampled at uneven times with those times
+    given, drives the same side as the even sampling (the rate is per second, not per command)."""
+    rng = np.random.default_rng(5)
+    t_even = np.arange(2000) * DT
+    t_uneven = np.cumsum(rng.choice([0.2e-3, 1.8e-3], 2000))   # bursts and gaps, 1 ms on average
+    path = lambda t: 0.025 + 1.5e-3 * np.sin(2 * np.pi * 0.7 * t)
+    even, uneven = BacklashFeedforward(W, 1, DT, 10.0), BacklashFeedforward(W, 1, DT, 10.0)
+    s_even = [(even.step(path(np.array([t])))[0] - path(t)) / (W / 2) for t in t_even]
+    s_uneven, prev = [], None
+    for t in t_uneven:
+        x = uneven.step(path(np.array([t])), None if prev is None else t - prev)[0]
+        prev = t
+        s_uneven.append((x - path(t)) / (W / 2))
+    # away from the reversals both drive on the full side; the per-command rate would halve it in the bursts
+    moving = lambda t: (np.abs(np.cos(2 * np.pi * 0.7 * t)) > 0.5) & (t > 0.05)   # after the filter's start
+    assert np.abs(np.array(s_uneven)[moving(t_uneven)]).min() > 0.99
+    assert np.abs(np.array(s_even)[moving(t_even)]).min() > 0.99
