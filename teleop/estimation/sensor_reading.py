@@ -62,8 +62,10 @@ class FbgReadingEstimator:
         self._t = np.zeros(self.n)
         # compile (or load) the kernels now, not on the loop's first frame
         z = np.zeros((2, self.n))
-        KS.fbg_row(z, 1.0, 1.0, self._t) if kind == "fbg" else KS.one_sensor_row(
-            np.ones(self.n), np.full(self.n, math.nan), 1.0, 1.0, 0.0, 0.0, z, 0, 1.0, 1.0, self._t)
+        if kind == "fbg":
+            KS.fbg_row(z, 1.0, 1.0, self._t)
+        else:
+            KS.one_sensor_row(np.ones(self.n), np.full(self.n, math.nan), 1.0, 1.0, 0.0, 0.0, z, 0, 1.0, 1.0, self._t)
         self.reset()
 
     def reset(self) -> None:
