@@ -44,3 +44,9 @@ def test_the_model_is_applied_and_recorded(tmp_path, capsys):
     assert json.loads(js.read_text())["compensation"]["backlash_width_mm"] == pytest.approx(0.5)
     conf = read_session(str(rec)).metadata["session"]["configuration"]
     assert conf["compensation"]["width_mm"] == pytest.approx([0.5] * 6)
+    # the bench measures the recorded session's tip error and names its compensation
+    out_js = tmp_path / "rec.json"
+    assert main(["bench", "feedforward", "--recordings", str(rec), "--settle-s", "0.1", "--json", str(out_js)]) == 0
+    r = json.loads(out_js.read_text())["recordings"][str(rec)]
+    assert r["readings"] > 10 and r["tip_error_mm"]["rms"] > 0
+    assert r["compensation"]["width_mm"] == pytest.approx([0.5] * 6)
