@@ -197,3 +197,23 @@ def test_palpate_with_sensor_one_short():
     maes = {js["summary"][n]["mean_abs_error_N"] for n in ESTIMATORS}
     assert len(maes) == 1 and maes.pop() <= SEED_MODEL_RMSE_N
     assert "sensor-model RMSE" in res.table()
+
+
+def test_palpate_calibration_file_pairs(tmp_path):
+    """`teleop palpate --calibration`: a `teleop calibrate` file fits the sensor kind or is refused naming
+    the file; the loaded values are the file's."""
+    from teleop.calibration.calfile import write_calibration
+    from teleop.protocols.palpation_sensors import sensor_calibration
+    from teleop.sensors import ProximalDistalModel
+
+    fbg = write_calibration(tmp_path / "fbg.toml", "fbg", "test", {"S_pm_N": 30.0, "r": 2.0, "kT1_pm_C": 10.0,
+                                                                  "kT2_pm_C": 20.0, "noise_pm": 5.0}, {}, {})
+    one = write_calibration(tmp_path / "one.toml", "one-sensor", "test",
+                            {"Kp": 0.8, "Kr": 1.2, "bp": 0.0, "br": 0.0, "unit": "N"}, {}, {})
+    assert sensor_calibration(str(fbg), "fbg")["fbg"] == FbgParams(30.0, 2.0, 10.0, 20.0, 5.0)
+    assert sensor_calibration(str(one), "one")["model"] == ProximalDistalModel(0.8, 1.2)
+    assert sensor_calibration(None, "one") == {}
+    with pytest.raises(InputError, match="one.toml.*does not calibrate --sensor fbg"):
+        sensor_calibration(str(one), "fbg")
+    with pytest.raises(InputError, match="fbg.toml: --sensor fsr takes no --calibration"):
+        sensor_calibration(str(fbg), "fsr")

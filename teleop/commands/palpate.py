@@ -4,6 +4,8 @@ from __future__ import annotations
 
 
 def register(subparsers) -> None:
+    from teleop.argtypes import input_file
+
     p = subparsers.add_parser(
         "palpate", help="palpation tests on the simulated robot: stiffness (Table 1), z / xy (Fig 16), scan (Fig 17)",
         description="Run a palpation test of seed 000 on the simulated CDPR and pybullet pads; print a table, "
@@ -22,6 +24,9 @@ def register(subparsers) -> None:
                    help="the robot's tension sensors: fsr (the FSR array, default), fbg (seed 001's distal FBG "
                         "on every cable, temperature compensated) or one (the FSR array plus one cable's FBG, "
                         "seed 001's sensor-model approach for the others)")
+    p.add_argument("--calibration", type=input_file, default=None, metavar="TOML",
+                   help="with --sensor fbg|one: a `teleop calibrate fbg` file (the FBGs' constants) or, with "
+                        "--sensor one, a `teleop calibrate one-sensor` file (Kp, Kr: not identified on the run)")
     p.add_argument("--json", default=None, help="write the results as JSON here")
     p.add_argument("--plot", default=None, help="write a PNG figure here")
     p.set_defaults(func=run)
@@ -35,7 +40,11 @@ def run(args) -> int:
     from teleop.outputs import save_figure, write_json
     from teleop.protocols.palpation import PalpationParams, run_test
 
-    params = dataclasses.replace(PalpationParams(), sensor=args.sensor)
+    params = dataclasses.replace(PalpationParams(), sensor=args.sensor, calibration=args.calibration)
+    if args.calibration is not None:  # a file that does not fit the sensor is refused before the run
+        from teleop.protocols.palpation_sensors import sensor_calibration
+
+        sensor_calibration(args.calibration, args.sensor)
     if args.repeats is not None:
         if args.repeats < 1:
             raise InputError(f"--repeats must be >= 1, got {args.repeats}")

@@ -136,7 +136,7 @@ def identify_one_sensor(fsr_tension, fbg_pm, lengths, cable: int = 0, fbg: FbgPa
     """Seed 001's identification on the instrumented cable: Kp, Kr (lines through the origin, eqs 4-7) from its
     proximal FSR tension (m,) [N], its Bragg shifts fbg_pm (m, 2, n) [pm] and its commanded lengths (m,) [m]
     (the direction of each sample: teleop.sensors.fit_proximal_distal_origin)."""
-    fd = fbg_tensions(np.asarray(fbg_pm, dtype=float))[:, cable]
+    fd = fbg_tensions(np.asarray(fbg_pm, dtype=float), fbg)[:, cable]
     return fit_proximal_distal_origin(fsr_tension, fd, cable_direction(lengths))
 
 

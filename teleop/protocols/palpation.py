@@ -77,6 +77,8 @@ class PalpationParams:
         sensor: the robot's tension sensors (teleop.sensors.SENSOR_KINDS): fsr (the FSR array, the four
             estimators), fbg (a distal FBG per cable) or one (the FSR array and cable 0's FBG, seed 001's
             sensor-model approach); teleop.protocols.palpation_sensors.
+        calibration: a `teleop calibrate fbg|one-sensor` file for the FBG kinds' estimator (None: seed 001's
+            FBG constants, and for one Kp, Kr identified on the no-load runs).
     """
 
     speed: float = 0.5e-3
@@ -101,6 +103,7 @@ class PalpationParams:
     turn_deadband: float = 1e-9
     turn_level_tail: float = 0.1
     sensor: str = "fsr"
+    calibration: str | None = None
 
 
 @dataclass(frozen=True)
@@ -510,7 +513,8 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
                 from teleop.protocols.palpation_sensors import sensor_estimates
 
                 w, calib[s.name]["sensor"] = sensor_estimates(params.sensor, fit_trace, spans, poke_trace, geom, dt,
-                                                              sim.fbg_cable, progress=bar.update)
+                                                              sim.fbg_cable, progress=bar.update,
+                                                              calibration=params.calibration)
             offset = plan.starts[0]
             for pk, k in zip(plan.pokes, plan.deepest):
                 k = k - offset

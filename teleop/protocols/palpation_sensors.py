@@ -25,26 +25,58 @@ SEED_FIGURES = {
 }
 
 
+def sensor_calibration(path: str | None, kind: str) -> dict:
+    """The estimator's settings from a `teleop calibrate` file for sensor `kind` ({} without a file):
+    {"fbg": FbgParams} from a kind "fbg" file (sensor fbg or one), {"model": ProximalDistalModel} from a
+    kind "one-sensor" file (sensor one: used instead of identifying it). Any other pairing is an
+    InputError naming the file."""
+    if path is None:
+        return {}
+    from teleop.calibration.calfile import load_calibration
+    from teleop.errors import InputError
+
+    file_kind, value = load_calibration(path)
+    if file_kind == "fbg" and kind in ("fbg", "one"):
+        return {"fbg": value}
+    if file_kind == "one-sensor" and kind == "one":
+        return {"model": value}
+    if kind == "fsr":
+        raise InputError(f"{path}: --sensor fsr takes no --calibration here (the FSR array's estimators read the "
+                         f"simulated robot's own FSR calibration); --calibration is for --sensor fbg or one")
+    wants = {"fbg": 'kind = "fbg"', "one": 'kind = "fbg" or "one-sensor"'}[kind]
+    raise InputError(f"{path}: kind = \"{file_kind}\" does not calibrate --sensor {kind} (expected {wants})")
+
+
 def sensor_estimates(kind: str, fit_trace, spans: dict, poke_trace, geom, dt: float, cable: int = 0,
-                     progress=None) -> tuple[dict, dict]:
+                     progress=None, calibration: str | None = None) -> tuple[dict, dict]:
     """({estimator: (m, 6) wrench} over `poke_trace`, calibration record) for sensor kind fbg or one.
 
-    spans: {axis: (a, b)} sample ranges of `fit_trace` holding the no-load runs."""
+    spans: {axis: (a, b)} sample ranges of `fit_trace` holding the no-load runs; calibration: a `teleop
+    calibrate` file (`sensor_calibration`)."""
+    from dataclasses import asdict
+
     from teleop.estimation.sensor_reading import estimate_trace, identify_one_sensor
     from teleop.protocols.palpation import ESTIMATORS, _slice, fsr_tensions
+    from teleop.sensors import FbgParams
 
-    model, calib = None, {"sensor": kind}
-    if kind == "one":
+    cal = sensor_calibration(calibration, kind)
+    fbg, model, calib = cal.get("fbg", FbgParams()), cal.get("model"), {"sensor": kind}
+    if calibration is not None:
+        calib["calibration_file"] = str(calibration)
+        calib["fbg"] = asdict(fbg)
+    if kind == "one" and model is not None:
+        calib["one_sensor"] = {"cable": cable, **asdict(model)}
+    elif kind == "one":
         a, b = min(v[0] for v in spans.values()), max(v[1] for v in spans.values())
         sl = slice(a, b)
         Fp = fsr_tensions(_slice(fit_trace, a, b))
-        model = identify_one_sensor(Fp[:, cable], fit_trace.fbg_pm[sl], fit_trace.lengths[sl, cable], cable)
+        model = identify_one_sensor(Fp[:, cable], fit_trace.fbg_pm[sl], fit_trace.lengths[sl, cable], cable, fbg)
         # what the sheath's capstan law gives the instrumented cable over the run (exp(-+mu Theta))
         mt = geom.mu * fit_trace.theta[sl, cable]
         calib["one_sensor"] = {"cable": cable, "Kp": round(model.Kp, 6), "Kr": round(model.Kr, 6),
                                "capstan_Kp_range": [round(float(np.exp(-mt.max())), 6), round(float(np.exp(-mt.min())), 6)],
                                "capstan_Kr_range": [round(float(np.exp(mt.min())), 6), round(float(np.exp(mt.max())), 6)]}
-    w = estimate_trace(poke_trace, geom, dt, kind, ESTIMATORS, model=model, cable=cable, progress=progress)
+    w = estimate_trace(poke_trace, geom, dt, kind, ESTIMATORS, fbg=fbg, model=model, cable=cable, progress=progress)
     return w, calib
 
 
