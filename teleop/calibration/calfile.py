@@ -132,6 +132,6 @@ def load_fsr(path: str | Path):
     one-sensor file is refused with what it holds)."""
     kind, model = load_calibration(path)
     if kind != "fsr":
-        raise InputError(f"{path}: kind = \"{kind}\", expected \"fsr\" (the loop's robots read FSR arrays; "
-                         f"FBG and one-sensor paths are not wired into the loop yet)")
+        raise InputError(f"{path}: kind = \"{kind}\", expected \"fsr\" (this reads an FSR array's calibration; "
+                         f"FBG and one-sensor files calibrate `teleop palpate --sensor fbg|one --calibration FILE`)")
     return model
