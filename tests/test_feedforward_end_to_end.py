@@ -14,7 +14,8 @@ def test_session_recording_to_diagnosed_backlash_model(tmp_path, capsys):
     rec, csv, model = tmp_path / "s.mcap", tmp_path / "c1.csv", tmp_path / "m.json"
     assert main(["session", "--haptic", "sim://?script=sine&amp_mm=12&axis=x&period_s=2",
                  "--robot", "sim://robot?substeps=2&backlash_mm=0.5", "--robot-inline", "--no-realtime",
-                 "--seconds", "8", "--record", str(rec)]) == 0
+                 "--seconds", "8", "--record", str(rec), "--stale-ms", "500"]) == 0
+    assert "final state ENABLED" in capsys.readouterr().out   # a paced run: a loaded machine must not fault it
     assert main(["export", str(rec), "--csv", str(csv), "--cable", "1"]) == 0
     assert main(["diagnose", str(csv), "--save-model", str(model), "--seed", "0"]) == 0
     out = capsys.readouterr().out
