@@ -397,15 +397,14 @@ class SimRig:
         samples: force_scale x the robot's ground-truth contact force (what a transparent chain renders),
         and force_scale x the estimator's wrench without its Kalman filter (same friction compensation;
         None when the chain renders the raw FSR wrench, which has no filter anyway)."""
-        from teleop.estimation.reading import ReadingEstimator
-
         if self.layout is None:
             from teleop.errors import InputError
 
             raise InputError("blind-test rig: arrange(layout) before poking")
         self._open_station(slot)
         st = self.station
-        raw = ReadingEstimator(st.geom, st.estimator.name, kalman=None) if self.options.compensation else None
+        raw = _sensor_estimator(st.geom, self.options, st.robot.params, st.estimator.name, None) \
+            if self.options.compensation else None  # the chain's sensor kind and estimator, unfiltered
         contact, unfiltered, last = [], [], [0.0, 0.0]
 
         def monitor(x):
