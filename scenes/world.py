@@ -163,6 +163,9 @@ class PadWorld:
         c.setPhysicsEngineParameter(numSolverIterations=p.solver_iterations, deterministicOverlappingPairs=1,
                                     contactBreakingThreshold=1e-4)
         self._xy_cached = np.zeros(2)
+        # a slab whose material map has regions: its stiffness under the tip follows the tip (one material
+        # and thickness everywhere gives the same stiffness at every point: set once)
+        self._graded = bool(self.pad.regions) and self.pad.hole_radius <= 0
         self._k_set = None
         self._build_pad()
         sph = c.createCollisionShape(pb.GEOM_SPHERE, radius=self.proxy_radius)
@@ -316,7 +319,7 @@ class PadWorld:
     def _step_to(self, target) -> None:
         """Advance one dt with the tip (touching point) commanded to `target` (3,) [m]."""
         pos = self._position()
-        if self.slab is not None and (abs(pos[0] - self._xc) > 5e-5 or abs(pos[1] - self._yc) > 5e-5):
+        if self._graded and (abs(pos[0] - self._xc) > 5e-5 or abs(pos[1] - self._yc) > 5e-5):
             self._update_slab(np.array(pos[:2]))
         if self.K is None:
             self._change_constraint(self._cid, [float(target[0]), float(target[1]), float(target[2]) - self._r],
