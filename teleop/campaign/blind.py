@@ -218,6 +218,17 @@ def jnd_curve(rig, jnds, participants: int, seed: int, base_params, progress=Non
     return {j: StudyResult(areas=tuple(rig.areas), records=tuple(records[j])) for j in jnds}
 
 
+def warm() -> None:
+    """Once per worker process before its tasks: the modules a task imports and the compiled kernels (from
+    numba's on-disk cache; compiled there if the cache is stale), so no task's time holds them."""
+    import scenes.pads  # noqa: F401 - the pad's layouts and meshes
+    import teleop.protocols.blind.rig  # noqa: F401
+    import teleop.protocols.blind.study  # noqa: F401
+    from teleop.kernels.warm import warm_up
+
+    warm_up()
+
+
 def execute(identity: dict) -> dict:
     """Run one task (on a worker): each participant of the block at every JND on a fresh simulated rig.
     Returns {"participants": [[record per JND] per participant]}."""

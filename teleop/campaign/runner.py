@@ -3,6 +3,7 @@ store as it arrives; then the summary, its table and the plots are made from wha
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from dataclasses import dataclass, field
@@ -24,8 +25,11 @@ def execute_task(task):
 @dataclass
 class RunReport:
     """What a run did: tasks in the campaign, skipped (already done), ran here, failed [(Task, error)],
-    wall time [s] (of which start_s starting or connecting to the scheduler), each task's own wall and CPU
-    time where it ran [s], worker threads at the end, and the summary of everything stored."""
+    wall time [s] (of which start_s starting or connecting to the scheduler and warm_s the kind's set-up in
+    every worker process, each worker's time in warm_seconds), each task's own wall and CPU time where it
+    ran [s], the Outcome of each task (where and when it ran), the CPU time of this process over the tasks
+    [s] (the client; a LocalCluster's scheduler and nannies run in it too; `none` runs the tasks in it), worker threads at the end, and
+    the summary of everything stored."""
 
     total: int
     skipped: int
@@ -33,9 +37,13 @@ class RunReport:
     failed: list = field(default_factory=list)
     wall_s: float = 0.0
     start_s: float = 0.0
+    warm_s: float = 0.0
+    warm_seconds: list = field(default_factory=list)
     workers: int = 0
     task_seconds: list = field(default_factory=list)
     task_cpu_seconds: list = field(default_factory=list)
+    outcomes: list = field(default_factory=list)
+    client_cpu_s: float = 0.0
     summary: dict = field(default_factory=dict)
 
 
@@ -53,27 +61,33 @@ def run_campaign(campaign: Campaign, out_dir: str | Path, scheduler: str = "none
         print(f"campaign {campaign.source}: {len(tasks)} tasks, {report.skipped} already done, "
               f"{len(todo)} to run on {scheduler}", file=stream, flush=True)
         started = datetime.now(timezone.utc).isoformat(timespec="seconds")
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         if todo:
-            with open_scheduler(scheduler) as sched, \
-                    Progress(len(todo), "campaign", stream, bar=bar, interval=interval) as progress:
+            with open_scheduler(scheduler) as sched:
                 report.start_s = time.perf_counter() - t0
-                for task, outcome in sched.run(execute_task, todo):
-                    if outcome.ok:
-                        store.save(task, outcome.value)
-                    else:
-                        store.save_failure(task, outcome.error, outcome.traceback)
-                        report.failed.append((task, outcome.error))
-                        progress.note(f"task failed: {task.label}: {shorten(outcome.error)}")
-                    report.ran += 1
-                    report.task_seconds.append(outcome.seconds)
-                    report.task_cpu_seconds.append(outcome.cpu_seconds)
-                    progress.update(outcome.ok)
+                if hasattr(kind, "warm"):
+                    report.warm_seconds = sched.warm(kind.warm)
+                report.warm_s = time.perf_counter() - t0 - report.start_s
+                c0 = time.process_time()
+                with Progress(len(todo), "campaign", stream, bar=bar, interval=interval) as progress:
+                    for task, outcome in sched.run(execute_task, todo):
+                        if outcome.ok:
+                            store.save(task, outcome.value)
+                        else:
+                            store.save_failure(task, outcome.error, outcome.traceback)
+                            report.failed.append((task, outcome.error))
+                            progress.note(f"task failed: {task.label}: {shorten(outcome.error)}")
+                        report.ran += 1
+                        report.task_seconds.append(outcome.seconds)
+                        report.task_cpu_seconds.append(outcome.cpu_seconds)
+                        report.outcomes.append(dataclasses.replace(outcome, value=None))
+                        progress.update(outcome.ok)
                 report.workers = sched.workers
         report.wall_s = time.perf_counter() - t0
+        report.client_cpu_s = time.process_time() - c0
         secs, cpu = report.task_seconds, report.task_cpu_seconds
         store.log_run({"started_utc": started, "scheduler": scheduler, "workers": report.workers,
-                       "start_s": round(report.start_s, 3),
+                       "start_s": round(report.start_s, 3), "warm_s": round(report.warm_s, 3),
                        "tasks": report.total, "skipped": report.skipped, "ran": report.ran,
                        "failed": len(report.failed), "wall_s": round(report.wall_s, 3),
                        "task_s_sum": round(sum(secs), 3),

@@ -30,7 +30,8 @@ class Campaign:
 
 
 def kinds() -> dict:
-    """kind name -> module with parse(doc, where, base_dir), tasks(campaign), execute(task), summarise(...)."""
+    """kind name -> module with parse(doc, where, base_dir), tasks(campaign), execute(task), summarise(...),
+    table(summary), write_outputs(summary, dir) and, optionally, warm() (its once-per-process set-up)."""
     from teleop.campaign import blind, noop, recordings
 
     return {blind.KIND: blind, recordings.KIND: recordings, noop.KIND: noop}

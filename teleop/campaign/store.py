@@ -4,8 +4,8 @@ Layout of DIR:
     tasks/<task id>.json    {"task", "kind", "label", "identity", "teleop_version", "result"}: a finished
                             task (one line, sorted keys, floats as shortest round-trip repr: the same
                             result is the same bytes; 2.6x smaller than indented)
-    failed/<task id>.json   {"task", "kind", "label", "identity", "error"}: the last failure of a task not
-                            yet finished (removed when it finishes)
+    failed/<task id>.json   {"task", "kind", "label", "identity", "error", "traceback"}: the last failure
+                            of a task not yet finished (removed when it finishes)
     runs.jsonl              one line per run: scheduler, counts, wall and task times (not results)
     .lock                   held (flock) by the run using DIR; the kernel drops it when that process dies
 

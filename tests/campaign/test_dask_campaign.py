@@ -64,6 +64,7 @@ def test_local_cluster_is_byte_identical_and_a_failing_task_is_reported(referenc
 
     report = run_campaign(campaign, tmp_path, "local:2", bar=False)
     assert report.ran == 8 and len(report.failed) == 4
+    assert len(report.warm_seconds) == 2 and len({o.worker for o in report.outcomes}) == 2  # each worker warmed
     assert files(tmp_path / "tasks") == files(ref_dir / "tasks")
     assert (tmp_path / "summary.json").read_bytes() == (ref_dir / "summary.json").read_bytes()
     failed = {p.name for p in (tmp_path / "failed").glob("*.json")}
