@@ -196,7 +196,9 @@ def test_palpate_with_sensor_one_short():
     assert one["Kp"] < 1.0 < one["Kr"]
     maes = {js["summary"][n]["mean_abs_error_N"] for n in ESTIMATORS}
     assert len(maes) == 1 and maes.pop() <= SEED_MODEL_RMSE_N
-    assert "sensor-model RMSE" in res.table()
+    assert "sensor-model RMSE" in res.table() and "tip tension RMSE per cable" in res.table()
+    rmse = js["calibration"]["z60"]["sensor"]["tension_rmse_N"]
+    assert len(rmse) == 6 and max(rmse) <= SEED_MODEL_RMSE_N
 
 
 def test_palpate_calibration_file_pairs(tmp_path):

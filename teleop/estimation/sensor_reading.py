@@ -142,15 +142,18 @@ def identify_one_sensor(fsr_tension, fbg_pm, lengths, cable: int = 0, fbg: FbgPa
 
 def estimate_trace(trace, geom: Geometry, dt: float, kind: str, names, *, fbg: FbgParams = FbgParams(),
                    model: ProximalDistalModel | None = None, cable: int = 0, cal: FsrCalibration | None = None,
-                   kalman: bool = True, progress=None) -> dict:
+                   kalman: bool = True, progress=None, tensions_out: np.ndarray | None = None) -> dict:
     """{name: (m, 6) wrench} of a SimTrace (counts, fbg_pm, poses) for sensor kind fbg or one: the numbers of
-    FbgReadingEstimator.update reading by reading (every name the same array: module docstring)."""
+    FbgReadingEstimator.update reading by reading (every name the same array: module docstring).
+    tensions_out: (m, n) array to receive the tip-side tensions [N] if given."""
     est = FbgReadingEstimator(geom, kind, fbg=fbg, model=model, cable=cable, cal=cal,
                               kalman=KalmanNoise(dt=dt) if kalman else None)
     w = np.empty((len(trace.t), 6))
     poses = np.ascontiguousarray(trace.poses, dtype=float)
     for k in range(len(trace.t)):
         t = est.tensions_into(trace.counts[k], trace.fbg_pm[k])
+        if tensions_out is not None:
+            tensions_out[k] = t
         w[k] = est.tick.estimate_into(poses[k], t, dt)[1, :6]
         if progress is not None and k % 1000 == 999:
             progress(1000)

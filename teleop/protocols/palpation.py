@@ -410,11 +410,9 @@ class PalpationResult:
             s = self.summary[n]
             lines.append(f"{n:<16} {s['mean_abs_error_N']:8.3f} {s['rmse_N']:9.3f}")
         if self.params.get("sensor", "fsr") != "fsr":
-            from teleop.protocols.palpation_sensors import seed_lines
+            from teleop.protocols.palpation_sensors import sensor_lines
 
-            lines.append(f"sensor: {self.params['sensor']} (tip-side tensions: every estimator name runs the same "
-                         f"f = -A t and Kalman; teleop.estimation.sensor_reading); the sources' figures:")
-            lines += seed_lines(self.params["sensor"])
+            lines += sensor_lines(self)
         for key in ("ranks_correctly", "contrast"):
             if key in self.extra:
                 lines.append(f"{key}: {self.extra[key]}")

@@ -52,7 +52,8 @@ def sensor_estimates(kind: str, fit_trace, spans: dict, poke_trace, geom, dt: fl
     """({estimator: (m, 6) wrench} over `poke_trace`, calibration record) for sensor kind fbg or one.
 
     spans: {axis: (a, b)} sample ranges of `fit_trace` holding the no-load runs; calibration: a `teleop
-    calibrate` file (`sensor_calibration`)."""
+    calibrate` file (`sensor_calibration`). The record holds `tension_rmse_N`: per cable, the RMSE of the
+    tip tensions read against the simulation's over the poke runs."""
     from dataclasses import asdict
 
     from teleop.estimation.sensor_reading import estimate_trace, identify_one_sensor
@@ -76,8 +77,25 @@ def sensor_estimates(kind: str, fit_trace, spans: dict, poke_trace, geom, dt: fl
         calib["one_sensor"] = {"cable": cable, "Kp": round(model.Kp, 6), "Kr": round(model.Kr, 6),
                                "capstan_Kp_range": [round(float(np.exp(-mt.max())), 6), round(float(np.exp(-mt.min())), 6)],
                                "capstan_Kr_range": [round(float(np.exp(mt.min())), 6), round(float(np.exp(mt.max())), 6)]}
-    w = estimate_trace(poke_trace, geom, dt, kind, ESTIMATORS, fbg=fbg, model=model, cable=cable, progress=progress)
+    t = np.empty(poke_trace.t_tip.shape)
+    w = estimate_trace(poke_trace, geom, dt, kind, ESTIMATORS, fbg=fbg, model=model, cable=cable, progress=progress,
+                       tensions_out=t)
+    # how well each cable's tip tension is read over the poke runs (the simulation's own tip tensions)
+    calib["tension_rmse_N"] = [round(float(v), 6) for v in np.sqrt(np.mean((t - poke_trace.t_tip) ** 2, axis=0))]
     return w, calib
+
+
+def sensor_lines(result) -> list:
+    """Plain-text lines for a palpation result of an FBG kind: what the names mean, each session's per-cable
+    tension RMSE and the seed figures."""
+    kind = result.params["sensor"]
+    lines = [f"sensor: {kind} (tip-side tensions: every estimator name runs the same f = -A t and Kalman; "
+             f"teleop.estimation.sensor_reading)"]
+    for name, c in result.extra.get("calibration", {}).items():
+        rmse = c.get("sensor", {}).get("tension_rmse_N")
+        if rmse:
+            lines.append(f"{name}: tip tension RMSE per cable [N]: " + " ".join(f"{v:.3f}" for v in rmse))
+    return lines + ["the sources' figures:"] + seed_lines(kind)
 
 
 def seed_lines(kind: str) -> list:
