@@ -66,6 +66,9 @@ def run_campaign(campaign: Campaign, out_dir: str | Path, scheduler: str = "none
             with open_scheduler(scheduler) as sched:
                 report.start_s = time.perf_counter() - t0
                 if hasattr(kind, "warm"):
+                    where = "this process" if sched.name == "none" else f"the workers of {sched.name}"
+                    print(f"campaign: setting up {where} (imports, compiled kernels; after the kernels changed "
+                          "they compile here first, about a minute)", file=stream, flush=True)
                     report.warm_seconds = sched.warm(kind.warm)
                 report.warm_s = time.perf_counter() - t0 - report.start_s
                 c0 = time.process_time()

@@ -64,8 +64,9 @@ def run(args) -> int:
         summary = report.summary
         if report.ran:
             secs = report.task_seconds
-            print(f"campaign: ran {report.ran} tasks in {report.wall_s:.1f} s on {args.scheduler} "
-                  f"({sum(secs) / len(secs):.2f} s per task where it ran)", file=sys.stderr)
+            print(f"campaign: ran {report.ran} tasks in {report.wall_s:.1f} s on {args.scheduler} (start "
+                  f"{report.start_s:.1f} s, set-up {report.warm_s:.1f} s; {sum(secs) / len(secs):.2f} s per task "
+                  "where it ran)", file=sys.stderr)
     else:
         from pathlib import Path
 
