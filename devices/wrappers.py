@@ -192,7 +192,8 @@ _SLOT = 256  # float64 slots of a published reading
 # command block (float64): [version, 6 lengths, stop flag, quit flag, child error flag]
 _CMD_N = 10
 _ERR = 9  # set by the child after it has sent an error on the pipe: the parent polls the pipe only then
-_BASE = ("t", "seq", "status", "boot_id")  # then fsr(6), steps(6), lengths(6), wrench(6), wrench_ok, extras
+_BASE = ("t", "seq", "status", "boot_id")  # then fsr(6), steps(6), lengths(6), wrench(6), wrench_ok, fbg_ok,
+_EXTRAS = 42                               # fbg_pm (2 x 6, RobotReading.fbg_pm), extras from slot 42
 
 
 def _pack(r: RobotReading, keys: list, out: np.ndarray) -> None:
@@ -206,20 +207,26 @@ def _pack(r: RobotReading, keys: list, out: np.ndarray) -> None:
     else:
         out[22:28] = r.wrench_truth
         out[28] = 1
-    i = 29
+    if r.fbg_pm is None:
+        out[29] = 0
+    else:
+        out[29] = 1
+        out[30:42] = np.asarray(r.fbg_pm, dtype=float).ravel()[:12]
+    i = _EXTRAS
     for k, w in keys:
         out[i:i + w] = np.asarray(r.extras.get(k, np.nan), dtype=float).ravel()[:w]
         i += w
 
 
 def _unpack(v: np.ndarray, keys: list) -> RobotReading:
-    extras, i = {}, 29
+    extras, i = {}, _EXTRAS
     for k, w in keys:
         extras[k] = v[i:i + w].copy() if w > 1 else float(v[i])
         i += w
     return RobotReading(t=float(v[0]), seq=int(v[1]), fsr_counts=v[4:10].copy(), position_steps=v[10:16].copy(),
                         commanded_lengths=v[16:22].copy(), status=int(v[2]), boot_id=int(v[3]),
-                        wrench_truth=v[22:28].copy() if v[28] else None, extras=extras)
+                        wrench_truth=v[22:28].copy() if v[28] else None, extras=extras,
+                        fbg_pm=v[30:42].reshape(2, 6).copy() if v[29] else None)
 
 
 def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, parent_pid: int,
@@ -248,7 +255,7 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
                 a = np.asarray(v, dtype=float).ravel()
             except (TypeError, ValueError):
                 continue
-            if 0 < a.size and 29 + sum(w for _, w in keys) + a.size <= _SLOT:
+            if 0 < a.size and _EXTRAS + sum(w for _, w in keys) + a.size <= _SLOT:
                 keys.append((k, int(a.size)))
         conn.send_bytes(pickle.dumps(("ok", dev.spec, keys, getattr(dev, "firmware_version", None))))
     except Exception as exc:  # noqa: BLE001 - reported to the parent as one line

@@ -164,3 +164,21 @@ def _identify(params, seed, cable, travel, speed, cycles):
     conv = FsrConverter(robot.cal)
     Fp = np.array([conv.update(c)[cable] for c in tr.counts])
     return identify_one_sensor(Fp, tr.fbg_pm, L[:, cable], cable)
+
+
+def loop_estimator(robot_url: str, frame_dt: float, cal=None):
+    """The loop's estimator for a `sim://robot?sensor=fbg|one` URL ("dynamic" name, Kalman gain for
+    `frame_dt` [s], FSR calibration `cal` for one's proximal tensions; for one, Kp and Kr identified on the
+    URL's robot, `identify_one_sensor_on`); None for any other URL or sensor=fsr (the FSR estimator serves)."""
+    from urllib.parse import parse_qs, urlparse
+
+    from devices.base import open_device
+    from teleop.estimation.kalman import KalmanNoise
+    from teleop.estimation.sensor_reading import make_estimator
+
+    u = urlparse(robot_url)
+    if (u.scheme, u.netloc) != ("sim", "robot") or parse_qs(u.query).get("sensor", ["fsr"])[-1] == "fsr":
+        return None
+    p = open_device(robot_url).params  # built, not opened: the URL's checked options
+    kw = {"model": identify_one_sensor_on(p, 0, p.fbg_cable), "cable": p.fbg_cable} if p.sensor == "one" else {}
+    return make_estimator(p.geometry, p.sensor, "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt), **kw)

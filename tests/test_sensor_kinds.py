@@ -219,3 +219,34 @@ def test_palpate_calibration_file_pairs(tmp_path):
         sensor_calibration(str(one), "fbg")
     with pytest.raises(InputError, match="fbg.toml: --sensor fsr takes no --calibration"):
         sensor_calibration(str(fbg), "fsr")
+
+
+def test_robot_process_slot_carries_fbg_shifts():
+    """The robot process's shared slot (devices.wrappers) carries RobotReading.fbg_pm, and None stays None."""
+    from devices.base import RobotReading
+    from devices.wrappers import _SLOT, _pack, _unpack
+
+    pm = np.full((2, 6), np.nan)
+    pm[:, 2] = (-0.5, 97.25)
+    keys = [("t_tip", 6)]
+    for fbg in (pm, None):
+        r = RobotReading(t=1.5, seq=7, fsr_counts=np.arange(6.0), position_steps=np.zeros(6),
+                         commanded_lengths=np.full(6, 0.02), extras={"t_tip": np.full(6, 2.85)}, fbg_pm=fbg)
+        slot = np.zeros(_SLOT)
+        _pack(r, keys, slot)
+        back = _unpack(slot, keys)
+        assert (back.fbg_pm is None) if fbg is None else np.array_equal(back.fbg_pm, fbg, equal_nan=True)
+        assert np.array_equal(back.extras["t_tip"], r.extras["t_tip"]) and np.array_equal(back.fsr_counts, r.fsr_counts)
+
+
+def test_session_estimator_follows_the_robot_url():
+    """`teleop session --robot sim://robot?sensor=K`: the loop's estimator reads kind K (None: the FSR one)."""
+    from scenes.sim_sensors import loop_estimator
+
+    assert loop_estimator("sim://robot", 1e-3) is None
+    assert loop_estimator("sim://robot?sensor=fsr", 1e-3) is None
+    assert loop_estimator("touch://", 1e-3) is None
+    est = loop_estimator("sim://robot?sensor=fbg", 1e-3)
+    assert est.kind == "fbg" and est.name == "dynamic"
+    one = loop_estimator("sim://robot?sensor=one&cable=4", 1e-3)
+    assert one.kind == "one" and one.cable == 4 and one.model.Kp < 1.0 < one.model.Kr
