@@ -46,6 +46,7 @@ LOCAL_CONFIG = {  # see the module docstring; none of these changes which task r
     "distributed.scheduler.work-stealing": False,  # tasks wait on the scheduler until a worker is free
 }
 FORMS = "none, local:N (N worker processes) or tcp://HOST:PORT (a running Dask scheduler)"
+WARM_TIMEOUT_S = 600.0  # the workers' set-up (a stale kernel cache compiles: about a minute here)
 WINDOW = 1000  # tasks submitted ahead of their results (bounds the client's and the scheduler's memory)
 
 
@@ -214,13 +215,18 @@ class DaskScheduler:
         return sum(self.client.nthreads().values()) if self.client is not None else 0
 
     def warm(self, fn: Callable) -> list:
-        """[seconds] of fn() on each worker process the scheduler knows now (one pinned task each, all at
-        once); a worker that fails it is left to warm on its first task."""
+        """[seconds] of fn() on each worker process the scheduler knows now (one task pinned to each, all
+        at once). A worker that fails it, or dies under it (its pinned task would wait for it for ever: a
+        restarted worker has another address), is left to warm on its first task; at most WARM_TIMEOUT_S."""
         futs = [self.client.submit(timed_warm, fn, workers=[w], allow_other_workers=False, pure=False)
                 for w in self.client.nthreads()]
-        out = self.client.gather(futs, errors="skip")
+        deadline, out = time.monotonic() + WARM_TIMEOUT_S, []
         for f in futs:
-            f.release()
+            try:
+                out.append(f.result(timeout=max(0.0, deadline - time.monotonic())))
+            except Exception:  # noqa: BLE001 - a failed or stuck set-up is left to the first task
+                pass
+        self.client.cancel(futs)
         return out
 
     def run(self, fn: Callable, items: Iterable) -> Iterator[tuple]:
