@@ -18,7 +18,9 @@ time ("task CPU s") and the rest of its worker process's CPU meanwhile ("worker 
 heartbeats), "client CPU s" this process's CPU per task over the task phase (scheduler, nannies, result
 files; with `none` the tasks' own CPU left out), "tail s" the time the worker that ran out of tasks first waited for the last
 result, "cores used" the tasks' CPU seconds over the task phase (what the machine gave: on a machine
-shared with other work a speed-up needs free cores).
+shared with other work a speed-up needs free cores). For such a machine the bench also says, on paper,
+what each run would take on as many free cores as it had worker processes: start + warm + (the tasks' and
+the client's CPU seconds) / cores + tail, the fixed parts as measured.
 """
 
 from __future__ import annotations
@@ -115,6 +117,11 @@ def run(args) -> int:
               f"{r['worker_cpu_s_per_task']:12.3f} {r['client_cpu_s_per_task']:12.3f} {r['tail_s']:6.1f} "
               f"{r['cores_used']:10.2f} {r['speedup']:8.2f} {r['tasks_speedup']:14.2f}  "
               f"{'yes' if r['identical_to_first'] else 'NO':9}  {r['load_1min'][0]:.1f} / {r['load_1min'][1]:.1f}")
+    for r in runs:
+        r["free_cores_speedup"] = ref["free_cores_wall_s"] / r["free_cores_wall_s"]
+        print(f"on {r['worker_processes']} free core(s), from the CPU accounting: {r['scheduler']} "
+              f"{r['free_cores_wall_s']:.1f} s (start, warm and tail as measured), speed-up "
+              f"{r['free_cores_speedup']:.2f}")
     print(f"scheduler cost per task ({overhead['tasks']} empty tasks on {overhead['scheduler']}): "
           f"{overhead['per_task_s'] * 1e3:.1f} ms; start {overhead['start_s']:.1f} s")
     if estimate:
@@ -144,7 +151,10 @@ def run_breakdown(rep, in_process: bool) -> dict:
             "tasks_wall_s": tasks_wall, "task_s_mean": sum(o.seconds for o in outs) / n,
             "task_cpu_s_mean": cpu / n, "task_thread_cpu_s_mean": thread / n,
             "worker_cpu_s_per_task": (cpu - thread) / n, "client_cpu_s_per_task": client / n,
-            "tail_s": tail, "worker_processes": len(last), "cores_used": cpu / tasks_wall}
+            "tail_s": tail, "worker_processes": len(last), "cores_used": cpu / tasks_wall,
+            # on as many free cores as worker processes: the fixed parts as measured, the tasks' and the
+            # client's CPU shared out over the cores (what this run would take with no other users)
+            "free_cores_wall_s": rep.start_s + rep.warm_s + (cpu + max(client, 0.0)) / max(len(last), 1) + tail}
 
 
 def _participants_per_task(campaign) -> int | None:

@@ -25,6 +25,7 @@ def test_breakdown_of_a_two_worker_run():
     assert b["tail_s"] == pytest.approx(1.5)  # worker h:1 done at 104, the last result at 105.5
     assert b["worker_processes"] == 2
     assert b["cores_used"] == pytest.approx(10.45 / 6.0)
+    assert b["free_cores_wall_s"] == pytest.approx(1.0 + 2.0 + (10.45 + 0.4) / 2 + 1.5)
 
 
 def test_in_process_client_cpu_leaves_the_tasks_out():
@@ -32,3 +33,4 @@ def test_in_process_client_cpu_leaves_the_tasks_out():
     rep = RunReport(total=2, skipped=0, ran=2, wall_s=2.5, warm_s=0.5, outcomes=outs, client_cpu_s=2.2)
     b = run_breakdown(rep, in_process=True)
     assert b["client_cpu_s_per_task"] == pytest.approx(0.1) and b["tail_s"] == 0.0
+    assert b["free_cores_wall_s"] == pytest.approx(0.5 + 2.0 + 0.2)
