@@ -5,6 +5,12 @@ Columns (one row per robot telemetry frame): t_s; motor_pos_mm (cable hauled in 
 the recording has it); motor_force_N (the FSR's calibrated tension, the sensor side of the distal sheath
 segment); tip_force_N (tension at the end effector, when the recording has the simulator's truth);
 bend_angle_deg (eq 6 bend at the setpoint pose plus the scaffold bend theta0); cmd_len_mm (commanded length).
+
+`--truth` (simulated robot only): motor_force_N is the simulator's tension at the FSR (x_t_fsr) instead of
+the FSR-calibrated estimate, so that a diagnosis sees the transmission without the sensor chain. A session
+on the simulated robot also writes the simulation's sheath friction coefficient as the metadata line
+`capstan_friction.mu = MU`: `teleop diagnose` holds it in its baseline (the simulation already has it), so
+that a friction the simulated robot was given on top (`sim://robot?model=FILE`) is not refitted into it.
 """
 
 from __future__ import annotations
@@ -21,11 +27,14 @@ def register(subparsers) -> None:
     p.add_argument("file", type=input_file, help="session recording (.mcap)")
     p.add_argument("--csv", required=True, metavar="OUT", help="output CSV")
     p.add_argument("--cable", type=int, default=1, help="cable 1..6 (default 1)")
+    p.add_argument("--truth", action="store_true",
+                   help="simulated robot: motor_force_N from the simulator's tension at the FSR, not the FSR estimate")
     p.set_defaults(func=run)
 
 
-def export_rows(session, cable: int):
-    """(header, rows, notes) of the interchange CSV for `cable` (1-based)."""
+def export_rows(session, cable: int, truth: bool = False):
+    """(header, rows) of the interchange CSV for `cable` (1-based); truth: motor_force_N from the simulator's
+    FSR-side tension (InputError when the recording has none)."""
     import numpy as np
 
     from teleop.kinematics import bending_angles, pose2cables, pose2lengths
@@ -60,7 +69,10 @@ def export_rows(session, cable: int):
             tip_pos = (L_home[i] - pose2lengths(actual, geom)[i]) * 1e3
         if "x_t_tip" in m:
             tip_force = float(m["x_t_tip"][i])
-        rows.append([m["t"], m["position_steps"][i] / steps_per_m * 1e3, tip_pos, est[k]["tensions"][i], tip_force,
+        if truth and "x_t_fsr" not in m:
+            raise InputError("--truth: the recording has no simulator tensions (x_t_fsr): was the robot sim://robot?")
+        motor_force = float(m["x_t_fsr"][i]) if truth else est[k]["tensions"][i]
+        rows.append([m["t"], m["position_steps"][i] / steps_per_m * 1e3, tip_pos, motor_force, tip_force,
                      float(np.rad2deg(theta)), m["commanded_lengths"][i] * 1e3])
     keep = [j for j in range(len(header)) if not all(r[j] != r[j] for r in rows)] if rows else list(range(len(header)))
     header = [header[j] for j in keep]
@@ -80,12 +92,18 @@ def run(args) -> int:
         raise InputError(f"{args.file}: no session metadata (is this a teleop session recording?){damage}")
     if s.damage:
         print(f"teleop: warning: {args.file}: {s.damage}; exporting the intact prefix", file=sys.stderr)
-    header, rows = export_rows(s, args.cable)
+    header, rows = export_rows(s, args.cable, args.truth)
     if not rows:
         raise InputError(f"{args.file}: no robot readings to export")
+    conf = s.metadata["session"].get("configuration", {})
+    source = ("simulator's tension at the FSR (truth)" if args.truth else
+              "FSR-calibrated tension (sensor side of the distal sheath segment)")
     lines = [f"# source = teleop session {args.file}", "# load = external", f"# cable = {args.cable}",
-             "# motor_force_N = FSR-calibrated tension (sensor side of the distal sheath segment)",
-             ",".join(header)]
+             f"# motor_force_N = {source}"]
+    mu = (conf.get("geometry") or {}).get("mu")
+    if str(conf.get("robot", "")).startswith("sim://robot") and mu is not None:
+        lines.append(f"# capstan_friction.mu = {float(mu)!r}")   # the simulation's own sheath friction
+    lines.append(",".join(header))
     lines += [",".join(repr(float(v)) for v in r) for r in rows]
     text = "\n".join(lines) + "\n"
     atomic_write(args.csv, lambda tmp: tmp.write_text(text, encoding="utf-8"))

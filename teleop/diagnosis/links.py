@@ -43,14 +43,30 @@ SMOOTH_MAX_S = 0.06   # noisier inputs are smoothed more, up to this width, so t
 RATE_NOISE = 0.02     # their rate is at most this fraction of the rate's 99th percentile
 
 
+def noise_sigma(x: np.ndarray) -> float:
+    """Robust standard deviation of the white noise on x [x's unit]: from its second differences (a smooth
+    motion sampled fast leaves almost nothing there; white noise of sigma gives 6 sigma^2), and at least
+    the quantisation's q / sqrt(12) when x sits on a lattice of step q (an encoder's or a step counter's
+    counts). 0 for an exact, smooth signal (a commanded position)."""
+    d2 = np.diff(x, 2)
+    sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / np.sqrt(6.0) if d2.size else 0.0
+    dx = np.abs(np.diff(x))
+    moves = dx[dx > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)]
+    if moves.size > 10:
+        q = float(np.min(moves))
+        if q > 0 and np.mean(np.abs(moves / q - np.round(moves / q)) < 0.01) > 0.95:
+            sigma = max(sigma, q / np.sqrt(12.0))
+    return sigma
+
+
 def smooth_width(x: np.ndarray, dt: float) -> int:
-    """Odd moving-average width [samples] for input x sampled every dt: at least SMOOTH_S, and enough
-    that the rate noise (sigma / (w dt) after a w-sample average and a central difference) stays below
-    RATE_NOISE of the rate's 99th percentile; at most SMOOTH_MAX_S."""
-    lo = max(1, int(round(SMOOTH_S / dt)))
-    hi = max(lo, int(round(SMOOTH_MAX_S / dt)))
-    dx = np.diff(x)
-    sigma = 1.4826 * float(np.median(np.abs(dx - np.median(dx)))) / np.sqrt(2.0)
+    """Odd moving-average width [samples] for input x sampled every dt: enough that the rate noise (sigma /
+    (w dt) after a w-sample average and a central difference, sigma from `noise_sigma`) stays below
+    RATE_NOISE of the rate's 99th percentile, at least SMOOTH_S and at most SMOOTH_MAX_S; an exact signal
+    (no noise, no quantisation: a commanded position) is not smoothed."""
+    hi = max(1, int(round(SMOOTH_MAX_S / dt)))
+    sigma = noise_sigma(x)
+    lo = max(1, int(round(SMOOTH_S / dt))) if sigma > 0 else 1
     v99 = float(np.percentile(np.abs(np.gradient(smooth(x, lo | 1), dt)), 99))
     need = sigma / (RATE_NOISE * v99 * dt) if v99 > 0 else 0.0
     return int(min(max(lo, need), hi)) | 1
@@ -249,8 +265,9 @@ def clean_motion(x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     (sign(0) = 0, as the catalogue's rate laws define it) and x held, so that no state model integrates
     the sensor noise of a motor at rest. Magnitudes are kept elsewhere."""
     v = np.gradient(x, t)
-    hf = v - smooth(v, 9)
-    eps = 3.0 * 1.4826 * float(np.median(np.abs(hf - np.median(hf))))
+    # the rate's noise: x's own (second differences, `noise_sigma`) through the central difference; the
+    # motion's fast content is not noise (a commanded position's jitter is motion)
+    eps = 3.0 * noise_sigma(x) / float(np.median(np.diff(t)))
     s = np.where(v > eps, 1.0, np.where(v < -eps, -1.0, 0.0))
     n = s.size
     idx = np.where(s != 0, np.arange(n), 0)

@@ -1,0 +1,158 @@
+"""`teleop bench session-diagnose`: a recorded session on the simulated robot, diagnosed, and the identified
+model handed back to the simulation.
+
+    teleop bench session-diagnose --effect coulomb_friction:Fc=0.3 --seconds 20 --seed 1 --json F
+
+1. A friction the project's simulation does not have is switched on in the simulated robot: a link model
+   whose baseline is the sheath's capstan and EFFECT lies beyond it (`sim://robot?model=A`).
+2. A paced `teleop session` on it is recorded (the simulated operator's pokes; the robot read every tick).
+3. Cable --cable is exported (`teleop export --truth`: the simulator's tension at the FSR, the simulation's
+   sheath mu as a known baseline parameter), diagnosed (`teleop diagnose`), and its model saved (B).
+4. The session's commanded lengths are replayed, reading by reading, through the simulated robot as it was
+   (A: checks the replay reproduces the recording), without the effect, and with B. The residual (recorded
+   tension at the FSR - replayed) of the plain robot against the one with B is the fit the handed-back
+   model buys, in the session itself; the diagnosis's own held-out improvement is printed beside it.
+
+JSON: {"effect", "params", "seconds", "seed", "cable", "found": [{"effect", "improvement", "params"}],
+"recovered": {param: value}, "replay_rmse_N": {"as_recorded", "plain", "identified"}, "shrink"
+(plain / identified), "pass" (effect named first and shrink >= 2)}.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from teleop.errors import InputError
+
+SCRIPT = "sim://?script=pokes&depth_mm=10&period_s=2&seed={seed}"
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("session-diagnose", help="a recorded simulated-robot session with a friction switched "
+                                                      "on: diagnosed, and the model handed back to the simulation")
+    p.add_argument("--effect", default="coulomb_friction:Fc=0.3",
+                   help="EFFECT:PARAM=VALUE[,PARAM=VALUE] switched on beyond the capstan (SI; default %(default)s)")
+    p.add_argument("--seconds", type=float, default=20.0, help="session length [s] (default 20)")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--cable", type=int, default=1, help="cable exported and diagnosed, 1..6 (default 1)")
+    p.add_argument("--json", metavar="F")
+    p.set_defaults(func=run)
+
+
+def parse_effect(text: str) -> tuple[str, dict]:
+    """'coulomb_friction:Fc=0.3' -> ('coulomb_friction', {'Fc': 0.3}); InputError naming the flag otherwise."""
+    from teleop.physics import get_effect
+
+    name, _, rest = text.partition(":")
+    eff = get_effect(name)
+    params = {s.name: s.default for s in eff.params}
+    for item in filter(None, rest.split(",")):
+        key, _, value = item.partition("=")
+        if key not in params:
+            raise InputError(f"--effect {text}: '{name}' has no parameter '{key}' (expected {', '.join(params)})")
+        try:
+            params[key] = float(value)
+        except ValueError:
+            raise InputError(f"--effect {text}: {key} must be a number, got {value!r}") from None
+    if eff.link != "force":
+        raise InputError(f"--effect {text}: the simulated robot takes force-link effects (got a {eff.link} effect)")
+    return name, params
+
+
+def _teleop(*args: str) -> None:
+    cmd = [sys.executable, "-m", "teleop.cli", *args]
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    if res.returncode != 0:
+        raise RuntimeError(f"{' '.join(args[:2])} failed ({res.returncode}): {res.stderr.strip()[-500:]}")
+
+
+def _recorded(path: Path, cable: int) -> tuple[np.ndarray, np.ndarray]:
+    """(commanded lengths (n, 6) [m], simulator's FSR-side tension of `cable` (n,) [N]), one row per reading."""
+    from teleop.recording import TOPIC_ROBOT, read_session
+
+    L, T, seen = [], [], set()
+    for m in read_session(path).messages(TOPIC_ROBOT):
+        if m["seq"] in seen:
+            continue
+        seen.add(m["seq"])
+        L.append(m["commanded_lengths"])
+        T.append(m["x_t_fsr"][cable - 1])
+    return np.asarray(L, dtype=float), np.asarray(T, dtype=float)
+
+
+def replay(url: str, lengths: np.ndarray, cable: int) -> np.ndarray:
+    """FSR-side tension of `cable` (n,) [N] of the robot at `url` commanded `lengths` (n, 6), read once each."""
+    from devices.base import open_device
+
+    out = np.empty(len(lengths))
+    with open_device(url) as robot:
+        for k, L in enumerate(lengths):
+            robot.command_lengths(L)
+            out[k] = robot.read().extras["t_fsr"][cable - 1]
+    return out
+
+
+def bench_session_diagnosis(effect: str, params: dict, seconds: float, seed: int, cable: int, work: Path) -> dict:
+    from teleop.diagnosis.diagnose import diagnose
+    from teleop.diagnosis.links import Link, LinkModel
+    from teleop.diagnosis.model_io import load_model, save_model
+    from teleop.diagnosis.recording_io import read_interchange
+    from teleop.geometry import default_geometry
+
+    force = Link("force", "motor_force", "tip_force", "motor_pos")
+    capstan = ("capstan_friction", {"mu": float(default_geometry().mu), "theta": 2.4, "k": 5e3})
+    model_a = work / "switched_on.json"
+    save_model(model_a, [LinkModel(force, 1.0, 0.0, 1.0, 1.0, (capstan, (effect, dict(params))), 1)],
+               "teleop bench session-diagnose")
+    robot = f"sim://robot?seed={seed}"
+    mcap, csv, model_b = work / "session.mcap", work / f"cable{cable}.csv", work / "identified.json"
+    print(f"session-diagnose: recording a {seconds:g} s session with {effect} switched on ...", flush=True)
+    _teleop("session", "--haptic", SCRIPT.format(seed=seed), "--robot", f"{robot}&model={model_a}",
+            "--seconds", str(seconds), "--robot-inline", "--no-realtime", "--record", str(mcap))
+    _teleop("export", str(mcap), "--csv", str(csv), "--cable", str(cable), "--truth")
+    print("session-diagnose: diagnosing the exported cable ...", flush=True)
+    diag = diagnose(read_interchange(csv))
+    doc = diag.as_dict()
+    save_model(model_b, [res.final.model for res in diag.links], str(csv))
+    found = [{"effect": f["effect"], "improvement": f["improvement"],
+              "params": {k: v["value"] for k, v in f["params"].items()}} for f in doc["findings"]
+             if f["channel"] == "motor_force"]
+    identified = load_model(model_b).links.get("force")
+    recovered = {}
+    if identified is not None:
+        recovered = dict(identified.effects[identified.base:]).get(effect, {})
+    print("session-diagnose: replaying the session's commands through the simulated robot ...", flush=True)
+    lengths, recorded = _recorded(mcap, cable)
+    rmse = {}
+    for name, url in (("as_recorded", f"{robot}&model={model_a}"), ("plain", robot),
+                      ("identified", f"{robot}&model={model_b}")):
+        rmse[name] = float(np.sqrt(np.mean((recorded - replay(url, lengths, cable)) ** 2)))
+    shrink = rmse["plain"] / max(rmse["identified"], 1e-12)
+    named_first = bool(found) and found[0]["effect"] == effect
+    return {"effect": effect, "params": params, "seconds": seconds, "seed": seed, "cable": cable, "found": found,
+            "recovered": recovered, "replay_rmse_N": rmse, "shrink": shrink, "pass": named_first and shrink >= 2.0}
+
+
+def run(args) -> int:
+    from teleop.outputs import write_json
+
+    if not 1 <= args.cable <= 6:
+        raise InputError(f"--cable must be 1..6, got {args.cable}")
+    if not 2.0 <= args.seconds <= 600.0:
+        raise InputError(f"--seconds must be in [2, 600], got {args.seconds}")
+    effect, params = parse_effect(args.effect)
+    with tempfile.TemporaryDirectory(prefix="session-diagnose-") as tmp:
+        out = bench_session_diagnosis(effect, params, args.seconds, args.seed, args.cable, Path(tmp))
+    found = ", ".join(f"{f['effect']} x{f['improvement']:.2f}" for f in out["found"]) or "none"
+    r = out["replay_rmse_N"]
+    print(f"switched on: {effect} {params}; found on motor_force: {found}; recovered {out['recovered']}")
+    print(f"replay residual [N]: as recorded {r['as_recorded']:.4f}, plain robot {r['plain']:.4f}, with the "
+          f"identified model {r['identified']:.4f}: x{out['shrink']:.2f} ({'PASS' if out['pass'] else 'FAIL'})")
+    if args.json:
+        write_json(args.json, out)
+    return 0
