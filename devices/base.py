@@ -9,6 +9,7 @@ are SI in a spec that renderers clip to (CHAI3D cHapticDeviceInfo). A URL picks 
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from dataclasses import dataclass, field
 from typing import Callable, Protocol, runtime_checkable
@@ -17,6 +18,33 @@ from urllib.parse import parse_qs, urlparse
 import numpy as np
 
 from teleop.errors import InputError
+
+
+def _direct_init(cls):
+    """Give the frozen dataclass `cls` an __init__ that writes the instance's __dict__ directly instead of calling
+    object.__setattr__ once per field (the generated __init__ of a frozen dataclass): the same signature,
+    defaults and default factories, built from the dataclass's own fields. A reading and a stylus sample are
+    made every tick; this takes RobotReading's construction from ~1.6 us to ~0.8 us."""
+    names, params, env = [], [], {"_MISSING": dataclasses.MISSING}
+    for f in dataclasses.fields(cls):
+        names.append(f.name)
+        if f.default is not dataclasses.MISSING:
+            env[f"_d_{f.name}"] = f.default
+            params.append(f"{f.name}=_d_{f.name}")
+        elif f.default_factory is not dataclasses.MISSING:
+            env[f"_f_{f.name}"] = f.default_factory
+            params.append(f"{f.name}=_MISSING")
+        else:
+            params.append(f.name)
+    body = [f"    if {n} is _MISSING: {n} = _f_{n}()" for n in names if f"_f_{n}" in env]
+    body.append("    d = self.__dict__")
+    body += [f"    d['{n}'] = {n}" for n in names]
+    exec(f"def __init__(self, {', '.join(params)}):\n" + "\n".join(body), env)
+    init = env["__init__"]
+    init.__qualname__ = f"{cls.__qualname__}.__init__"
+    init.__doc__ = cls.__init__.__doc__
+    cls.__init__ = init
+    return cls
 
 
 class DeviceError(RuntimeError):
@@ -58,6 +86,7 @@ OMEGA_SPEC = DeviceSpec(name="Force Dimension omega.3", workspace_min=(-0.08, -0
                         max_stiffness=14500.0, rate_hz=4000.0)
 
 
+@_direct_init
 @dataclass(frozen=True)
 class HapticSample:
     """One stylus reading (CRTK names where they fit).
@@ -115,6 +144,7 @@ class RobotSpec:
     adc_max: int = 1023
 
 
+@_direct_init
 @dataclass(frozen=True)
 class RobotReading:
     """One robot reading: what the hardware returns.

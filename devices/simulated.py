@@ -152,7 +152,6 @@ class SimulatedStylus(ContextDevice):
         self._c_for = None  # (operator, script, spec) the integrator's constants were built for
         self._x = np.zeros(9)  # the integrator's state: p, v, F_tremor (p, v, F_tremor are copies of it)
         self._x[0:3] = self.p
-        self._F = np.zeros(3)
         self._no_targets = np.zeros((0, 3))
         self.is_open = True
 
@@ -194,10 +193,12 @@ class SimulatedStylus(ContextDevice):
         if self.script.kind == "recorded":
             targets = np.array([self.script.target_xyz((self.steps + i + 1) * h) for i in range(n)])
         x = self._x
-        self._F[:] = self.F_cmd
-        operator_steps(x, self._F, self.steps, n, self._constants(), noise, i0, tremor, targets, self._absent)
+        fx, fy, fz = self.F_cmd
+        operator_steps(x, fx, fy, fz, self.steps, n, self._constants(), noise, i0, tremor, targets, self._absent)
         self.steps += n
-        self.p, self.v, self.F_tremor, self.t = x[0:3].copy(), x[3:6].copy(), x[6:9].copy(), self.steps * h
+        # p and v: views of one fresh copy (never written in place: a sample may hand them out as they are)
+        pv = x[0:6].copy()
+        self.p, self.v, self.F_tremor, self.t = pv[0:3], pv[3:6], x[6:9].copy(), self.steps * h
 
     def _noise(self, n: int) -> tuple:
         """(rows, i0): n rows of 3 standard normal draws at rows[i0:i0 + n], taken from blocks drawn 1024 rows
@@ -224,8 +225,8 @@ class SimulatedStylus(ContextDevice):
         self._advance(float(self.clock()) - self.t0)
         sc = self.script
         buttons, present = sc.buttons(self.t) if sc.absent or sc.clutch else (1, True)
-        return HapticSample(t=self.t, measured_cp=self.p.copy(), orientation=self.R, measured_cv=self.v.copy(),
-                            buttons=buttons, operator_present=present)
+        # p and v are replaced, never written, by each step: the sample takes them without a copy
+        return HapticSample(self.t, self.p, self.R, self.v, buttons, present)
 
     def servo_cf(self, force) -> None:
         self.F_cmd = guarded_force(self, force, "sim stylus")

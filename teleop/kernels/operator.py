@@ -36,18 +36,17 @@ def script_offset(kind, t, amplitude, period, duty):
 
 
 @njit
-def operator_steps(x, F, step0, n, c, noise, i0, tremor, targets, absent):
+def operator_steps(x, fx, fy, fz, step0, n, c, noise, i0, tremor, targets, absent):
     """Advance the operator n steps of c[H] from step `step0` (step j ends at time (j + 1) h).
 
-    x (9,): position p (3,) [m], velocity v (3,) [m/s], tremor force r (3,) [N], updated in place; F (3,):
-    commanded stylus force [N]; noise (k, 3): standard normal draws, rows i0 .. i0 + n - 1 used when
+    x (9,): position p (3,) [m], velocity v (3,) [m/s], tremor force r (3,) [N], updated in place; fx, fy, fz:
+    the commanded stylus force [N] (three floats: no array to fill per read); noise (k, 3): standard normal draws, rows i0 .. i0 + n - 1 used when
     `tremor`; targets (n, 3): the hand targets [m] for a recorded script (else unused); absent (a, 2): the
     [t0, t1) intervals [s] with the hand off. After the steps p is clipped to the workspace [lo, hi] and v
     zeroed along the clipped axes."""
     h, m, k, b, a_ou, s_ou = c[H], c[M], c[K], c[B], c[A_OU], c[S_OU]
     kind = int(c[KIND])
     px, py, pz, vx, vy, vz, rx, ry, rz = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]
-    fx, fy, fz = F[0], F[1], F[2]
     for i in range(n):
         t = (step0 + i + 1) * h
         if tremor:

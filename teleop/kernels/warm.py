@@ -123,7 +123,7 @@ def warm_up(geom=None) -> float:
     c[[KO.H, KO.M, KO.K, KO.B, KO.PERIOD, KO.DUTY]] = 1e-3, 0.15, 150.0, 6.0, 2.0, 0.5
     c[KO.HI:KO.HI + 3] = 1.0
     for tremor in (True, False):
-        KO.operator_steps(np.zeros(9), np.zeros(3), 0, 1, c, np.zeros((1, 3)), 0, tremor, np.zeros((0, 3)),
+        KO.operator_steps(np.zeros(9), 0.0, 0.0, 0.0, 0, 1, c, np.zeros((1, 3)), 0, tremor, np.zeros((0, 3)),
                           np.zeros((0, 2)))
     KO.script_offset(KO.POKES, 0.1, 0.01, 2.0, 0.5)
     # the recorder's tap: a reading's counts and steps as ints (inline robot) or floats (ProcessRobot)
