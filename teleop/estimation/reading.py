@@ -26,6 +26,10 @@ from teleop.kernels.estimate import fsr_tensions
 from teleop.sensors import LOADING, UNLOADING, FsrCalibration, default_fsr_calibration
 
 
+# the counts the compiled path takes as they are (an ADC's integers, or floats; the kernels are warmed for both)
+_COUNT_DTYPES = (np.dtype(np.int64), np.dtype(np.float64))
+
+
 class ReadingEstimator:
     """One of the four named estimators behind the loop's reading interface (see module docstring)."""
 
@@ -72,9 +76,14 @@ class ReadingEstimator:
         """
         t = self._t
         if fsr_tensions(counts, self._fsr, self.deadband_counts, self._table, t):
-            for i in np.flatnonzero(np.isnan(t)):
-                t[i] = self._tension1(float(counts[i]), UNLOADING if self._fsr[0, i] < 0.0 else LOADING)
+            self._off_table(counts, t)
         return t
+
+    def _off_table(self, counts: np.ndarray, t: np.ndarray) -> None:
+        """The tensions fsr_tensions left NaN (counts off the table) by the per-float conversion, on the branch
+        it chose."""
+        for i in np.flatnonzero(np.isnan(t)):
+            t[i] = self._tension1(float(counts[i]), UNLOADING if self._fsr[0, i] < 0.0 else LOADING)
 
     def tensions(self, counts) -> list:
         """Tensions [N] (list) from raw FSR counts (any sequence of floats); updates the branch state."""
@@ -84,8 +93,16 @@ class ReadingEstimator:
     def update_arrays(self, counts: np.ndarray, pose: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """(tensions (n,) [N], wrench (6,) [N, N m] in {B}) from counts (n,) and pose (6,) float64 arrays: the
         loop's hot path. The results are this estimator's buffers (overwritten by the next update)."""
-        t = self.tensions_into(np.ascontiguousarray(counts, dtype=float))
-        return t, self.tick.estimate_into(np.ascontiguousarray(pose, dtype=float), t, float(dt))[1, :6]
+        tc = self.tick
+        pose = np.ascontiguousarray(pose, dtype=float)
+        c = counts if type(counts) is np.ndarray and counts.dtype in _COUNT_DTYPES and counts.flags.c_contiguous \
+            else np.ascontiguousarray(counts, dtype=float)
+        # tensions_into and estimate_into in one compiled call (kernel estimate.counts_*)
+        if tc.counts_kernel(c, self._fsr, self.deadband_counts, self._table, self._t, pose, float(dt), tc.cab, tc.c,
+                            tc.st, tc.kf, tc.turn, tc.coefs, tc.out):
+            self._off_table(c, self._t)  # some counts off the table: converted here, then the estimate
+            tc.estimate_into(pose, self._t, float(dt))
+        return self._t, tc.out[1, :6]
 
     @property
     def compensated(self) -> np.ndarray:

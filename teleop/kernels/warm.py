@@ -62,6 +62,7 @@ def warm_up(geom=None) -> float:
             lt.engage(np.zeros(3))
             for k in range(3):
                 est.update_arrays(np.full(n, 400.0 + k), np.zeros(6), 1e-3)
+                est.update_arrays(np.full(n, 400 + k, dtype=np.int64), np.zeros(6), 1e-3)  # a robot's ADC counts
                 lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.0 + k), 1e-3)
                 lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.5 + k), 1e-3)  # a non-table count
                 est.update_floats([400.0] * n, [0.0] * 6, 1e-3)

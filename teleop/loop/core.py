@@ -125,7 +125,7 @@ class Teleop:
         self.wrench = np.zeros(6)
         self.anchor_stylus = np.zeros(3)
         self.anchor_robot = self.pose[:3].copy()
-        self._map_anchor, self._map_pos = np.zeros(6), np.zeros(3)  # the mapping kernel's arrays
+        self._map_anchor = np.zeros(6)  # the mapping kernel's anchors (stylus, robot)
         self.tap = None
         self.last_reading = None
         self._est_seq = None  # sequence number and robot time of the last frame the estimator saw
@@ -181,12 +181,11 @@ class Teleop:
         teleop.mapping.Follower.step_into (kernel mapping.follow_step): the math of teleop.mapping.stylus2target /
         position2lengths / limit_lengths, compiled (this runs every tick).
         """
-        a, pos = self._map_anchor, self._map_pos
+        a = self._map_anchor
         a[:3], a[3:] = self.anchor_stylus, self.anchor_robot
-        pos[:] = self.pose[:3]
         L = np.array(self.L_last, dtype=float)
-        self.fast.follower.step_into(np.ascontiguousarray(x.sample.measured_cp, dtype=float), a, pos, L)
-        self.pose[:3] = pos
+        # the pose's position, a view: the kernel reads the previous target there and writes the new one
+        self.fast.follower.step_into(np.ascontiguousarray(x.sample.measured_cp, dtype=float), a, self.pose[:3], L)
         return L
 
     def stop_robot(self) -> None:
