@@ -461,10 +461,17 @@ def _pair(d: LinkData, current: Fit, cands: list, fit_idx: slice, hold_idx: slic
     best = None
     for i in range(len(names)):
         for j in range(i + 1, len(names)):
-            try:
-                f = fit_chain(d, current.model, (names[i], names[j]), fit_idx, hold_idx, seed=seed)
-            except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            # both orders: each starts the other effect from the residual the first leaves, and a joint fit
+            # from one of them can settle in a local minimum (a play fitted under a hysteresis start)
+            fits = []
+            for pair in ((names[i], names[j]), (names[j], names[i])):
+                try:
+                    fits.append(fit_chain(d, current.model, pair, fit_idx, hold_idx, seed=seed))
+                except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+                    pass
+            if not fits:
                 continue
+            f = min(fits, key=lambda g: g.rmse_fit)
             if f.at_bound or any(wrong_form(n, p, d) for n, p in f.model.effects):
                 continue
             if f.rmse_hold * ACCEPT ** 2 <= current.rmse_hold and delta_bic(f, current) < 0:
