@@ -1,6 +1,8 @@
 """`teleop export FILE --csv OUT [--cable N]`: a session as the interchange CSV of DESIGN.md, one cable.
 
-Columns (one row per robot telemetry frame): t_s; motor_pos_mm (cable hauled in by the motor, from the step count,
+Columns (one row per robot telemetry frame): t_s (the reading's own time stamp, `t_robot`: when the robot
+sampled it, which rate laws need; the loop's receive time, jittered by scheduling, where the robot's stamps do
+not increase); motor_pos_mm (cable hauled in by the motor, from the step count,
 + = shortening); tip_pos_mm (cable hauled in at the end effector, from the simulator's actual tip pose when
 the recording has it); motor_force_N (the FSR's calibrated tension, the sensor side of the distal sheath
 segment); tip_force_N (tension at the end effector, when the recording has the simulator's truth);
@@ -50,7 +52,7 @@ def export_rows(session, cable: int, truth: bool = False):
     est = {m["tick"]: m for m in session.messages("/estimation")}
     sp = {m["tick"]: m for m in session.messages(TOPIC_SETPOINT)}
     header = ["t_s", "motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "cmd_len_mm"]
-    rows = []
+    rows, loop_t = [], []
     last_seq = None
     for m in session.messages(TOPIC_ROBOT):
         k = m["tick"]
@@ -72,8 +74,13 @@ def export_rows(session, cable: int, truth: bool = False):
         if truth and "x_t_fsr" not in m:
             raise InputError("--truth: the recording has no simulator tensions (x_t_fsr): was the robot sim://robot?")
         motor_force = float(m["x_t_fsr"][i]) if truth else est[k]["tensions"][i]
-        rows.append([m["t"], m["position_steps"][i] / steps_per_m * 1e3, tip_pos, motor_force, tip_force,
+        loop_t.append(m["t"])
+        rows.append([m.get("t_robot", m["t"]), m["position_steps"][i] / steps_per_m * 1e3, tip_pos, motor_force, tip_force,
                      float(np.rad2deg(theta)), m["commanded_lengths"][i] * 1e3])
+    t_robot = np.array([r[0] for r in rows], dtype=float)
+    if rows and not (np.all(np.isfinite(t_robot)) and np.all(np.diff(t_robot) > 0)):
+        for r, t in zip(rows, loop_t):   # the robot's stamps restart or repeat: the loop's receive times
+            r[0] = t
     keep = [j for j in range(len(header)) if not all(r[j] != r[j] for r in rows)] if rows else list(range(len(header)))
     header = [header[j] for j in keep]
     rows = [[r[j] for j in keep] for r in rows]
