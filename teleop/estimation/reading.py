@@ -95,9 +95,12 @@ class ReadingEstimator:
         loop's hot path. The results are this estimator's buffers (overwritten by the next update)."""
         tc = self.tick
         pose = np.ascontiguousarray(pose, dtype=float)
+        if tc.counts_kernel is None:
+            t = self.tensions_into(np.ascontiguousarray(counts, dtype=float))
+            return t, tc.estimate_into(pose, t, float(dt))[1, :6]
         c = counts if type(counts) is np.ndarray and counts.dtype in _COUNT_DTYPES and counts.flags.c_contiguous \
             else np.ascontiguousarray(counts, dtype=float)
-        # tensions_into and estimate_into in one compiled call (kernel estimate.counts_*)
+        # tensions_into and estimate_into in one compiled call (kernel estimate.counts_dynamic)
         if tc.counts_kernel(c, self._fsr, self.deadband_counts, self._table, self._t, pose, float(dt), tc.cab, tc.c,
                             tc.st, tc.kf, tc.turn, tc.coefs, tc.out):
             self._off_table(c, self._t)  # some counts off the table: converted here, then the estimate

@@ -36,9 +36,9 @@ from teleop.rendering import Renderer
 # the compensation step of each estimator (everything else is shared: teleop.kernels.estimate)
 ESTIMATE_KERNELS = {"non_compensated": K.estimate_non_compensated, "single": K.estimate_capstan,
                     "double": K.estimate_capstan, "dynamic": K.estimate_dynamic}
-# the same behind teleop.kernels.estimate.fsr_tensions, in one call (ReadingEstimator.update_arrays)
-COUNTS_KERNELS = {"non_compensated": K.counts_non_compensated, "single": K.counts_capstan,
-                  "double": K.counts_capstan, "dynamic": K.counts_dynamic}
+# the loop's estimator behind teleop.kernels.estimate.fsr_tensions in one call (ReadingEstimator.update_arrays;
+# the others make the two calls)
+COUNTS_KERNELS = {"dynamic": K.counts_dynamic}
 
 
 class TickComputer:
@@ -56,7 +56,7 @@ class TickComputer:
         self.geom = geom
         self.dyn = dynamic
         self.kernel = ESTIMATE_KERNELS[estimator]
-        self.counts_kernel = COUNTS_KERNELS[estimator]
+        self.counts_kernel = COUNTS_KERNELS.get(estimator)
         n = len(geom.B)
         self.cab = np.zeros((n, 12))
         self.cab[:, 0:3], self.cab[:, 3:6] = geom.r, geom.B

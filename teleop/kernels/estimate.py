@@ -180,33 +180,13 @@ def fsr_tensions(counts, st, deadband, table, out):
     return missing
 
 
-# one tick from raw FSR counts: fsr_tensions, then the estimator's kernel, in one compiled call (a kernel call
-# costs ~0.1 us plus ~0.05 us per array argument; the loop's estimate stage made one call per step). Counts
-# may be int64 (a robot's ADC) or float64. Returns fsr_tensions' count of tensions left NaN (then nothing is
-# estimated: the caller converts those counts and calls the estimator's kernel itself).
-
-
-@njit
-def counts_non_compensated(counts, fsr, deadband, table, t, pose, dt, cab, c, st, kf, turn, coefs, out):
-    """fsr_tensions (counts, fsr state, dead band, table -> t) then estimate_non_compensated."""
-    missing = fsr_tensions(counts, fsr, deadband, table, t)
-    if missing == 0:
-        estimate_non_compensated(pose, t, dt, cab, c, st, kf, turn, coefs, out)
-    return missing
-
-
-@njit
-def counts_capstan(counts, fsr, deadband, table, t, pose, dt, cab, c, st, kf, turn, coefs, out):
-    """fsr_tensions (counts, fsr state, dead band, table -> t) then estimate_capstan."""
-    missing = fsr_tensions(counts, fsr, deadband, table, t)
-    if missing == 0:
-        estimate_capstan(pose, t, dt, cab, c, st, kf, turn, coefs, out)
-    return missing
-
-
 @njit
 def counts_dynamic(counts, fsr, deadband, table, t, pose, dt, cab, c, st, kf, turn, coefs, out):
-    """fsr_tensions (counts, fsr state, dead band, table -> t) then estimate_dynamic."""
+    """One tick of the `dynamic` estimator (the loop's) from raw FSR counts in one compiled call: fsr_tensions
+    (counts, its state fsr, dead band, table -> t), then estimate_dynamic (a kernel call costs ~0.1 us plus
+    ~0.05 us an array argument: the loop's estimate stage made one call for each). Counts may be int64 (a
+    robot's ADC) or float64. Returns fsr_tensions' count of tensions left NaN (then nothing is estimated: the
+    caller converts those counts and calls estimate_dynamic itself)."""
     missing = fsr_tensions(counts, fsr, deadband, table, t)
     if missing == 0:
         estimate_dynamic(pose, t, dt, cab, c, st, kf, turn, coefs, out)
