@@ -170,9 +170,12 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     estimator = default_estimator(frame_period(params, None))
     kin, phys, solver, rd = _Meter(), _Meter(), _Meter(), _Meter()
     solver_timed = False
-    # the trajectory logs: references to each tick's arrays (every one is made fresh by its producer: the
-    # stylus's p per step, the loop's force per tick, the reading's arrays per reading), stacked after the run
-    L_rows, counts_rows, f_rows, p_rows, F_rows = [], [], [], [], []
+    n_read = -(-n // params.robot_every)
+    L_log = np.zeros((n_read, 6))
+    counts_log = np.zeros((n_read, 6), dtype=np.int64)
+    f_truth = np.zeros(n_read)
+    p_log = np.zeros((n, 3))
+    F_log = np.zeros((n, 3))
     enabled = 0
     stage_ns = np.zeros((n, len(LOOP_STAGES)), dtype=np.int64)
     sub_ns = np.zeros((n, 4), dtype=np.int64)  # cumulative kinematics, physics, stepSimulation, read [ns]
@@ -186,6 +189,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
         tp.start(0.0)
         dt = params.dt
         pc = time.perf_counter_ns
+        j = 0
         gc.collect()
         gc.disable()
         try:
@@ -200,21 +204,17 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                     sub_ns[k] = (kin.ns, phys.ns, solver.ns, rd.ns)
                 r = x.reading
                 if r is not None:
-                    L_rows.append(r.commanded_lengths)
-                    counts_rows.append(r.fsr_counts)
-                    f_rows.append(r.wrench_truth)
-                p_rows.append(stylus.p)
-                F_rows.append(x.F)
+                    L_log[j] = r.commanded_lengths
+                    counts_log[j] = r.fsr_counts
+                    f_truth[j] = -r.wrench_truth[2]
+                    j += 1
+                p_log[k] = stylus.p
+                F_log[k] = x.F
                 enabled += tp.state == State.ENABLED
             wall_ns, cpu = pc() - wall0, time.process_time() - cpu0
         finally:
             gc.enable()
         final_state, fault_reason = tp.state.name, tp.fault_reason
-    j = len(L_rows)
-    L_log = np.array(L_rows, dtype=float).reshape(j, 6)
-    counts_log = np.array(counts_rows, dtype=np.int64).reshape(j, 6)
-    f_truth = -np.array(f_rows, dtype=float).reshape(j, 6)[:, 2]
-    p_log, F_log = np.array(p_rows, dtype=float).reshape(n, 3), np.array(F_rows, dtype=float).reshape(n, 3)
     simulated = n / RATE_HZ
     wall = wall_ns / 1e9
     sub = np.diff(np.vstack([np.zeros((1, 4), dtype=np.int64), sub_ns]), axis=0)
