@@ -10,7 +10,9 @@ from teleop.errors import InputError
 
 
 def test_coulomb_found_in_a_session_and_handed_back(tmp_path):
-    out = bench_session_diagnosis("coulomb_friction", {"Fc": 0.3}, seconds=5.0, seed=1, cable=1, work=tmp_path)
+    # 20 s (ten pokes): in 5 s a Coulomb friction and a sensor hysteresis of the same size were told apart in
+    # one session out of two (motion and force reverse together in a poke; free-space strokes separate them)
+    out = bench_session_diagnosis("coulomb_friction", {"Fc": 0.3}, seconds=20.0, seed=1, cable=1, work=tmp_path)
     assert out["found"] and out["found"][0]["effect"] == "coulomb_friction", out["found"]
     assert out["replay_rmse_N"]["as_recorded"] < 1e-9      # the replay is the recorded robot, reading by reading
     # a paced session's commands follow the machine's scheduling: Fc came out 0.20-0.34 N over seven sessions
