@@ -248,12 +248,6 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
     try:
         dev = open_device(url, **options)
         dev.open()
-        # the compiled kernels (the simulated robot's forward kinematics, cable chain) ready now, not on the
-        # loop's first command: loading them there stalled the link ~20 ms, past the stale limit (a no-op when
-        # the parent warmed them before the fork)
-        from teleop.kernels.warm import warm_up
-
-        warm_up()
         first = dev.read()
         keys = []
         for k, v in sorted((first.extras or {}).items()):

@@ -105,10 +105,13 @@ def bench_session_diagnosis(effect: str, params: dict, seconds: float, seed: int
     from teleop.diagnosis.links import Link, LinkModel
     from teleop.diagnosis.model_io import load_model, save_model
     from teleop.diagnosis.recording_io import read_interchange
-    from teleop.geometry import default_geometry
+    from scenes.sim_robot import SimRobotParams
 
+    # the robot's own capstan, as the model's baseline (baseline effects are not added again: the robot has it)
+    sim = SimRobotParams()
     force = Link("force", "motor_force", "tip_force", "motor_pos")
-    capstan = ("capstan_friction", {"mu": float(default_geometry().mu), "theta": 2.4, "k": 5e3})
+    capstan = ("capstan_friction", {"mu": float(sim.geometry.mu), "theta": float(sim.geometry.theta0),
+                                    "k": float(sim.capstan_k)})
     model_a = work / "switched_on.json"
     save_model(model_a, [LinkModel(force, 1.0, 0.0, 1.0, 1.0, (capstan, (effect, dict(params))), 1)],
                "teleop bench session-diagnose")
