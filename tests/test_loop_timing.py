@@ -209,3 +209,15 @@ def test_a_deadline_miss_is_more_than_half_a_period_late():
     assert fast["late_threshold_us"] == 125.0 and fast["deadline_misses"] == 4
     assert slow["late_threshold_us"] == 500.0 and slow["deadline_misses"] == 0
     assert "0.125 ms" in budget_verdict(fast, 60.0, True, rate_hz=4000.0)["criterion"]
+
+
+def test_run_stepped_ticks_at_exact_periods_and_sets_the_devices_clock():
+    from teleop.loop.timing import SimClock, run_stepped
+
+    tp, clock, seen = Stub(), SimClock(), []
+    tick = tp.tick
+    tp.tick = lambda now: (seen.append(clock()), tick(now))
+    log = run_stepped(tp, 0.01, 4000.0, clock=clock)
+    assert tp.times == pytest.approx([k * 250e-6 for k in range(40)], rel=1e-12, abs=0)  # whatever the speed
+    assert seen == tp.times                                # the devices read the tick's own time
+    assert log.n == 40 and not log.lateness[:40].any() and list(log.start[:3]) == [0, 250_000, 500_000]

@@ -5,7 +5,8 @@ model handed back to the simulation.
 
 1. A friction the project's simulation does not have is switched on in the simulated robot: a link model
    whose baseline is the sheath's capstan and EFFECT lies beyond it (`sim://robot?model=A`).
-2. A paced `teleop session` on it is recorded (the simulated operator's pokes; the robot read every tick).
+2. A `teleop session` on it is recorded on a simulated clock (`--sim-clock`: the same session on any machine;
+   the simulated operator's pokes; the robot read every tick).
 3. Cable --cable is exported (`teleop export --truth`: the simulator's tension at the FSR, the simulation's
    sheath mu as a known baseline parameter), diagnosed (`teleop diagnose`), and its model saved (B).
 4. The session's commanded lengths are replayed, reading by reading, through the simulated robot as it was
@@ -119,7 +120,7 @@ def bench_session_diagnosis(effect: str, params: dict, seconds: float, seed: int
     mcap, csv, model_b = work / "session.mcap", work / f"cable{cable}.csv", work / "identified.json"
     print(f"session-diagnose: recording a {seconds:g} s session with {effect} switched on ...", flush=True)
     _teleop("session", "--haptic", SCRIPT.format(seed=seed), "--robot", f"{robot}&model={model_a}",
-            "--seconds", str(seconds), "--robot-inline", "--no-realtime", "--record", str(mcap))
+            "--seconds", str(seconds), "--robot-inline", "--sim-clock", "--record", str(mcap))
     _teleop("export", str(mcap), "--csv", str(csv), "--cable", str(cable), "--truth")
     print("session-diagnose: diagnosing the exported cable ...", flush=True)
     diag = diagnose(read_interchange(csv))

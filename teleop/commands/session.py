@@ -42,6 +42,10 @@ def register(subparsers) -> None:
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20; docs/safety.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
+    p.add_argument("--sim-clock", action="store_true",
+                   help="tick on a simulated clock: tick k at k periods, as fast as the machine runs, so that the same "
+                        "URLs and seeds record the same session on any machine and load (needs --robot-inline; "
+                        "lateness is not measured)")
     p.add_argument("--json", metavar="F", help="write the timing summary and events as JSON")
     add_live_arguments(p)
     p.set_defaults(func=run)
@@ -79,6 +83,10 @@ def run(args) -> int:
         raise InputError(f"--seconds must be > 0, got {args.seconds}")
     if args.record and not args.record.endswith(".mcap"):
         raise InputError(f"--record {args.record}: expected a file name ending in .mcap")
+    if args.sim_clock and not args.robot_inline:
+        raise InputError("--sim-clock needs --robot-inline (a robot process runs on the wall clock)")
+    if args.sim_clock and not args.haptic.startswith(("sim://?", "sim://#")) and args.haptic != "sim://":
+        raise InputError(f"--sim-clock needs a simulated stylus (--haptic sim://...), got {args.haptic}")
     if args.live is not None:
         from teleop.live.server import check_port
 
@@ -116,7 +124,7 @@ def run(args) -> int:
                           estimator=estimator, robot_process_hz=robot_hz, realtime=not args.no_realtime,
                           robot_rt_priority=args.robot_rt or None,
                           live=(args.live_host, args.live) if args.live is not None else None,
-                          robot_wrapper=wrapper)
+                          robot_wrapper=wrapper, sim_clock=args.sim_clock)
     t = res.timing
     if ctrl_c.pressed:
         print(f"session: INTERRUPTED (Ctrl-C) after {t['ticks'] / t['rate_hz']:.3f} s of {args.seconds:g} s")
@@ -160,8 +168,8 @@ def compensation_wrapper(path, period: float):
 
     width = model_backlash_width(load_model(path), f"--compensation {path}")
 
-    def wrap(robot):
-        return BacklashCompensatedRobot(robot, width, period)
+    def wrap(robot, clock=None):
+        return BacklashCompensatedRobot(robot, width, period, clock=clock)
     wrap.width = width  # [m]
     return wrap
 

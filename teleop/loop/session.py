@@ -22,7 +22,7 @@ from devices.base import open_device
 from teleop.loop.core import Teleop
 from teleop.loop.params import LoopParams
 from teleop.loop.tap import RowTap, numeric_extras, session_layout
-from teleop.loop.timing import TimingLog, run_paced, set_normal, set_realtime
+from teleop.loop.timing import SimClock, TimingLog, run_paced, run_stepped, set_normal, set_realtime
 
 
 @dataclass
@@ -161,7 +161,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 spin_us: float | None = None, flush_interval: float = 0.1, haptic=None, robot=None,
                 robot_process_hz: float | None = 1000.0, realtime: bool = True,
                 robot_rt_priority: int | None = None, live: tuple | None = None,
-                live_scene: dict | None = None, robot_wrapper=None) -> SessionResult:
+                live_scene: dict | None = None, robot_wrapper=None, sim_clock: bool = False) -> SessionResult:
     """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
 
     With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
@@ -170,9 +170,22 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     SCHED_FIFO 50 when the OS allows it; the robot process (SCHED_FIFO `robot_rt_priority` if given, else nice -10)
     and the recorder (nice -10) stay behind it. `live` = (host, port) serves the session to Foxglove from
     another process reading the same ring (teleop.live; port 0 picks a free one, printed on stdout);
-    `live_scene` adds pads to its 3D scene. `robot_wrapper(robot)` wraps the robot the loop talks to (on the
+    `live_scene` adds pads to its 3D scene. `robot_wrapper(robot, clock)` wraps the robot the loop talks to (on the
     loop's side of the robot process), e.g. the backlash feed-forward devices.wrappers.BacklashCompensatedRobot.
+    `sim_clock` ticks on a simulated clock instead (timing.run_stepped: tick k at k periods, no waiting; the
+    same inputs give the same session on any machine); it needs the robot inline (robot_process_hz None) and a
+    simulated stylus (sim://, opened here on that clock); `robot_wrapper(robot, clock)` is handed the clock
+    (None: the wall clock).
     """
+    if sim_clock and robot_process_hz:
+        raise ValueError("a simulated clock needs the robot inline (robot_process_hz=None): a robot process runs "
+                         "on the wall clock")
+    realtime = realtime and not sim_clock  # flat out under SCHED_FIFO would starve the machine
+    clock = SimClock() if sim_clock else None
+    if sim_clock and haptic is None:
+        if not haptic_url.startswith("sim://?") and haptic_url != "sim://":
+            raise ValueError(f"a simulated clock needs a simulated stylus (sim://), got {haptic_url}")
+        haptic = open_device(haptic_url, clock=clock)
     params = params or LoopParams()
     if estimator is None:
         estimator = default_estimator(frame_period(params, robot_process_hz))
@@ -188,7 +201,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
         else:
             robot = built = open_device(robot_url)
     if robot_wrapper is not None:
-        robot = robot_wrapper(robot)
+        robot = robot_wrapper(robot, clock)
     recorder = live_view = None
     old = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
@@ -214,10 +227,13 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             gc.collect()
             gc.disable()
             interrupted = ""
+            on_start = (recorder.set_t0 if recorder is not None else
+                        live_view.ring.set_t0 if live_view is not None else None)
             try:
-                run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us,
-                          on_start=recorder.set_t0 if recorder is not None else
-                          live_view.ring.set_t0 if live_view is not None else None)
+                if sim_clock:
+                    run_stepped(tp, seconds, params.rate_hz, log, on_start=on_start, clock=clock)
+                else:
+                    run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us, on_start=on_start)
             except KeyboardInterrupt:
                 interrupted = "SIGINT"
             except _Terminate:
