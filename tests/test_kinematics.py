@@ -29,6 +29,26 @@ def test_inverse_then_forward_round_trip(x, y, z, beta, gamma):
     assert np.abs(back[3:] - q[3:]).max() <= 1e-9  # rad
 
 
+@given(positions, positions, positions, angles, angles, st.integers(0, 5), st.floats(-1e-8, 1e-8))
+def test_lengths_no_pose_has_stop_at_the_least_squares_pose(x, y, z, beta, gamma, i, dl):
+    """One length moved off its pose (as the loop's per-cable step limit leaves them): the Gauss-Newton stops
+    once its step is below tol, at the least-squares pose (J^T r = 0), instead of halving round-off steps
+    until max_iter (which moved the pose by ~1e-13 rad per call)."""
+    from teleop.kernels.geometry import forward_kinematics
+    from teleop.kinematics import FREE_AXIAL
+
+    q0 = pose_from(x, y, z, beta, gamma)
+    L = pose2lengths(q0, GEOM).copy()
+    L[i] += dl
+    few, many = q0.copy(), q0.copy()
+    forward_kinematics(L, few, FREE_AXIAL, GEOM.r, GEOM.B, 1e-12, 4)
+    forward_kinematics(L, many, FREE_AXIAL, GEOM.r, GEOM.B, 1e-12, 100)
+    assert np.array_equal(few, many)  # converged within 4 iterations, then stopped
+    J = length_jacobian(many, GEOM)[:, FREE_AXIAL]
+    r = pose2lengths(many, GEOM) - L
+    assert np.abs(J.T @ r).max() <= 1e-11  # the normal equations hold (within tol): a least-squares pose
+
+
 @given(st.floats(-np.pi, np.pi), st.floats(-1.5, 1.5), st.floats(-np.pi, np.pi))
 def test_rotation_is_orthonormal_zyx(a, b, g):
     R = rotation_zyx(a, b, g)
