@@ -9,7 +9,10 @@ segment); tip_force_N (tension at the end effector, when the recording has the s
 bend_angle_deg (eq 6 bend at the setpoint pose plus the scaffold bend theta0); cmd_len_mm (commanded length).
 
 `--truth` (simulated robot only): motor_force_N is the simulator's tension at the FSR (x_t_fsr) instead of
-the FSR-calibrated estimate, so that a diagnosis sees the transmission without the sensor chain. A session
+the FSR-calibrated estimate, and motor_pos_mm the motor position its cable physics runs on (its steppers are
+ideal: the commanded length, L_home - L) instead of the step count rounded to 9.8 um, so that a diagnosis sees
+the transmission without the sensor chain. (On the step count a slow reversal leaves the drive flat for tens
+of ms, and a Coulomb friction and a force-sensor hysteresis, which flip at the same reversal, fit alike.) A session
 on the simulated robot also writes the simulation's sheath friction coefficient as the metadata line
 `capstan_friction.mu = MU`: `teleop diagnose` holds it in its baseline (the simulation already has it), so
 that a friction the simulated robot was given on top (`sim://robot?model=FILE`) is not refitted into it.
@@ -30,7 +33,8 @@ def register(subparsers) -> None:
     p.add_argument("--csv", required=True, metavar="OUT", help="output CSV")
     p.add_argument("--cable", type=int, default=1, help="cable 1..6 (default 1)")
     p.add_argument("--truth", action="store_true",
-                   help="simulated robot: motor_force_N from the simulator's tension at the FSR, not the FSR estimate")
+                   help="simulated robot: motor_force_N from the simulator's tension at the FSR, not the FSR estimate, "
+                        "and motor_pos_mm from the commanded length its cable physics runs on, not the step count")
     p.set_defaults(func=run)
 
 
@@ -75,7 +79,8 @@ def export_rows(session, cable: int, truth: bool = False):
             raise InputError("--truth: the recording has no simulator tensions (x_t_fsr): was the robot sim://robot?")
         motor_force = float(m["x_t_fsr"][i]) if truth else est[k]["tensions"][i]
         loop_t.append(m["t"])
-        rows.append([m.get("t_robot", m["t"]), m["position_steps"][i] / steps_per_m * 1e3, tip_pos, motor_force, tip_force,
+        motor_pos = ((L_home[i] - m["commanded_lengths"][i]) if truth else m["position_steps"][i] / steps_per_m) * 1e3
+        rows.append([m.get("t_robot", m["t"]), motor_pos, tip_pos, motor_force, tip_force,
                      float(np.rad2deg(theta)), m["commanded_lengths"][i] * 1e3])
     t_robot = np.array([r[0] for r in rows], dtype=float)
     if rows and not (np.all(np.isfinite(t_robot)) and np.all(np.diff(t_robot) > 0)):

@@ -229,12 +229,26 @@ def baseline_fit(d: LinkData, fit_idx: slice, hold_idx: slice) -> Fit:
 def wrong_form(name: str, params: dict, d: LinkData) -> bool:
     """True when fitted parameters contradict the effect's defining signature (then it is not named):
     Stribeck means more friction at low speed than in sliding (Fs > Fc); a relaxation faster than the
-    data resolve (tau below twice the inputs' smoothing) is damping, not viscoelasticity."""
+    data resolve (tau below twice the inputs' smoothing) is damping, not viscoelasticity; a Dahl transition
+    (length Fc / sigma) shorter than the drive moves in one sample is a jump at the reversal: Coulomb
+    friction, the Dahl law's limit (a near-step Dahl wins a few per cent there by splitting the reversal's
+    sample, which is the rate's discretisation, not a pre-sliding regime)."""
     if name == "stribeck_friction":
         return params["Fs"] <= 1.1 * params["Fc"]
     if name == "viscoelasticity":
         return params["tau"] < 2.0 * d.resolution_s
+    if name == "dahl_hysteresis" and d.x is not None:
+        return params["Fc"] / params["sigma"] < drive_step(d)
     return False
+
+
+def drive_step(d: LinkData) -> float:
+    """The drive's typical travel [its unit] in one sample: the median per-sample move while moving."""
+    dx = np.abs(np.diff(d.x))
+    moving = dx[dx > 1e-9 * max(float(np.max(dx)), 1e-300)] if dx.size else dx
+    if not moving.size:
+        return 0.0
+    return float(np.median(moving))
 
 
 def _pick(cands: list[Fit], d: LinkData) -> Fit | None:

@@ -10,13 +10,13 @@ from teleop.errors import InputError
 
 
 def test_coulomb_found_in_a_session_and_handed_back(tmp_path):
-    # 20 s (ten pokes): in 5 s a Coulomb friction and a sensor hysteresis of the same size were told apart in
-    # one session out of two (motion and force reverse together in a poke; free-space strokes separate them)
+    # 20 s (ten pokes) on the simulated clock: the same session on any machine (paced, the CI's run named the
+    # Coulomb friction a sensor hysteresis of the same size: motion and force reverse together in a poke).
+    # Seeds 1-6 (--truth drive): Coulomb named first on 5, Fc 0.266-0.270 N; seed 5 a sensor hysteresis
     out = bench_session_diagnosis("coulomb_friction", {"Fc": 0.3}, seconds=20.0, seed=1, cable=1, work=tmp_path)
     assert out["found"] and out["found"][0]["effect"] == "coulomb_friction", out["found"]
     assert out["replay_rmse_N"]["as_recorded"] < 1e-9      # the replay is the recorded robot, reading by reading
-    # a paced session's commands follow the machine's scheduling: Fc came out 0.20-0.34 N over seven sessions
-    assert abs(out["recovered"]["Fc"] - 0.3) < 0.5 * 0.3
+    assert abs(out["recovered"]["Fc"] - 0.3) < 0.2 * 0.3
     assert out["shrink"] >= 2.0, out["replay_rmse_N"]
 
 
