@@ -138,6 +138,17 @@ class Renderer:
             self.fault_reason = _TRIPS[trip]
         return out[0], out[1], out[2]
 
+    def render_tick(self, fx: float, fy: float, fz: float, dt: float, vx: float, vy: float, vz: float) -> tuple:
+        """The loop's render stage in one call: render_xyz (floats as it takes them), then what the loop reads
+        after it: (force (3,) [N] device frame (a fresh array), `mapped` (3 floats), `ramp` (0.0 while
+        disabled), `fault`)."""
+        rs, out = self.rs, self.out
+        trip = render_step(rs, self.rp, self.R, fx, fy, fz, dt, vx, vy, vz, out)
+        if trip:
+            self.fault_reason = _TRIPS[trip]
+        ramp = float(rs[KR.RAMP]) if rs[KR.STATE] != KR.DISABLED else 0.0
+        return out[:3].copy(), tuple(out[3:6].tolist()), ramp, bool(rs[KR.FAULT])
+
     def render(self, wrench, dt: float, velocity=None) -> np.ndarray:
         """(3,) force [N] in the device frame from a wrench (6,) or force (3,) in {B}."""
         w = np.asarray(wrench, dtype=float).ravel()

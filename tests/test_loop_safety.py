@@ -218,7 +218,7 @@ def test_exception_at_any_stage_faults_with_reason_zero_force(stage):
     elif stage == "estimate":
         est.update = lambda *a: (_ for _ in ()).throw(Boom("kalman"))
     elif stage == "render":
-        tp.renderer.render_xyz = lambda *a: (_ for _ in ()).throw(Boom("render"))
+        tp.renderer.render_tick = lambda *a: (_ for _ in ()).throw(Boom("render"))  # the loop's render call
     elif stage == "write":
         real = rig.stylus.servo_cf
         calls = []
@@ -459,3 +459,29 @@ def test_clutch_reanchors_without_jump():
     assert dst[:4] == ["ALIGNING", "ENABLED", "CLUTCHED", "ENABLED"]
     L = np.array(rig.robot.commands)
     assert np.abs(np.diff(L, axis=0)).max() < 0.5 * rig.tp.geom.v_max * DT  # smooth, no re-engage jump
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2 ** 31 - 1), st.booleans())
+def test_tension_monitors_in_one_call_report_as_the_two_monitors_in_turn(seed, check_range):
+    """safety.tension_monitors (the loop's one call) gives the reasons and the state of TensionRange.update then
+    StuckCable.update, tick by tick, on tensions that wander over and under the limits while cables pay out."""
+    from teleop.loop.safety import StuckCable, TensionRange, tension_monitors
+
+    rng = np.random.default_rng(seed)
+    pair = [(TensionRange(5.5, 0.2, 0.03), StuckCable(0.05, 0.3, 1e-7)) for _ in range(2)]
+    t = np.full(6, 2.85)
+    for k in range(300):  # seeds 0-29 with both check_range: 64 stuck, 26 over-range and 9 slack faults
+        now = k * DT
+        t = np.clip(t + rng.normal(0.0, 0.1, 6), -1.0, 8.0)
+        dL = rng.normal(1e-6, 6e-7, 6)  # mostly paying out (a streak ends where dL <= 1e-7)
+        (r1, s1), (r2, s2) = pair
+        want = r1.update(now, t) if check_range else None
+        want = want or s1.update(now, t, dL)
+        got = tension_monitors(r2, s2, now, t, dL, check_range)
+        assert got == want
+        np.testing.assert_array_equal(r1.since, r2.since)
+        np.testing.assert_array_equal(s1.st, s2.st)
+        np.testing.assert_array_equal(s1.sc, s2.sc)
+        if want:  # a fault: the loop stops monitoring; start both pairs afresh
+            pair = [(TensionRange(5.5, 0.2, 0.03), StuckCable(0.05, 0.3, 1e-7)) for _ in range(2)]

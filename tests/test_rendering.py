@@ -116,3 +116,19 @@ def test_negative_z_is_zeroed_in_the_device_frame_with_the_loop_registration():
     assert r.mapped == (0.1, -0.2, 0.0)
     kept = engaged(RenderParams(max_force=5.0, R_dev_B=R_dev_B, ramp_s=0.0, alpha_max=0.0))
     np.testing.assert_allclose(kept.render([0.1, 0.2, 0.7, 0, 0, 0], 1e-3), [0.1, -0.2, -0.7])
+
+
+@settings(derandomize=True, max_examples=50, deadline=None)
+@given(st.lists(st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3), st.sampled_from([0.0, 0.05, math.nan])),
+                min_size=1, max_size=40))
+def test_render_tick_is_render_xyz_and_what_the_loop_reads_after_it(steps):
+    """Renderer.render_tick (the loop's one call) = render_xyz, then mapped, ramp (0 while disabled), fault."""
+    a, b = Renderer(RenderParams(ramp_s=0.01)), Renderer(RenderParams(ramp_s=0.01))
+    for r in (a, b):
+        r.enable()
+    for fx, fy, fz, v in steps:
+        F = a.render_xyz(fx, fy, fz, 1e-3, v, 0.0, -v)
+        want = (list(F), a.mapped, a.ramp if a.state != "disabled" else 0.0, a.fault)
+        got_F, *rest = b.render_tick(fx, fy, fz, 1e-3, v, 0.0, -v)
+        assert type(got_F) is np.ndarray and (list(got_F.tolist()), *rest) == want
+        assert a.fault_reason == b.fault_reason

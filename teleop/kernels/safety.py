@@ -4,6 +4,7 @@ and state holders there). State arrays are float64; NaN stands for "no time yet"
     all_finite        every element of an array finite (all_finite3: three arrays and a time)
     tension_range     over-range / slack tension persisting longer than a window (TensionRange)
     stuck_cable       a paying-out cable whose filtered tension keeps rising (StuckCable)
+    tension_monitors  tension_range then stuck_cable, as the loop runs them each estimate (one call)
 """
 
 from __future__ import annotations
@@ -94,3 +95,17 @@ def stuck_cable(now, t, dL, st, sc, tau, eps, window, rise, confirm):
         else:
             st[COUNT, i] = 0.0
     return bad
+
+
+@njit
+def tension_monitors(now, t, dL, check_range, since, t_max, t_slack, window_range, st, sc, tau, eps, window, rise,
+                     confirm):
+    """The loop's two tension monitors on one estimate, in one call: tension_range (when check_range) and, unless
+    it tripped, stuck_cable (arguments as theirs; window_range the range's window [s]). Returns -1, a
+    tension_range code (< 2 n), or 2 n + the stuck cable's index."""
+    if check_range:
+        k = tension_range(now, t, t_max, t_slack, window_range, since)
+        if k >= 0:
+            return k
+    bad = stuck_cable(now, t, dL, st, sc, tau, eps, window, rise, confirm)
+    return -1 if bad < 0 else 2 * t.shape[0] + bad

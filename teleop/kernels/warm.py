@@ -96,7 +96,7 @@ def warm_up(geom=None) -> float:
     KS.reading(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6), np.empty(n),
                np.empty(n), np.empty(n, dtype=np.int64))
     KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
-    from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample
+    from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample, tension_monitors
     from teleop.sensors import FsrBranchLag
 
     lag = FsrBranchLag(default_fsr_calibration(), n)
@@ -105,6 +105,7 @@ def warm_up(geom=None) -> float:
     # the loop's safety monitors and finiteness checks (float and int arrays)
     TensionRange(5.5, 0.2, 0.05, n).update(0.0, np.full(n, 2.85))
     StuckCable(0.05, 0.3, 1e-7, n).update(0.0, np.full(n, 2.85), np.zeros(n))
+    tension_monitors(TensionRange(5.5, 0.2, 0.05, n), StuckCable(0.05, 0.3, 1e-7, n), 0.0, np.full(n, 2.85), np.zeros(n))
     check = type("R", (), {"fsr_counts": np.zeros(n, dtype=np.int64), "position_steps": np.zeros(n, dtype=np.int64),
                            "commanded_lengths": L, "t": 0.0, "measured_cp": np.zeros(3), "measured_cv": np.zeros(3),
                            "orientation": np.eye(3)})()

@@ -22,10 +22,11 @@ from teleop.kernels.safety import all_finite2
 from teleop.kernels.warm import warm_up
 from teleop.kinematics import lengths2pose
 from teleop.loop.params import LoopParams
-from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample
+from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample, \
+    tension_monitors
 from teleop.loop.states import BEHAVIOURS, State
 from teleop.mapping import platform_offsets, position2lengths
-from teleop.rendering import DISABLED, Renderer, engage_count
+from teleop.rendering import Renderer, engage_count
 from teleop.robot_status import RobotStatus, stop_reason
 
 STAGES = ("read", "map", "robot", "estimate", "render", "write", "record")
@@ -319,8 +320,7 @@ class Teleop:
                             raise ValueError("estimated tensions/wrench not finite")
                     self.tensions, self.wrench = t, f
                     if self.state != State.FAULT:
-                        reason = self.range.update(now, t) if self.state != State.DISABLED else None
-                        reason = reason or self.stuck.update(now, t, x.dL)
+                        reason = tension_monitors(self.range, self.stuck, now, t, x.dL, self.state != State.DISABLED)
                         if reason:
                             self.fault(reason)
             if self.state != State.FAULT:
@@ -335,14 +335,13 @@ class Teleop:
             rd = self.renderer
             fx, fy, fz = self.wrench[:3].tolist()
             vx, vy, vz = x.sample.measured_cv.tolist() if x.sample is not None else (0.0, 0.0, 0.0)
-            F = self.fast.render(fx, fy, fz, p.dt, vx, vy, vz)  # Renderer.render_xyz: zero force unless ENABLED
-            if rd.fault:
+            # Renderer.render_xyz (zero force unless ENABLED) and its mapped force, ramp and fault in one call;
+            # mapped: device frame, scaled, -z zeroed, the force that would be rendered
+            x.F, x.F_raw, x.ramp, tripped = rd.render_tick(fx, fy, fz, p.dt, vx, vy, vz)
+            if tripped:
                 self.fault(f"render: {rd.fault_reason}")
-            x.F_raw = rd.mapped  # device frame, scaled, -z zeroed: the force that would be rendered
             if self.state == State.ALIGNING:  # the engage rule, counted on the force that would be rendered
                 self.small_force_ticks = engage_count(self.small_force_ticks, *x.F_raw, p.render.engage_N)
-            x.ramp = rd.ramp if rd.state != DISABLED else 0.0
-            x.F = np.array(F)
         except Exception as exc:  # noqa: BLE001
             x.F = np.zeros(3)
             self.fault(f"render: {type(exc).__name__}: {exc}")

@@ -58,7 +58,7 @@ class TensionRange:
     The rule is the kernel safety.tension_range (one compiled call per update)."""
 
     def __init__(self, t_max: float, t_slack: float, window: float, n: int = 6):
-        self.t_max, self.t_slack, self.window, self.n = t_max, t_slack, window, n
+        self.t_max, self.t_slack, self.window, self.n = float(t_max), float(t_slack), float(window), n
         self.reset()
 
     def reset(self) -> None:
@@ -67,9 +67,11 @@ class TensionRange:
 
     def update(self, now: float, t) -> str | None:
         t = np.ascontiguousarray(t, dtype=float)
-        k = KS.tension_range(float(now), t, float(self.t_max), float(self.t_slack), float(self.window), self.since)
-        if k < 0:
-            return None
+        k = KS.tension_range(float(now), t, self.t_max, self.t_slack, self.window, self.since)
+        return None if k < 0 else self.reason(now, k, t)
+
+    def reason(self, now: float, k: int, t) -> str:
+        """The fault message for the kernel's code k (row * n + cable) at tensions t (n,) [N]."""
         row, i = divmod(k, self.n)
         return (f"cable {i + 1} tension {'slack' if row else 'over-range'} for "
                 f"{1e3 * (now - self.since[row, i]):.1f} ms ({t[i]:.3f} N; limits {self.t_slack:g}..{self.t_max:g} N)")
@@ -87,7 +89,8 @@ class StuckCable:
 
     def __init__(self, window: float, rise: float, payout_eps: float, n: int = 6, confirm: int = 3,
                  tau: float = 0.02):
-        self.window, self.rise, self.eps, self.confirm, self.tau, self.n = window, rise, payout_eps, confirm, tau, n
+        self.window, self.rise, self.eps, self.confirm, self.tau, self.n = (float(window), float(rise), float(payout_eps),
+                                                                            float(confirm), float(tau), n)
         self.st = np.zeros((4, n))  # filtered tension, streak start (NaN: none), streak minimum, rises
         self.sc = np.array([np.nan, 0.0])  # previous update time [s], filtered tension valid
         self.reset()
@@ -99,13 +102,28 @@ class StuckCable:
 
     def update(self, now: float, t, dL) -> str | None:
         bad = KS.stuck_cable(float(now), np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(dL, dtype=float),
-                             self.st, self.sc, float(self.tau), float(self.eps), float(self.window),
-                             float(self.rise), float(self.confirm))
-        if bad < 0:
-            return None
+                             self.st, self.sc, self.tau, self.eps, self.window, self.rise, self.confirm)
+        return None if bad < 0 else self.reason(now, bad)
+
+    def reason(self, now: float, bad: int) -> str:
+        """The fault message for stuck cable index `bad`."""
         st = self.st
         return (f"cable {bad + 1} stuck: tension rose {st[KS.TF, bad] - st[KS.TMIN, bad]:.2f} N over "
                 f"{1e3 * (now - st[KS.T0, bad]):.0f} ms while paying out")
+
+
+def tension_monitors(rng: TensionRange, stuck: StuckCable, now: float, t, dL, check_range: bool = True) -> str | None:
+    """`rng.update(now, t)` (when check_range) and, unless it reports, `stuck.update(now, t, dL)`: the loop's
+    tension monitors on each estimate, in one compiled call (kernel safety.tension_monitors). The first
+    reason, or None. t (n,) tensions [N], dL (n,) length steps [m]."""
+    t = np.ascontiguousarray(t, dtype=float)
+    k = KS.tension_monitors(float(now), t, np.ascontiguousarray(dL, dtype=float), check_range, rng.since, rng.t_max,
+                            rng.t_slack, rng.window, stuck.st, stuck.sc, stuck.tau, stuck.eps, stuck.window, stuck.rise,
+                            stuck.confirm)
+    if k < 0:
+        return None
+    n2 = 2 * rng.n
+    return rng.reason(now, k, t) if k < n2 else stuck.reason(now, k - n2)
 
 
 def _all_finite(values) -> bool:
@@ -118,10 +136,15 @@ def _numeric(a) -> bool:
     return type(a) is np.ndarray and a.dtype.kind in "fiu"
 
 
+_ND = np.ndarray
+
+
 def is_finite_sample(sample) -> bool:
     """True when a HapticSample's numbers are all finite."""
     cp, cv, R = sample.measured_cp, sample.measured_cv, sample.orientation
-    if _numeric(cp) and _numeric(cv) and _numeric(R) and type(sample.t) is float:  # one compiled call
+    # numeric arrays and a float time: one compiled call (_numeric written out: this runs every tick)
+    if type(cp) is _ND and type(cv) is _ND and type(R) is _ND and type(sample.t) is float \
+            and cp.dtype.kind in "fiu" and cv.dtype.kind in "fiu" and R.dtype.kind in "fiu":
         return KS.all_finite3(cp, cv, R, sample.t)
     return (_all_finite(cp) and _all_finite(cv) and _all_finite(np.ravel(R)) and math.isfinite(sample.t))
 
@@ -129,6 +152,7 @@ def is_finite_sample(sample) -> bool:
 def is_finite_reading(reading) -> bool:
     """True when a RobotReading's numbers are all finite."""
     c, s, L = reading.fsr_counts, reading.position_steps, reading.commanded_lengths
-    if _numeric(c) and _numeric(s) and _numeric(L) and type(reading.t) is float:  # one compiled call
+    if type(c) is _ND and type(s) is _ND and type(L) is _ND and type(reading.t) is float \
+            and c.dtype.kind in "fiu" and s.dtype.kind in "fiu" and L.dtype.kind in "fiu":  # as is_finite_sample
         return KS.all_finite3(c, s, L, reading.t)
     return (_all_finite(c) and _all_finite(s) and _all_finite(L) and math.isfinite(reading.t))
