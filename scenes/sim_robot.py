@@ -302,7 +302,9 @@ class SimRobot(ContextDevice):
             self.geom.mu, self.geom.t_min, self.geom.t_max, p.pretension, p.capstan_k, self.spec.steps_per_m)
         self._kc = kc
         self._fbg = FbgArray(p.sensor, n, self.seed, cable=p.fbg_cable) if p.sensor != "fsr" else None
-        self._lag = FsrBranchLag(self.cal)
+        self._lag = FsrBranchLag(self.cal, n)
+        self._lag_args = self._lag.kernel_args()  # its state (written in place) and constants, for kernel reading_counts
+        self._no_noise = np.zeros((1, n))
         self._added = _AddedEffects(self.model, n) if self.model is not None else None
         self._rich = RichPlant(p.plant, n) if p.plant is not None else None
         self.is_open = True
@@ -369,10 +371,15 @@ class SimRobot(ContextDevice):
         if self._rich is not None and self._play is not None:  # the cable moves with its realized length
             x = -self._L_real
         n = len(x)
-        t_tip, t_fsr, f, steps = np.empty(n), np.empty(n), np.empty(6), np.empty(n, np.int64)
+        t_tip, t_fsr, f, steps, counts = np.empty(n), np.empty(n), np.empty(6), np.empty(n, np.int64), \
+            np.empty(n, np.int64)
+        noise, k = self._noise_row()  # this reading's ADC noise [counts]: noise[k]
+        direct = self._added is None and self._rich is None  # nothing acts between the cable and its FSR
         # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable chain
-        if KS.reading(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc, self._cap, f,
-                      t_tip, t_fsr, steps) != KT.OK:
+        # and, when direct, the FSRs (lag, conductance, ADC: FsrBranchLag.counts)
+        status = KS.reading_counts(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
+                                   self._cap, f, t_tip, t_fsr, steps, direct, *self._lag_args, noise, k, counts)
+        if status != KT.OK:
             # not the one-dimensional null space, or infeasible: teleop.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
             for i in range(len(x)):
@@ -384,8 +391,8 @@ class SimRobot(ContextDevice):
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + p.dt])[0]
-        noise = self._noise_rows(1)[0] if p.noise_counts > 0 else np.zeros(6)
-        counts = self._lag.counts(t_fsr, noise)  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
+        if not direct or status != KT.OK:
+            counts = self._lag.counts(t_fsr, noise[k])  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
         fbg = None if self._fbg is None else self._fbg.read(t_tip, self.t + p.dt)  # distal FBGs (sim_sensors)
         self.t += p.dt
         self.seq += 1
@@ -393,6 +400,18 @@ class SimRobot(ContextDevice):
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
                             boot_id=self.boot_id, wrench_truth=f, fbg_pm=fbg,
                             extras={"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy()})
+
+    def _noise_row(self) -> tuple:
+        """(block, k): the next row of ADC noise [counts] is block[k] (the row _noise_rows(1)[0] would be, without
+        making the views; zeros without noise)."""
+        if self.params.noise_counts <= 0:
+            return self._no_noise, 0
+        k = self._nbuf_i
+        if k < len(self._nbuf):
+            self._nbuf_i = k + 1
+            return self._nbuf, k
+        self._noise_rows(1)  # the next block: its row 0
+        return self._nbuf, 0
 
     def _noise_rows(self, m: int) -> np.ndarray:
         """(m, n) ADC noise [counts], N(0, noise_counts): the next m rows of the seeded stream, drawn 1024 rows

@@ -228,7 +228,8 @@ class FsrBranchLag:
     its one 50 g (0.49 N) step back from 650 g reads on the unloading branch.
 
     The gap is tabulated once on [0, cal.t_max] (constant beyond); t + G(t) is made non-decreasing there
-    so u stays monotone in t for any calibration. Starts on the loading branch (u = t).
+    so u stays monotone in t for any calibration. Starts on the loading branch (u = t): the state u (n,) [N]
+    is NaN for a cable that has read nothing yet (after `reset`), and is written in place.
     """
 
     def __init__(self, cal: FsrCalibration, n: int = 6, points: int = 1024):
@@ -238,14 +239,25 @@ class FsrBranchLag:
         self._t = t
         self._gap = np.maximum.accumulate(t + gap) - t
         self.n = n
-        self.u = None
+        self.u = np.full(n, np.nan)
+        self._c = np.asarray(cal.loading, dtype=float)
+        self._r, self._adc = float(cal.r_divider), float(cal.adc_max)
 
     def gap(self, t) -> np.ndarray:
         """Branch gap G(t) [N] (array-broadcast)."""
         return np.interp(t, self._t, self._gap)
 
     def reset(self) -> None:
-        self.u = None
+        self.u[:] = np.nan
+
+    def kernel_args(self) -> tuple:
+        """(u, grid, gap, c, r_divider, adc_max): this lag's state and constants as kernel sensor.fsr_counts takes
+        them after the tensions (u written in place by the kernel; a caller may fuse that kernel into its own)."""
+        return self.u, self._t, self._gap, self._c, self._r, self._adc
+
+    def _check(self, n: int) -> None:
+        if n != self.n:
+            raise InputError(f"FSR branch lag: {n} tensions for a lag of {self.n} cables")
 
     def step(self, t) -> np.ndarray:
         """(n,) equivalent tensions u [N] after tensions t (n,) [N]."""
@@ -255,23 +267,17 @@ class FsrBranchLag:
         """(m, n) equivalent tensions for (m, n) tensions, continuing from the state (same numbers as `step`
         row by row; kernel sensor.branch_lag)."""
         T = np.ascontiguousarray(T, dtype=float)
-        u = T[0].copy() if self.u is None else self.u.copy()
-        U = branch_lag_loop(u, T, self._t, self._gap, np.empty_like(T))
-        self.u = u
-        return U
+        self._check(T.shape[1])
+        return branch_lag_loop(self.u, T, self._t, self._gap, np.empty_like(T))
 
     def counts(self, t, noise) -> np.ndarray:
         """(n,) int64 ADC counts after tensions t (n,) [N] with noise (n,) [counts] added before rounding:
         `step`, the loading branch's conductance, the divider and the ADC (one kernel call, sensor.fsr_counts;
         the numbers of conductance2counts(conductance(step(t))) + noise, rounded and clipped)."""
         t = np.ascontiguousarray(t, dtype=float)
-        first = self.u is None
-        if first:
-            self.u = np.empty(t.shape[0])
-            self._c = np.asarray(self.cal.loading, dtype=float)
-            self._r_adc = float(self.cal.r_divider), float(self.cal.adc_max)
+        self._check(t.shape[0])
         counts = np.empty(t.shape[0], dtype=np.int64)
-        fsr_counts(t, self.u, first, self._t, self._gap, self._c, *self._r_adc, np.ascontiguousarray(noise, dtype=float),
+        fsr_counts(t, self.u, self._t, self._gap, self._c, self._r, self._adc, np.ascontiguousarray(noise, dtype=float),
                    counts)
         return counts
 

@@ -55,9 +55,12 @@ def conductance2counts_loop(g, r_divider, adc_max, out):
 
 @njit
 def branch_lag_loop(u, T, grid, gap, out):
-    """branch_lag along the rows of T (m, n) from u (n,) (updated in place to the last row): out (m, n)."""
+    """branch_lag along the rows of T (m, n) from u (n,) (updated in place to the last row; NaN: a cable's first
+    reading, which starts on the loading branch, u = t): out (m, n)."""
     for i in range(T.shape[1]):
         ui = u[i]
+        if ui != ui and T.shape[0] > 0:
+            ui = T[0, i]
         for k in range(T.shape[0]):
             ui = branch_lag(ui, T[k, i], grid, gap)
             out[k, i] = ui
@@ -66,13 +69,13 @@ def branch_lag_loop(u, T, grid, gap, out):
 
 
 @njit
-def fsr_counts(t_fsr, u, first, grid, gap, c, r_divider, adc_max, noise, counts):
+def fsr_counts(t_fsr, u, grid, gap, c, r_divider, adc_max, noise, counts):
     """One reading of n FSRs: equivalent tensions u (n,) [N] after the tensions t_fsr (n,) [N] at the FSRs
-    (u = t_fsr when `first`: the loading branch), then counts (n,) int64 = adc_round(conductance2counts(
-    loading_conductance(u)) + noise) with noise (n,) [counts]. Returns nothing (a returned array is boxed
-    again: ~1 us a call)."""
+    (u = t_fsr where u is NaN, a first reading: the loading branch), then counts (n,) int64 =
+    adc_round(conductance2counts(loading_conductance(u)) + noise) with noise (n,) [counts]. Returns nothing
+    (a returned array is boxed again: ~1 us a call)."""
     for i in range(t_fsr.shape[0]):
-        ui = t_fsr[i] if first else branch_lag(u[i], t_fsr[i], grid, gap)
+        ui = t_fsr[i] if u[i] != u[i] else branch_lag(u[i], t_fsr[i], grid, gap)
         u[i] = ui
         k = conductance2counts(loading_conductance(c, ui), r_divider, adc_max) + noise[i]
         counts[i] = int(adc_round(k, adc_max))

@@ -7,6 +7,8 @@ the cable chain tip tensions -> FSR-side tensions, built from the shared kernels
     reading: one reading after the physics steps (contact wrench, motor steps, cable_sensor) in one call:
         a kernel call costs ~1 us of argument handling, several per reading added up to a tenth of the
         closed-loop simulation's tick
+    reading_counts: reading and, with nothing between the cable and its FSR, the FSRs' ADC counts
+        (sensor.fsr_counts) in the same call
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from teleop.kernels.friction import capstan_play_step
 from teleop.kernels.geometry import cable, forward_kinematics, platform_offsets, rotation_zyx, structure_column, \
     wrap_angle
 from teleop.kernels.jit import njit
-from teleop.kernels.sensor import loading_conductance
+from teleop.kernels.sensor import fsr_counts, loading_conductance
 from teleop.kernels.tension import OK, null1_terms, null1_tensions
 
 
@@ -171,3 +173,16 @@ def follow_pose(L, q, free, r, B, tol, max_iter, max_residual, v, theta0, tip, o
     if moved and worst <= max_residual:
         pose_target(q, r, B, v, theta0, tip, off, A, theta, tip_off, target)
     return worst, moved
+
+
+@njit
+def reading_counts(o, F, A, theta, x, L_home, L, c, cap, f, t_tip, t_fsr, steps, fsr, u, grid, gap, coefs, r_divider,
+                   adc_max, noise, i, counts):
+    """`reading`, then, when `fsr` and it is OK, the FSRs' counts (n,) int64 of its t_fsr (sensor.fsr_counts with
+    the branch lag's state u and its constants grid, gap, coefs, r_divider, adc_max, and the ADC noise row i of
+    noise (m, n) [counts]): the simulated robot's whole reading in one call when no effect acts between the
+    cable and its FSR. Returns reading's status (counts left unwritten unless fsr and OK)."""
+    status = reading(o, F, A, theta, x, L_home, L, c, cap, f, t_tip, t_fsr, steps)
+    if fsr and status == OK:
+        fsr_counts(t_fsr, u, grid, gap, coefs, r_divider, adc_max, noise[i], counts)
+    return status

@@ -95,9 +95,15 @@ def warm_up(geom=None) -> float:
     kc = np.array([geom.mu, geom.t_min, geom.t_max, 2.85, 5e3, 1e5])
     KS.reading(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6), np.empty(n),
                np.empty(n), np.empty(n, dtype=np.int64))
+    from teleop.sensors import FsrBranchLag
+
+    for fsr in (True, False):  # with the FSR chain (the matched plant) and without (effects in between)
+        KS.reading_counts(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6),
+                          np.empty(n), np.empty(n), np.empty(n, dtype=np.int64), fsr,
+                          *FsrBranchLag(default_fsr_calibration(), n).kernel_args(), np.zeros((1, n)), 0,
+                          np.empty(n, dtype=np.int64))
     KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
     from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample, tension_monitors
-    from teleop.sensors import FsrBranchLag
 
     lag = FsrBranchLag(default_fsr_calibration(), n)
     for _ in range(2):  # the first reading, then the lag
