@@ -43,13 +43,14 @@ def export_rows(session, cable: int, truth: bool = False):
     FSR-side tension (InputError when the recording has none)."""
     import numpy as np
 
+    from devices.base import RobotSpec
     from teleop.kinematics import bending_angles, pose2cables, pose2lengths
     from teleop.loop.replay import geometry_from
 
     meta = session.metadata.get("session", {})
     conf = meta.get("configuration", {})
     geom = geometry_from(conf.get("geometry"))
-    steps_per_m = float((conf.get("robot_spec") or {}).get("steps_per_m", 3200 / (np.pi * 0.010)))
+    steps_per_m = float((conf.get("robot_spec") or {}).get("steps_per_m", RobotSpec.steps_per_m))
     home = np.array(((conf.get("loop") or {}).get("mapping") or {}).get("home", [0.0] * 6), dtype=float)
     L_home = pose2lengths(home, geom)
     i = cable - 1
