@@ -349,14 +349,16 @@ class PadWorld:
         if self._position()[2] < self._z_clear and self._z_before < self._z_clear:
             self._fc, self._fc_step = _NO_FORCE, self._steps
             return self._fc
-        F = [0.0, 0.0, 0.0]
+        fx = fy = fz = 0.0
         for cp in self._tip_contacts():
             # cp[7] normal on B pointing towards A, cp[9] its force; cp[10..13] friction magnitudes and
-            # directions as applied to B (measured: a tip sliding +x reads +x), so A gets the opposite
-            n, d1, d2 = cp[7], cp[11], cp[13]
-            for i in range(3):
-                F[i] += cp[9] * n[i] - cp[10] * d1[i] - cp[12] * d2[i]
-        self._fc, self._fc_step = tuple(F), self._steps
+            # directions as applied to B (measured: a tip sliding +x reads +x), so A gets the opposite:
+            # F += fn n - f1 d1 - f2 d2, written out per axis
+            (n0, n1, n2), fn, f1, (a0, a1, a2), f2, (b0, b1, b2) = cp[7], cp[9], cp[10], cp[11], cp[12], cp[13]
+            fx += fn * n0 - f1 * a0 - f2 * b0
+            fy += fn * n1 - f1 * a1 - f2 * b1
+            fz += fn * n2 - f1 * a2 - f2 * b2
+        self._fc, self._fc_step = (fx, fy, fz), self._steps
         return self._fc
 
     def n_contacts(self) -> int:

@@ -124,9 +124,10 @@ class Teleop:
         comp = getattr(estimator, "compensated", None)
         self.compensated = comp if comp is not None else np.zeros(len(self.geom.B))
         self.wrench = np.zeros(6)
-        self.anchor_stylus = np.zeros(3)
-        self.anchor_robot = self.pose[:3].copy()
-        self._map_anchor = np.zeros(6)  # the mapping kernel's anchors (stylus, robot)
+        self._map_anchor = np.zeros(6)  # the mapping kernel's anchors [m]: stylus (3,), then robot (3,)
+        self._map_anchor[3:] = self.pose[:3]
+        # views of it, written in place (the kernel reads them where they are)
+        self.anchor_stylus, self.anchor_robot = self._map_anchor[:3], self._map_anchor[3:]
         self.tap = None
         self.last_reading = None
         self._est_seq = None  # sequence number and robot time of the last frame the estimator saw
@@ -162,8 +163,8 @@ class Teleop:
 
     def anchor(self, now: float) -> None:
         """Engage: stylus and robot anchors for the incremental mapping (the Renderer ramps the force in)."""
-        self.anchor_stylus = np.array(self.x.sample.measured_cp, dtype=float)
-        self.anchor_robot = self.pose[:3].copy()
+        self.anchor_stylus[:] = self.x.sample.measured_cp
+        self.anchor_robot[:] = self.pose[:3]
         if self.L_last is None:  # first engagement: start from where the robot is
             r = self.x.reading if self.x.reading is not None else self.last_reading
             L = None if r is None else np.asarray(r.commanded_lengths, dtype=float)
@@ -171,7 +172,7 @@ class Teleop:
                 if np.max(np.abs(L - position2lengths(self.pose[:3], self.offsets))) > 1e-4:
                     self.pose = lengths2pose(L, self.geom, guess=self.pose)
                     self.pose[3:] = self.params.mapping.home[3:]  # the mapping holds the home orientation
-                    self.anchor_robot = self.pose[:3].copy()
+                    self.anchor_robot[:] = self.pose[:3]
                 self.L_last = L
             else:
                 self.L_last = position2lengths(self.pose[:3], self.offsets)
@@ -182,11 +183,11 @@ class Teleop:
         teleop.mapping.Follower.step_into (kernel mapping.follow_step): the math of teleop.mapping.stylus2target /
         position2lengths / limit_lengths, compiled (this runs every tick).
         """
-        a = self._map_anchor
-        a[:3], a[3:] = self.anchor_stylus, self.anchor_robot
         L = np.array(self.L_last, dtype=float)
-        # the pose's position, a view: the kernel reads the previous target there and writes the new one
-        self.fast.follower.step_into(np.ascontiguousarray(x.sample.measured_cp, dtype=float), a, self.pose[:3], L)
+        # the anchors where anchor() wrote them; the pose's position, a view: the kernel reads the previous
+        # target there and writes the new one
+        self.fast.follower.step_into(np.ascontiguousarray(x.sample.measured_cp, dtype=float), self._map_anchor,
+                                     self.pose[:3], L)
         return L
 
     def stop_robot(self) -> None:
