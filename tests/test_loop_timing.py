@@ -208,7 +208,8 @@ def test_a_deadline_miss_is_more_than_half_a_period_late():
     fast, slow = log.summary(4000.0), log.summary(1000.0)
     assert fast["late_threshold_us"] == 125.0 and fast["deadline_misses"] == 4
     assert slow["late_threshold_us"] == 500.0 and slow["deadline_misses"] == 0
-    assert "0.125 ms" in budget_verdict(fast, 60.0, True, rate_hz=4000.0)["criterion"]
+    v = budget_verdict(fast, 60.0, True)
+    assert "0.125 ms" in v["criterion"] and v["conclusive"]   # 4 kHz is a budget rate too (CHAI3D's)
 
 
 def test_run_stepped_ticks_at_exact_periods_and_sets_the_devices_clock():

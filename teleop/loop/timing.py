@@ -107,27 +107,31 @@ def format_histogram(hist: dict, width: int = 40) -> str:
     return "\n".join(lines)
 
 
-def budget_verdict(summary: dict, seconds: float, recording: bool, max_fraction: float = 0.001,
-                   min_seconds: float = 60.0, rate_hz: float = 1000.0) -> dict:
-    """The RELIABILITY.md timing budget on a loop summary: <= max_fraction of ticks more than 0.5 ms late
-    (skipped deadlines count), over >= min_seconds [s] at rate_hz [Hz] with recording on.
+BUDGET_RATES_HZ = (1000.0, 4000.0)  # the loop rates the timing budget is checked at (1 kHz; CHAI3D's 4 kHz)
 
-    `pass` is the criterion on the misses; `conclusive` says whether the run was long enough, at the rate and
-    with recording on, for the pass to count as the budget check (`why_not` lists what is missing).
+
+def budget_verdict(summary: dict, seconds: float, recording: bool, max_fraction: float = 0.001,
+                   min_seconds: float = 60.0, rates_hz: tuple = BUDGET_RATES_HZ) -> dict:
+    """The RELIABILITY.md timing budget on a loop summary: <= max_fraction of ticks more than half a period
+    late (skipped deadlines count), over >= min_seconds [s] at one of rates_hz [Hz] with recording on.
+
+    `pass` is the criterion on the misses; `conclusive` says whether the run was long enough, at a budget rate
+    and with recording on, for the pass to count as the budget check (`why_not` lists what is missing).
     """
     ticks = int(summary["ticks"])
     misses = int(summary["deadline_misses"])
     frac = misses / max(1, ticks + summary.get("skipped", 0))
+    rates = " or ".join(f"{r:g}" for r in rates_hz)
     why = []
     if seconds < min_seconds:
         why.append(f"needs --seconds {min_seconds:g} (ran {seconds:g} s)")
-    if summary["rate_hz"] != rate_hz:
-        why.append(f"needs --rate {rate_hz:g} (ran {summary['rate_hz']:g} Hz)")
+    if summary["rate_hz"] not in rates_hz:
+        why.append(f"needs --rate {rates} (ran {summary['rate_hz']:g} Hz)")
     if not recording:
         why.append("needs recording on")
     late_ms = late_threshold_ns(summary["rate_hz"]) / 1e6
     return {"criterion": f"<= {100 * max_fraction:g} % of ticks > {late_ms:g} ms (half a period) late over >= "
-                         f"{min_seconds:g} s at {rate_hz:g} Hz, recording on",
+                         f"{min_seconds:g} s at {summary['rate_hz']:g} Hz ({rates} Hz), recording on",
             "miss_fraction": frac, "max_miss_fraction": max_fraction, "pass": bool(frac <= max_fraction),
             "conclusive": not why, "why_not": why}
 
