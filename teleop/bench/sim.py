@@ -155,6 +155,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     import gc
 
     from devices.simulated import OperatorParams, Script, SimulatedStylus
+    from teleop.kernels.tap import sim_log_row
     from teleop.loop import LoopParams, State, Teleop
     from teleop.loop.session import default_estimator, frame_period
     from teleop.mapping import POKE_WORKSPACE_MAX, MappingParams
@@ -187,6 +188,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
             solver_timed = _meter_world(robot.world, phys, solver)
         tp = Teleop(stylus, robot, params, estimator=estimator)
         tp.start(0.0)
+        log_row, no_L, no_counts = sim_log_row, np.zeros(6), np.zeros(6, dtype=np.int64)
         dt = params.dt
         pc = time.perf_counter_ns
         j = 0
@@ -199,17 +201,15 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                 t0 = pc()
                 x = tp.tick(clock_t[0])
                 tick_ns[k] = pc() - t0
-                stage_ns[k] = tp.stage_ns
-                if stages:
-                    sub_ns[k] = (kin.ns, phys.ns, solver.ns, rd.ns)
+                # the tick's row of every log in one compiled call (kernel tap.sim_log_row)
                 r = x.reading
                 if r is not None:
-                    L_log[j] = r.commanded_lengths
-                    counts_log[j] = r.fsr_counts
-                    f_truth[j] = -r.wrench_truth[2]
+                    log_row(k, tp.stage_ns, stage_ns, kin.ns, phys.ns, solver.ns, rd.ns, sub_ns, stylus.p, p_log, x.F,
+                            F_log, j, r.commanded_lengths, L_log, r.fsr_counts, counts_log, r.wrench_truth, f_truth)
                     j += 1
-                p_log[k] = stylus.p
-                F_log[k] = x.F
+                else:
+                    log_row(k, tp.stage_ns, stage_ns, kin.ns, phys.ns, solver.ns, rd.ns, sub_ns, stylus.p, p_log, x.F,
+                            F_log, -1, no_L, L_log, no_counts, counts_log, no_L, f_truth)
                 enabled += tp.state == State.ENABLED
             wall_ns, cpu = pc() - wall0, time.process_time() - cpu0
         finally:

@@ -144,6 +144,13 @@ def warm_up(geom=None) -> float:
         tap_row(np.zeros(29 * 16), o, w, 0, 0.0, 0, 0, 0, np.zeros(7, dtype=np.int64), True, 0.0, np.zeros(3),
                 np.zeros(3), np.eye(3), 1, True, True, np.zeros(6), L, True, 0.0, 0, c6, c6, L, 1, 0, True, L,
                 np.zeros(6), np.zeros(6), 0.0, 0.0, 0.0, 0.0, np.zeros(3))
+    from teleop.kernels.tap import sim_log_row  # teleop bench sim's log: a tick with a reading and one without
+
+    for j in (0, -1):
+        sim_log_row(0, np.zeros(7, dtype=np.int64), np.zeros((1, 7), dtype=np.int64), 0, 0, 0, 0,
+                    np.zeros((1, 4), dtype=np.int64), np.zeros(3), np.zeros((1, 3)), np.zeros(3), np.zeros((1, 3)), j,
+                    L, np.zeros((1, n)), np.zeros(n, dtype=np.int64), np.zeros((1, n), dtype=np.int64), np.zeros(6),
+                    np.zeros(1))
     check_lengths(L, geom)
     TensionSolver(A, geom.t_min, geom.t_max, 2.85).solve(f)
     # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's
