@@ -196,9 +196,9 @@ class SimulatedStylus(ContextDevice):
         fx, fy, fz = self.F_cmd
         operator_steps(x, fx, fy, fz, self.steps, n, self._constants(), noise, i0, tremor, targets, self._absent)
         self.steps += n
-        # p and v: views of one fresh copy (never written in place: a sample may hand them out as they are)
-        pv = x[0:6].copy()
-        self.p, self.v, self.F_tremor, self.t = pv[0:3], pv[3:6], x[6:9].copy(), self.steps * h
+        # p, v and F_tremor: views of one fresh copy (never written in place: a sample may hand them out as they are)
+        pv = x.copy()
+        self.p, self.v, self.F_tremor, self.t = pv[0:3], pv[3:6], pv[6:9], self.steps * h
 
     def _noise(self, n: int) -> tuple:
         """(rows, i0): n rows of 3 standard normal draws at rows[i0:i0 + n], taken from blocks drawn 1024 rows

@@ -15,7 +15,7 @@ from teleop.errors import InputError
 from teleop.geometry import Geometry
 from teleop.kernels import sim as KS
 from teleop.kernels.geometry import forward_kinematics
-from teleop.kinematics import FREE_AXIAL
+from teleop.kinematics import FREE_AXIAL, check_lengths
 
 FREE = tuple(FREE_AXIAL.tolist())  # axial geometry: the roll alpha is not set by the cables
 
@@ -32,7 +32,8 @@ class PoseFollower:
     """
 
     def __init__(self, geom: Geometry, pose, tol: float = 1e-12, max_residual: float = 1e-6):
-        self.r, self.B = geom.r, geom.B
+        self.geom, self.r, self.B = geom, geom.r, geom.B
+        self._limits = float(geom.l_min), float(geom.l_max)
         self.tol, self.max_residual = float(tol), float(max_residual)
         self._q = np.array(pose, dtype=float).reshape(6)
         self._L = np.zeros(len(geom.B))
@@ -54,8 +55,13 @@ class PoseFollower:
     def follow(self, L: np.ndarray, terms: tuple) -> np.ndarray | None:
         """solve_into, and when the pose moved, the pose terms at it written into `terms` (v, theta0, tip, off,
         A, theta, tip_off, target: the arguments of kernel sim.pose_target after the pose and the geometry's
-        anchors) in the same kernel call (sim.follow_pose); the pose's (6,) array if it moved, else None."""
-        worst, moved = KS.follow_pose(L, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12, self.max_residual, *terms)
+        anchors) in the same kernel call (sim.follow_pose), which first checks L (n,) float64 against the
+        geometry's length limits (teleop.kinematics.check_lengths raises with the reason, the pose unchanged);
+        the pose's (6,) array if it moved, else None."""
+        worst, moved, bad = KS.follow_pose(L, *self._limits, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12,
+                                           self.max_residual, *terms)
+        if bad >= 0:
+            check_lengths(L, self.geom)
         self._check(worst)
         return self._q if moved else None
 

@@ -322,13 +322,17 @@ class SimRobot(ContextDevice):
     def command_lengths(self, lengths) -> None:
         """Command cable lengths (6,) [m] (checked against the geometry's limits)."""
         self._require_open()
-        L = check_lengths(lengths, self.geom)
-        if not self.stopped:
-            # forward kinematics and, if the pose moved, its terms (A, wraps, tool offset, tip target): one call
-            pose = self._fk.follow(np.ascontiguousarray(L) if self._play is None else self._realize(L), self._term_out)
-            if pose is not None:
-                self.pose, self._terms = pose.copy(), (self._tip_off, self._target)
-            self.L_cmd = L.copy()
+        L = np.array(lengths, dtype=float)  # the robot's own copy (the caller may change its array)
+        if self.stopped or self._play is not None or L.shape != (6,):
+            L = check_lengths(L, self.geom)
+            if self.stopped:
+                return
+        # the limits (unless checked above), forward kinematics and, if the pose moved, its terms (A, wraps,
+        # tool offset, tip target): one kernel call (PoseFollower.follow raises as check_lengths)
+        pose = self._fk.follow(L if self._play is None else self._realize(L), self._term_out)
+        if pose is not None:
+            self.pose, self._terms = pose.copy(), (self._tip_off, self._target)
+        self.L_cmd = L
 
     def _realize(self, L: np.ndarray) -> np.ndarray:
         """Realized cable lengths (6,) [m]: each cable's play operator stepped to its commanded length."""

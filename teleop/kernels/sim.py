@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from teleop.kernels.friction import capstan_play_step
-from teleop.kernels.geometry import cable, forward_kinematics, platform_offsets, rotation_zyx, structure_column, \
-    wrap_angle
+from teleop.kernels.geometry import cable, forward_kinematics, lengths_outside, platform_offsets, rotation_zyx, \
+    structure_column, wrap_angle
 from teleop.kernels.jit import njit
 from teleop.kernels.sensor import fsr_counts, loading_conductance
 from teleop.kernels.tension import OK, null1_terms, null1_tensions
@@ -162,17 +162,22 @@ def pose_target(q, r, B, v, theta0, tip, off, A, theta, tip_off, target):
 
 
 @njit
-def follow_pose(L, q, free, r, B, tol, max_iter, max_residual, v, theta0, tip, off, A, theta, tip_off, target):
-    """The simulated robot's command (scenes.sim_robot.SimRobot.command_lengths) in one call: forward
-    kinematics from the pose q (6,) (updated in place) to the lengths L (n,) [m], then, if q moved and the
-    lengths are met within max_residual [m], pose_target at the new pose (else the terms are left as they
-    were). Returns (the largest length residual [m], whether q moved)."""
+def follow_pose(L, l_min, l_max, q, free, r, B, tol, max_iter, max_residual, v, theta0, tip, off, A, theta, tip_off,
+                target):
+    """The simulated robot's command (scenes.sim_robot.SimRobot.command_lengths) in one call: the lengths L
+    (n,) [m] checked against [l_min, l_max] (geometry.lengths_outside), forward kinematics from the pose q (6,)
+    (updated in place) to them, then, if q moved and the lengths are met within max_residual [m], pose_target
+    at the new pose (else the terms are left as they were). Returns (the largest length residual [m], whether
+    q moved, the first length outside its limits or not finite (-1: none; then nothing else is done))."""
+    bad = lengths_outside(L, l_min, l_max)
+    if bad >= 0:
+        return np.nan, False, bad
     q0, q1, q2, q3, q4, q5 = q[0], q[1], q[2], q[3], q[4], q[5]
     worst = forward_kinematics(L, q, free, r, B, tol, max_iter)
     moved = q[0] != q0 or q[1] != q1 or q[2] != q2 or q[3] != q3 or q[4] != q4 or q[5] != q5
     if moved and worst <= max_residual:
         pose_target(q, r, B, v, theta0, tip, off, A, theta, tip_off, target)
-    return worst, moved
+    return worst, moved, bad
 
 
 @njit

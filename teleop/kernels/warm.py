@@ -88,7 +88,8 @@ def warm_up(geom=None) -> float:
                                (0.0, 0.0, 0.0), implicit)
     KS.pose_target(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
                    np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip, np.empty(3))
-    KS.follow_pose(np.ascontiguousarray(L), q.copy(), FREE_AXIAL, geom.r, geom.B, 1e-12, 12, 1e-6,
+    KS.follow_pose(np.ascontiguousarray(L), float(geom.l_min), float(geom.l_max), q.copy(), FREE_AXIAL, geom.r, geom.B,
+                   1e-12, 12, 1e-6,
                    np.asarray(geom.v, dtype=float), float(geom.theta0), np.asarray(geom.tip, dtype=float),
                    np.empty((n, 6)), A, theta, tip, np.empty(3))
     # the sim robot's reading (scenes.sim_robot.SimRobot.read): the contact force as pybullet's tuple

@@ -161,3 +161,18 @@ def test_forward_kinematics_recovers_the_commanded_poses():
     assert np.allclose(tip, rotation_zyx(*got[-1, 3:]) @ GEOM.tip, atol=1e-15)
     with pytest.raises(InputError):
         fk.solve(L[-1] + np.array([0.01, 0, 0, 0, 0, 0]))  # no pose has these lengths
+
+
+@pytest.mark.parametrize("bad, error", [(np.nan, InputError), (0.2, InfeasibleError), (-1.0, InfeasibleError),
+                                        ("short", InputError)])
+def test_bad_commands_raise_and_change_nothing(bad, error):
+    """The lengths are checked in the forward kinematics' kernel call: a bad command raises as
+    teleop.kinematics.check_lengths and leaves the pose, the commanded lengths and the pose terms as they were."""
+    with SimRobot(z_test_pad(), PARAMS, seed=1) as r:
+        r.command_lengths(_poke()[3])
+        pose, L, target = r.pose.copy(), r.L_cmd.copy(), r._pose_terms()[1].copy()
+        cmd = _poke()[4][:5] if bad == "short" else np.where(np.arange(6) == 2, bad, _poke()[4])
+        with pytest.raises(error):
+            r.command_lengths(cmd)
+        assert np.array_equal(r.pose, pose) and np.array_equal(r.L_cmd, L)
+        assert np.array_equal(r._pose_terms()[1], target) and np.array_equal(r._fk._q, pose)
