@@ -1,7 +1,8 @@
 """Kernels of the FSR's reading chain (teleop.sensors; the simulated robot's per-reading sensor side):
 
     branch_lag        the FSR hysteresis as play between its branches: u = clip(u_prev, t, t + G(t))
-                      (teleop.sensors.FsrBranchLag; G tabulated on a grid, linear interpolation as np.interp)
+                      (teleop.sensors.FsrBranchLag; G tabulated on a grid, linear interpolation as np.interp:
+                      linalg.interp1)
     loading_conductance   the loading branch's conductance [S]: max(sum_j c_j u^j, 0)
     conductance2counts    the divider and ADC: adc_max G R / (1 + G R) [counts, unrounded]
     adc_round         rounded, clipped counts: clip(rint(c), 0, adc_max)
@@ -14,14 +15,14 @@ import numpy as np
 
 from teleop.kernels.friction import clamp
 from teleop.kernels.jit import njit
-from teleop.kernels.linalg import horner
+from teleop.kernels.linalg import horner, interp1
 
 
 @njit
 def branch_lag(u, t, grid, gap):
     """Equivalent tension [N] after tension t [N] from u [N]: clip(u, t, t + G(t)), G the branch gap
     tabulated at `grid` [N] (gap (k,) [N], >= 0, linear interpolation, constant beyond the ends)."""
-    return clamp(u, t, t + np.interp(t, grid, gap))
+    return clamp(u, t, t + interp1(t, grid, gap))
 
 
 @njit

@@ -3,7 +3,7 @@
 import numpy as np
 
 from teleop.geometry import default_geometry
-from teleop.kernels.linalg import horner, lu_complete, lu_null_vector, lu_particular, solve_into
+from teleop.kernels.linalg import horner, interp1, lu_complete, lu_null_vector, lu_particular, solve_into
 from teleop.kinematics import structure_matrix
 
 G = default_geometry()
@@ -36,3 +36,16 @@ def test_solve_and_horner():
     c = rng.normal(size=6)
     s = 0.37
     assert horner(c, s) == np.polynomial.polynomial.polyval(s, c)
+
+
+def test_interp1_is_numpy_interp_bit_for_bit():
+    """One x at a time, as the FSR branch lag calls it: numpy's numbers, at the grid points, between them,
+    outside the table, for NaN and infinities, on the lag's uniform table and on an irregular one with
+    repeated values."""
+    rng = np.random.default_rng(1)
+    grids = [(np.linspace(0.0, 6.0, 1024), rng.random(1024)),
+             (np.cumsum(rng.uniform(0.01, 1.0, 50)), np.repeat(rng.normal(size=25), 2))]
+    for xp, fp in grids:
+        xs = np.concatenate([rng.uniform(xp[0] - 1, xp[-1] + 1, 20000), xp, [np.nan, np.inf, -np.inf]])
+        got = np.array([interp1(float(x), xp, fp) for x in xs])
+        assert np.array_equal(got, np.interp(xs, xp, fp), equal_nan=True)
