@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import InitVar, dataclass, field, fields, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -99,12 +100,12 @@ class LoopParams:
         if self.tension_slack < 0 or self.payout_eps < 0:
             raise InputError("loop: tension_slack and payout_eps must be >= 0")
 
-    @property
+    @cached_property  # read every tick (frozen: computed once)
     def dt(self) -> float:
         """Tick period [s]."""
         return 1.0 / self.rate_hz
 
-    @property
+    @cached_property
     def robot_every(self) -> int:
         """Ticks per robot-link exchange."""
         return 1 if self.robot_rate_hz is None else max(1, int(round(self.rate_hz / self.robot_rate_hz)))
