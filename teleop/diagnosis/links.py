@@ -7,8 +7,12 @@ A link maps recorded input channels to one recorded output channel:
 - spring law (`load = spring`, a position link through a spring): tip_pos (else motor_pos) -> tip_force;
   position effects act on the travel in the input's units, the gain is the spring's, and the tip force
   sensor's effects apply to the output;
-- force link: tip load -> motor_force, the motor motion (motor_pos, else tip_pos) giving the direction;
-  with `load = spring` and no tip_force the spring's deflection (tip_pos, else motor_pos) is the load;
+- force link: tip load -> motor_force, the motor motion (actuator_pos, else motor_pos, else tip_pos) giving
+  the direction; with `load = spring` and no tip_force the spring's deflection (tip_pos, else motor_pos) is
+  the load. actuator_pos is the actuator's own position where motor_pos is measured past a gearbox or
+  coupling: the proximal force sensor sits between the two, so its friction and pre-sliding states follow
+  the actuator (a spindle held by static friction while its motor winds the coupling: the torque reverses
+  before the spindle moves), while the position link stays motor_pos -> tip_pos;
 - contact link: indentation -> force (a pad poke).
 
 Baseline (what every finding is an addition to): an affine map y = g u + c (gain g: transmission ratio
@@ -121,7 +125,7 @@ def find_links(rec: Recording) -> list[Link]:
         travel = "tip_pos" if "tip_pos" in ch else "motor_pos"
         links.append(Link("position", "tip_force", travel, "motor_pos" if "motor_pos" in ch else travel))
     if "motor_force" in ch:
-        drive = "motor_pos" if "motor_pos" in ch else ("tip_pos" if "tip_pos" in ch else None)
+        drive = next((c for c in ("actuator_pos", "motor_pos", "tip_pos") if c in ch), None)
         if "tip_force" in ch:
             links.append(Link("force", "motor_force", "tip_force", drive))
         elif rec.metadata.get("load") == "spring" and drive is not None:

@@ -1,8 +1,9 @@
 """Recordings in and out: the interchange CSV of DESIGN.md and other layouts through a TOML column map.
 
 A `Recording` holds time `t` (n,) [s] and named channels in SI units (m, rad, N, N m; temperature in C).
-Canonical channel names: motor_pos, tip_pos, motor_force, tip_force, bend_angle, temperature,
-indentation, force. Columns of other quantities are kept in `extra` (raw numbers) and ignored.
+Canonical channel names: motor_pos, tip_pos, actuator_pos, motor_force, tip_force, bend_angle,
+temperature, indentation, force (actuator_pos: the actuator's own position where motor_pos is measured past a
+gearbox or coupling). Columns of other quantities are kept in `extra` (raw numbers) and ignored.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ UNITS = {
 # quantity -> SI units it may carry
 QUANTITIES = {
     "t": ("s",),
-    "motor_pos": ("m", "rad"), "tip_pos": ("m", "rad"),
+    "motor_pos": ("m", "rad"), "tip_pos": ("m", "rad"), "actuator_pos": ("m", "rad"),
     "motor_force": ("N", "N m"), "tip_force": ("N", "N m"),
     "bend_angle": ("rad",), "temperature": ("C",),
     "indentation": ("m",), "force": ("N",),

@@ -49,13 +49,17 @@ def test_units_convert_to_si(tmp_path):
 @needs_mrdlab
 def test_mrdlab_map_reads_all_runs():
     cmap = load_column_map(builtin_map("mrdlab"))
-    assert {c.quantity for c in cmap.columns} == {"t", "motor_pos", "motor_force", "tip_pos", "tip_force"}
+    assert {c.quantity for c in cmap.columns} == {"t", "motor_pos", "actuator_pos", "motor_force", "tip_pos",
+                                                  "tip_force"}
     rec = read_recording(MRDLAB / "tool4_left_03.TXT", "mrdlab")
     assert rec.n == 20000 and rec.dt == pytest.approx(1e-3, rel=1e-6)   # seconds, not the header's ms
     # 30 deg-amplitude sine on the spindle: 0..60 deg; the jaw swings the other way through about 55 deg
     assert math.degrees(np.ptp(rec.channels["motor_pos"])) == pytest.approx(59, abs=2)
     assert math.degrees(np.ptp(rec.channels["tip_pos"])) == pytest.approx(57, abs=3)
     assert np.corrcoef(rec.channels["motor_pos"], rec.channels["tip_pos"])[0, 1] < -0.99
+    # the Maxon motor behind its 35:1 gearbox turns with the spindle, scaled to the spindle's angle
+    assert np.ptp(rec.channels["actuator_pos"]) == pytest.approx(np.ptp(rec.channels["motor_pos"]), rel=0.03)
+    assert np.corrcoef(rec.channels["motor_pos"], rec.channels["actuator_pos"])[0, 1] > 0.99
     assert 0.05 < np.ptp(rec.channels["motor_force"]) < 0.2   # N m
 
 
