@@ -223,7 +223,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 live_view = _start_live(tp, layout, extras, recorder, live,
                                         {"pads": pad_scene(built), **(live_scene or {})})
             log = TimingLog(int(round(seconds * params.rate_hz)))
-            scheduling = set_realtime(50) if realtime else "SCHED_OTHER (not requested)"
+            scheduling = (set_realtime(50) if realtime else
+                          "simulated clock (not paced)" if sim_clock else "SCHED_OTHER (not requested)")
             gc.collect()
             gc.disable()
             interrupted = ""
