@@ -73,3 +73,24 @@ def test_stiff_series_spring_on_the_light_tip_stays_stable_and_settles():
         F = -w.contact_force()[2]
     k_s = k_r * k_p / (k_r + k_p)
     assert F == pytest.approx(k_s * 2e-4, rel=0.1)
+
+
+@pytest.mark.parametrize("k_r", [1e4, 400.0])
+def test_tip_velocity_from_two_positions_is_pybullets(k_r):
+    """The series spring's damper takes the tip's velocity as (x_k - x_(k-1)) / dt (Bullet integrates the base
+    semi-implicitly): pybullet's own velocity to round-off at every step of a poke, a slide in contact and a
+    lift off (fails if pybullet integrated otherwise, e.g. with sub-steps)."""
+    K, C = np.eye(3) * k_r, np.eye(3) * 2 * 0.7 * np.sqrt(PARAMS.indenter_mass * k_r)
+    worst, fastest, touching = 0.0, 0.0, 0
+    with PadWorld(z_test_pad(), PARAMS, stiffness=K, damping=C) as w:
+        for i in range(1500):
+            z = PARAMS.surface_z + 0.003 * np.sin(np.pi * i / 1000)  # in 5 mm, 3 mm deep and out
+            w.step([2e-6 * i if 300 < i < 900 else 6e-4, 0.0, z])
+            w.tip()
+            v = np.array(w.velocity())
+            if w._vel_step == w._steps:  # the velocity the next step's spring takes
+                worst = max(worst, np.abs(np.array(w._velocity()) - v).max())
+            fastest = max(fastest, np.abs(v).max())
+            touching += w.contact_force()[2] < -0.05
+    assert touching > 300 and fastest > 0.1  # in contact for most of it; up to 1.5 m/s (measured)
+    assert worst <= 1e-12  # m/s (measured: 2e-15)
