@@ -188,7 +188,11 @@ class SimulatedStylus(ContextDevice):
             self.steps = target_steps - int(1.0 / h)
             n = int(1.0 / h)
         tremor = op.tremor > 0
-        noise, i0 = self._noise(n) if tremor else (self._nbuf, 0)
+        i0 = self._nbuf_i
+        if tremor and i0 + n <= len(self._nbuf):  # _noise's usual case, written out (this runs every tick)
+            noise, self._nbuf_i = self._nbuf, i0 + n
+        else:
+            noise, i0 = self._noise(n) if tremor else (self._nbuf, 0)
         targets = self._no_targets
         if self.script.kind == "recorded":
             targets = np.array([self.script.target_xyz((self.steps + i + 1) * h) for i in range(n)])

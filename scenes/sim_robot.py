@@ -321,7 +321,8 @@ class SimRobot(ContextDevice):
     # Robot protocol --------------------------------------------------------------------------------
     def command_lengths(self, lengths) -> None:
         """Command cable lengths (6,) [m] (checked against the geometry's limits)."""
-        self._require_open()
+        if not self.is_open:
+            self._require_open()
         L = np.array(lengths, dtype=float)  # the robot's own copy (the caller may change its array)
         if self.stopped or self._play is not None or L.shape != (6,):
             L = check_lengths(L, self.geom)
@@ -361,16 +362,13 @@ class SimRobot(ContextDevice):
             self._terms = (self._tip_off, self._target)
         return self._terms
 
-    def _physics(self) -> tuple[np.ndarray, tuple]:
-        """Advance `substeps` steps toward the commanded pose; (tip (3,) [m], contact force (fx, fy, fz) [N] on
-        the tip)."""
-        return self.world.advance(self._pose_terms()[1], self.params.substeps)
-
     def read(self) -> RobotReading:
         """Advance one reading period and return the raw reading."""
-        self._require_open()
+        if not self.is_open:
+            self._require_open()
         p, g = self.params, self.geom
-        tip, F = self._physics()
+        # `substeps` physics steps toward the commanded pose: tip (3,) [m], contact force (fx, fy, fz) [N] on the tip
+        tip, F = self.world.advance(self._target if self._terms is not None else self._pose_terms()[1], p.substeps)
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
         if self._rich is not None and self._play is not None:  # the cable moves with its realized length
             x = -self._L_real
