@@ -32,6 +32,7 @@ from teleop.kernels.render import clamp_norm, engage_count, frame_map, is_finite
 DISABLED, WAITING, RAMPING, ENGAGED = "disabled", "waiting", "ramping", "engaged"
 _STATES = (DISABLED, WAITING, RAMPING, ENGAGED)  # by the kernel's state code
 _TRIPS = {KR.TRIP_FORCE: "non-finite force", KR.TRIP_VELOCITY: "non-finite stylus velocity or dt"}
+_STATE, _RAMP, _FAULT, _OFF = KR.STATE, KR.RAMP, KR.FAULT, KR.DISABLED  # render_tick's reads of the kernel state
 
 
 def _identity():
@@ -146,8 +147,9 @@ class Renderer:
         trip = render_step(rs, self.rp, self.R, fx, fy, fz, dt, vx, vy, vz, out)
         if trip:
             self.fault_reason = _TRIPS[trip]
-        ramp = float(rs[KR.RAMP]) if rs[KR.STATE] != KR.DISABLED else 0.0
-        return out[:3].copy(), tuple(out[3:6].tolist()), ramp, bool(rs[KR.FAULT])
+        st, o = rs.tolist(), out.tolist()  # Python floats: one conversion each, not one per element
+        ramp = st[_RAMP] if st[_STATE] != _OFF else 0.0
+        return out[:3].copy(), (o[3], o[4], o[5]), ramp, st[_FAULT] != 0.0
 
     def render(self, wrench, dt: float, velocity=None) -> np.ndarray:
         """(3,) force [N] in the device frame from a wrench (6,) or force (3,) in {B}."""
