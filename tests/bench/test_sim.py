@@ -19,7 +19,7 @@ def _factor_ok(factor, simulated, spent):
 
 def test_cli_json_keys_and_consistent_values(tmp_path, capsys):
     path = tmp_path / "sim.json"
-    assert main(["bench", "sim", "--seconds", "2", "--seed", "3", "--json", str(path)]) == 0
+    assert main(["bench", "sim", "--seconds", "2", "--seed", "3", "--stages", "--json", str(path)]) == 0
     out = json.loads(path.read_text())
     assert list(out) == KEYS
     assert out["simulated_s"] == 2.0 and out["ticks"] == 2000 and out["readings"] == 2000
