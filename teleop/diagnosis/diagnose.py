@@ -7,6 +7,7 @@ object {"recording", "channels", "baseline": {"params", "rmse"}, "findings": [..
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -14,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from teleop.diagnosis.identify import Fit, LinkResult, identify_link, rms, simulation_baseline
-from teleop.diagnosis.links import LinkData, find_links, link_data, predict
+from teleop.diagnosis.links import LinkData, find_links, is_exact, link_data, predict
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
 from teleop.diagnosis.recording_io import Recording
@@ -194,6 +195,7 @@ class Diagnosis:
             r = d.y - predict(d, m)
             loc = locate(d, r, d.y, index=self.hold)
             channels[ch].update({"link": d.link.kind, "input": d.link.input,
+                                 **({"drive": d.link.drive, "drive_rate": _drive_rate(d)} if d.x is not None else {}),
                                  "rmse_baseline": res.baseline.rmse_hold,
                                  "rmse_model": res.final.rmse_hold,
                                  "residual": loc.as_dict()})
@@ -227,6 +229,13 @@ def sensor_correction(res: LinkResult) -> np.ndarray | None:
     return predict(res.data, m) - predict(res.data, plain)
 
 
+def _drive_rate(d: LinkData) -> str:
+    """How the link's drive rate was taken (links.clean_motion)."""
+    if not is_exact(d.x):
+        return "central, smoothed"
+    return "backward (exact drive)" if d.backward else "central (exact drive)"
+
+
 def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int = 0,
              baseline: tuple = PROJECT_BASELINE, sindy: bool = False) -> Diagnosis:
     """Diagnose `rec` beyond the `baseline` simulation (see the module docstring); progress(k) is called
@@ -255,6 +264,13 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
             raw = identify_link(d_raw, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline))
             if raw.final.rmse_hold < res.final.rmse_hold and "backlash" in raw.final.names:
                 d, res = d_raw, raw
+        if link.kind != "contact" and link.drive and is_exact(d.x):
+            # an exact drive's rate at its reversals: the central difference of the catalogue's array forms or
+            # the backward one of a per-sample simulation; the held-out part says which this recording follows
+            d_b = dataclasses.replace(d, backward=True, cache={})
+            res_b = identify_link(d_b, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline))
+            if res_b.final.rmse_hold < res.final.rmse_hold:
+                d, res = d_b, res_b
         results.append(res)
         corr = sensor_correction(res)
         if corr is not None:

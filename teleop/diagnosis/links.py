@@ -45,17 +45,18 @@ from teleop.physics.base import REGISTRY
 SMOOTH_S = 0.02
 SMOOTH_MAX_S = 0.06   # noisier inputs are smoothed more, up to this width, so that the noise left on
 RATE_NOISE = 0.02     # their rate is at most this fraction of the rate's 99th percentile
+EXACT = 0.01          # a drive whose noise is below this fraction of its median per-sample move is exact
 
 
 def noise_sigma(x: np.ndarray) -> float:
-    """Robust standard deviation of the white noise on x [x's unit]: from its second differences (a smooth
-    motion sampled fast leaves almost nothing there; white noise of sigma gives 6 sigma^2), and at least
-    the quantisation's q / sqrt(12) when x sits on a lattice of step q (an encoder's or a step counter's
-    counts). 0 for an exact, smooth signal (a commanded position)."""
-    d2 = np.diff(x, 2)
-    sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / np.sqrt(6.0) if d2.size else 0.0
-    dx = np.abs(np.diff(x))
-    moves = dx[dx > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)]
+    """Robust standard deviation of the white noise on x [x's unit]: from its third differences (a motion
+    sampled fast leaves almost nothing there, an operator's tremor included, which second differences took
+    for noise; white noise of sigma gives 20 sigma^2), and at least the quantisation's q / sqrt(12) when x
+    sits on a lattice of step q (an encoder's or a step counter's counts). Next to 0 for an exact signal (a
+    commanded position)."""
+    d3 = np.diff(x, 3)
+    sigma = 1.4826 * float(np.median(np.abs(d3 - np.median(d3)))) / np.sqrt(20.0) if d3.size else 0.0
+    moves = _moves(x)
     if moves.size > 10:
         q = float(np.min(moves))
         if q > 0 and np.mean(np.abs(moves / q - np.round(moves / q)) < 0.01) > 0.95:
@@ -63,11 +64,27 @@ def noise_sigma(x: np.ndarray) -> float:
     return sigma
 
 
+def _moves(x: np.ndarray) -> np.ndarray:
+    """|x_k+1 - x_k| of the samples where x moves at all."""
+    dx = np.abs(np.diff(x))
+    return dx[dx > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)] if dx.size else dx
+
+
+def is_exact(x: np.ndarray) -> bool:
+    """True for an exact drive (a commanded position, a noise-free simulation): its noise is below EXACT of
+    its median per-sample move, so every reversal in it is motion (an operator's tremor reverses a command
+    hundreds of times in 20 s, and a friction flips with each) and nothing is smoothed or thresholded."""
+    moves = _moves(x)
+    return bool(moves.size) and noise_sigma(x) <= EXACT * float(np.median(moves))
+
+
 def smooth_width(x: np.ndarray, dt: float) -> int:
     """Odd moving-average width [samples] for input x sampled every dt: enough that the rate noise (sigma /
     (w dt) after a w-sample average and a central difference, sigma from `noise_sigma`) stays below
     RATE_NOISE of the rate's 99th percentile, at least SMOOTH_S and at most SMOOTH_MAX_S; an exact signal
     (no noise, no quantisation: a commanded position) is not smoothed."""
+    if is_exact(x):
+        return 1
     hi = max(1, int(round(SMOOTH_MAX_S / dt)))
     sigma = noise_sigma(x)
     lo = max(1, int(round(SMOOTH_S / dt))) if sigma > 0 else 1
@@ -165,6 +182,8 @@ class LinkData:
     theta: np.ndarray | None
     resolution_s: float = 0.0
     known: dict = field(default_factory=dict)   # {effect: {param: value}} the user's simulation already knows
+    backward: bool = False   # an exact drive's rate as the backward difference (clean_motion)
+    v: np.ndarray | None = None   # the drive's rate, taken before decimation (an exact drive's reversals)
     cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property
@@ -172,10 +191,15 @@ class LinkData:
         return int(self.t.shape[0])
 
     def window(self, sl) -> "LinkData":
+        """The samples `sl` (a decimating stride included). An exact drive's rate is taken on all samples
+        first: a stride would step over the reversals of an operator's tremor, where a friction flips."""
         def cut(a):
             return None if a is None else a[sl]
+        v = self.v
+        if v is None and self.x is not None and sl.step not in (None, 1) and is_exact(self.x):
+            v = clean_motion(self.x, self.t, self.backward)[1]
         return LinkData(self.link, self.t[sl], self.u[sl], self.y[sl], cut(self.x), cut(self.load),
-                        cut(self.temperature), cut(self.theta), self.resolution_s, self.known)
+                        cut(self.temperature), cut(self.theta), self.resolution_s, self.known, self.backward, cut(v))
 
 
 def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_input: bool = False) -> LinkData:
@@ -262,14 +286,25 @@ class LinkModel:
 STOP_S = 0.05   # a quiet stretch (|v| within the noise) longer than this is a stop, not a reversal
 
 
-def clean_motion(x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def clean_motion(x: np.ndarray, t: np.ndarray, backward: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """(x, v) of drive x with its rate's sign cleaned: where |v| is within the noise (3 sigma of the
     differentiated noise), a short quiet stretch (a reversal) keeps its direction up to its middle and
     switches there instead of flickering with the noise; a stretch longer than STOP_S is a stop: v = 0
     (sign(0) = 0, as the catalogue's rate laws define it) and x held, so that no state model integrates
-    the sensor noise of a motor at rest. Magnitudes are kept elsewhere."""
+    the sensor noise of a motor at rest. Magnitudes are kept elsewhere. An exact drive (`is_exact`) is
+    taken as it is, every reversal in it motion; its rate is the central difference (the catalogue's array
+    forms, teleop.physics Signals) or, with `backward`, the backward difference (the motion over the interval
+    that ends at the sample, as a per-sample simulation such as the simulated robot's steps applies it): at a
+    reversal they differ by one sample, and an operator's tremor reverses a command hundreds of times."""
+    if x.size > 1 and is_exact(x):
+        if not backward:
+            return x, np.gradient(x, t)
+        v = np.empty_like(x)
+        v[1:] = np.diff(x) / np.diff(t)
+        v[0] = v[1]
+        return x, v
     v = np.gradient(x, t)
-    # the rate's noise: x's own (second differences, `noise_sigma`) through the central difference; the
+    # the rate's noise: x's own (third differences, `noise_sigma`) through the central difference; the
     # motion's fast content is not noise (a commanded position's jitter is motion)
     eps = 3.0 * noise_sigma(x) / float(np.median(np.diff(t)))
     s = np.where(v > eps, 1.0, np.where(v < -eps, -1.0, 0.0))
@@ -309,7 +344,7 @@ def _template(d: LinkData, m: LinkModel) -> Signals:
     if key not in d.cache:
         kw = {"t": d.t}
         if d.x is not None:
-            xc, vc = clean_motion(d.x, d.t)
+            xc, vc = (d.x, d.v) if d.v is not None else clean_motion(d.x, d.t, d.backward)
             kw["x"] = m.direction * xc
             kw["v"] = m.direction * vc
         if d.temperature is not None:

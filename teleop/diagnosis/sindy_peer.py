@@ -29,7 +29,7 @@ THRESHOLDS = (1e-3, 1e-2, 3e-2, 1e-1)   # STLSQ thresholds tried (on standardise
 def _inputs(d: LinkData) -> tuple[np.ndarray, list[str]]:
     cols, names = [d.u], ["u"]
     if d.x is not None:
-        _, v = clean_motion(d.x, d.t)
+        _, v = clean_motion(d.x, d.t, d.backward)
         scale = max(float(np.percentile(np.abs(v), 99)), 1e-300)
         cols += [v / scale, np.sign(v)]
         names += ["v", "sign_v"]

@@ -1,7 +1,8 @@
 """The diagnosis handed back to the simulation, on a real recorded session (teleop bench session-diagnose): a
 Coulomb friction switched on in the simulated robot beyond its sheath's capstan is named on the exported
-cable, and the model saved from the diagnosis, loaded back into the simulated robot, replays the session's
-commands with a residual several times smaller than the plain robot's."""
+cable, in every column subset, and the model saved from the diagnosis, loaded back into the simulated robot,
+replays the session's commands with a residual several times smaller than the plain robot's; a compound
+(Coulomb + viscous) is named as both."""
 
 import pytest
 
@@ -11,13 +12,21 @@ from teleop.errors import InputError
 
 def test_coulomb_found_in_a_session_and_handed_back(tmp_path):
     # 20 s (ten pokes) on the simulated clock: the same session on any machine (paced, the CI's run named the
-    # Coulomb friction a sensor hysteresis of the same size: motion and force reverse together in a poke).
-    # Seeds 1-6 (--truth drive): Coulomb named first on 5, Fc 0.266-0.270 N; seed 5 a sensor hysteresis
-    out = bench_session_diagnosis("coulomb_friction", {"Fc": 0.3}, seconds=20.0, seed=1, cable=1, work=tmp_path)
+    # Coulomb friction a sensor hysteresis of the same size: motion and force reverse together in a poke)
+    out = bench_session_diagnosis([("coulomb_friction", {"Fc": 0.3})], seconds=20.0, seed=1, cable=1, work=tmp_path)
     assert out["found"] and out["found"][0]["effect"] == "coulomb_friction", out["found"]
+    assert all(s["named"] for s in out["subsets"]), out["subsets"]
+    assert [s["columns"] for s in out["subsets"]][1:] == ["no tip position", "no bend", "no tip position, no bend"]
     assert out["replay_rmse_N"]["as_recorded"] < 1e-9      # the replay is the recorded robot, reading by reading
-    assert abs(out["recovered"]["Fc"] - 0.3) < 0.2 * 0.3
-    assert out["shrink"] >= 2.0, out["replay_rmse_N"]
+    assert abs(out["recovered"]["coulomb_friction"]["Fc"] - 0.3) < 0.1 * 0.3
+    assert out["shrink"] >= 2.0 and out["pass"], out["replay_rmse_N"]
+
+
+def test_a_compound_is_named_as_both(tmp_path):
+    out = bench_session_diagnosis([("coulomb_friction", {"Fc": 0.3}), ("viscous_friction", {"b": 20.0})],
+                                  seconds=20.0, seed=1, cable=1, work=tmp_path, subsets=False)
+    assert {f["effect"] for f in out["found"]} >= {"coulomb_friction", "viscous_friction"}, out["found"]
+    assert out["found"][0]["effect"] == "coulomb_friction" and out["shrink"] >= 2.0
 
 
 @pytest.mark.parametrize("text, match", [("coulomb_friction:Fk=1", "no parameter 'Fk'"),
