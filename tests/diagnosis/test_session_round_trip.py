@@ -18,15 +18,17 @@ def test_coulomb_found_in_a_session_and_handed_back(tmp_path):
     assert all(s["named"] for s in out["subsets"]), out["subsets"]
     assert [s["columns"] for s in out["subsets"]][1:] == ["no tip position", "no bend", "no tip position, no bend"]
     assert out["replay_rmse_N"]["as_recorded"] < 1e-9      # the replay is the recorded robot, reading by reading
-    assert abs(out["recovered"]["coulomb_friction"]["Fc"] - 0.3) < 0.1 * 0.3
-    assert out["shrink"] >= 2.0 and out["pass"], out["replay_rmse_N"]
+    assert abs(out["recovered"]["coulomb_friction"]["Fc"] - 0.3) < 0.05 * 0.3
+    assert out["shrink"] >= 10.0 and out["pass"], out["replay_rmse_N"]
 
 
 def test_a_compound_is_named_as_both(tmp_path):
     out = bench_session_diagnosis([("coulomb_friction", {"Fc": 0.3}), ("viscous_friction", {"b": 20.0})],
                                   seconds=20.0, seed=1, cable=1, work=tmp_path, subsets=False)
     assert {f["effect"] for f in out["found"]} >= {"coulomb_friction", "viscous_friction"}, out["found"]
-    assert out["found"][0]["effect"] == "coulomb_friction" and out["shrink"] >= 2.0
+    assert out["found"][0]["effect"] in ("coulomb_friction", "viscous_friction") and out["pass"]
+    assert abs(out["recovered"]["coulomb_friction"]["Fc"] - 0.3) < 0.1 * 0.3
+    assert abs(out["recovered"]["viscous_friction"]["b"] - 20.0) < 0.2 * 20.0
 
 
 @pytest.mark.parametrize("text, match", [("coulomb_friction:Fk=1", "no parameter 'Fk'"),
