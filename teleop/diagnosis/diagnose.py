@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.diagnosis.identify import Fit, LinkResult, identify_link, rms, simulation_baseline
+from teleop.diagnosis.identify import Fit, LinkResult, fit_chain, identify_link, rms, simulation_baseline
 from teleop.diagnosis.links import LinkData, find_links, is_exact, link_data, predict
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
@@ -229,6 +229,23 @@ def sensor_correction(res: LinkResult) -> np.ndarray | None:
     return predict(res.data, m) - predict(res.data, plain)
 
 
+def exact_rate(d: LinkData, fit_idx: slice, hold_idx: slice, baseline: tuple, seed: int) -> LinkData:
+    """`d` with the rate convention of its exact drive that the held-out part prefers: the central difference
+    of the catalogue's array forms or the backward one of a per-sample simulation (at a reversal they differ
+    by one sample, and an operator's tremor reverses a command hundreds of times). The probe: the baseline
+    with the simplest rate law on it (Coulomb friction), fitted each way."""
+    best, pick = math.inf, d
+    for cand in (d, dataclasses.replace(d, backward=True, cache={})):
+        base = simulation_baseline(cand, fit_idx, hold_idx, baseline, seed)
+        try:
+            r = fit_chain(cand, base.model, ("coulomb_friction",), fit_idx, hold_idx, seed=seed).rmse_hold
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            r = base.rmse_hold
+        if r < best:
+            best, pick = r, cand
+    return pick
+
+
 def _drive_rate(d: LinkData) -> str:
     """How the link's drive rate was taken (links.clean_motion)."""
     if not is_exact(d.x):
@@ -256,21 +273,17 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
             without = simulation_baseline(plain, fit_idx, hold_idx, tuple(baseline), seed)
             if without.rmse_hold <= with_c.rmse_hold:
                 d = plain
+        if link.kind == "force" and link.drive and is_exact(d.x):
+            d = exact_rate(d, fit_idx, hold_idx, tuple(baseline), seed)
         res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed,
                                         baseline=tuple(baseline))
-        if link.kind == "position" and "backlash" in res.final.names:
-            # a play seen on the raw input too: keep whichever input the held-out part prefers
+        if link.kind == "position" and "backlash" in res.final.names and not is_exact(rec.channels[link.input]):
+            # a play seen on the raw input too: keep whichever input the held-out part prefers (an exact
+            # input is not smoothed: its raw form is the same)
             d_raw = link_data(rec, link, corrections, raw_input=True)
             raw = identify_link(d_raw, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline))
             if raw.final.rmse_hold < res.final.rmse_hold and "backlash" in raw.final.names:
                 d, res = d_raw, raw
-        if link.kind != "contact" and link.drive and is_exact(d.x):
-            # an exact drive's rate at its reversals: the central difference of the catalogue's array forms or
-            # the backward one of a per-sample simulation; the held-out part says which this recording follows
-            d_b = dataclasses.replace(d, backward=True, cache={})
-            res_b = identify_link(d_b, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline))
-            if res_b.final.rmse_hold < res.final.rmse_hold:
-                d, res = d_b, res_b
         results.append(res)
         corr = sensor_correction(res)
         if corr is not None:
