@@ -40,7 +40,7 @@ from teleop.kinematics import FREE_AXIAL, check_lengths, poses2lengths
 from teleop.physics import get_effect
 from teleop.physics.backlash import backlash
 from teleop.robot_status import robot_status
-from teleop.sensors import FsrBranchLag, FsrCalibration, default_fsr_calibration
+from teleop.sensors import FsrBranchLag, FsrCalibration, adc_counts, default_fsr_calibration
 from teleop.tension import TensionSolver, wrench2tensions
 
 
@@ -210,8 +210,7 @@ def fsr_conductance(u, cal: FsrCalibration) -> np.ndarray:
 
 def counts_from(g, cal: FsrCalibration, noise) -> np.ndarray:
     """Rounded, clipped ADC counts (int64) for conductance g [S] plus noise [counts]."""
-    c = cal.conductance2counts(g) + noise
-    return np.clip(np.rint(c), 0, cal.adc_max).astype(np.int64)
+    return adc_counts(cal.conductance2counts(g) + noise, cal.adc_max)
 
 
 @dataclass

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.polynomial import Polynomial
 
 from teleop.errors import InputError
-from teleop.kernels.sensor import branch_lag_loop, fsr_counts
+from teleop.kernels.sensor import branch_lag_loop, conductance_loop, fsr_counts, polynomial_loop
 
 G = 9.80665  # standard gravity [m/s^2], converts the seed's calibration weights to newtons
 LOADING, UNLOADING = 1, -1
@@ -151,7 +151,7 @@ class FsrCalibration:
         grid = np.linspace(0.0, self.t_max, self.table_size)
         tables = {}
         for b, coefs in ((LOADING, self.loading), (UNLOADING, self.unloading)):
-            g = Polynomial(coefs)(grid)
+            g = polynomial_loop(grid, np.asarray(coefs, dtype=float), np.empty(grid.shape[0]))
             # monotone inversion: a quintic can wiggle at the ends; keep the running maximum so the
             # table reading -> tension is non-decreasing, then drop repeated readings.
             g = np.maximum.accumulate(g)
@@ -165,9 +165,10 @@ class FsrCalibration:
         """Conductance [S] for tension t [N] on `branch` (+1 loading, -1 unloading), array-broadcast."""
         t = np.asarray(t, dtype=float)
         b = np.broadcast_to(np.asarray(branch), t.shape)
-        gl = Polynomial(self.loading)(t)
-        gu = Polynomial(self.unloading)(t)
-        return np.maximum(np.where(b == UNLOADING, gu, gl), 0.0)
+        flat = np.ascontiguousarray(t.reshape(-1))
+        gl, gu = (conductance_loop(flat, np.asarray(c, dtype=float), np.empty(flat.shape[0])).reshape(t.shape)
+                  for c in (self.loading, self.unloading))
+        return np.where(b == UNLOADING, gu, gl)
 
     def tension(self, reading, branch) -> np.ndarray:
         """Tension [N] for conductance `reading` [S] on `branch` (inverse of `reading`; 0 below, linear above)."""
@@ -352,7 +353,15 @@ def synthesize_fsr_counts(t, branch, cal: FsrCalibration, rng: np.random.Generat
         if rng is None:
             raise ValueError("synthesize_fsr_counts: noise needs a seeded rng")
         c = c + rng.normal(0.0, noise_counts, np.shape(c))
-    return np.clip(np.rint(c), 0, cal.adc_max).astype(np.int64)
+    return adc_counts(c, cal.adc_max)
+
+
+def adc_counts(c, adc_max) -> np.ndarray:
+    """Rounded, clipped ADC counts (int64) for counts c (float, unrounded): kernel sensor.adc_round."""
+    from teleop.kernels.jit import broadcast_call
+    from teleop.kernels.sensor import adc_round_loop
+
+    return np.asarray(broadcast_call(adc_round_loop, c, adc_max)).astype(np.int64)
 
 
 class FsrConverter:

@@ -6,6 +6,7 @@
     loading_conductance   the loading branch's conductance [S]: max(sum_j c_j u^j, 0)
     conductance2counts    the divider and ADC: adc_max G R / (1 + G R) [counts, unrounded]
     adc_round         rounded, clipped counts: clip(rint(c), 0, adc_max)
+    polynomial_loop, conductance_loop, adc_round_loop   element-wise forms (FsrCalibration, the simulated robot)
     fsr_counts        one reading of n FSRs: tensions at the FSRs -> lag -> conductance -> counts + noise
 """
 
@@ -44,6 +45,31 @@ def conductance2counts(g, r_divider, adc_max):
 def adc_round(c, adc_max):
     """Counts c rounded half to even and clipped to [0, adc_max] (the ADC's integer reading, as a float)."""
     return min(max(np.rint(c), 0.0), adc_max)
+
+
+@njit
+def polynomial_loop(u, c, out):
+    """out (m,) = sum_j c_j u_j^j (linalg.horner; numpy's polyval's order of operations) for u (m,)."""
+    for k in range(u.shape[0]):
+        out[k] = horner(c, u[k])
+    return out
+
+
+@njit
+def conductance_loop(u, c, out):
+    """out (m,): max(sum_j c_j u^j, 0) for equivalent tensions u (m,) [N]: an FSR branch's conductance [S]
+    from the calibration's power-series coefficients c (loading_conductance element-wise)."""
+    for k in range(u.shape[0]):
+        out[k] = loading_conductance(c, u[k])
+    return out
+
+
+@njit
+def adc_round_loop(c, adc_max, out):
+    """adc_round element-wise (1-D arrays of one length, jit.broadcast_call)."""
+    for k in range(out.shape[0]):
+        out[k] = adc_round(c[k], adc_max[k])
+    return out
 
 
 @njit

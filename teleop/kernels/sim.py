@@ -20,7 +20,7 @@ from teleop.kernels.friction import capstan_play_step
 from teleop.kernels.geometry import cable, forward_kinematics, lengths_outside, platform_offsets, rotation_zyx, \
     structure_column, wrap_angle
 from teleop.kernels.jit import njit
-from teleop.kernels.sensor import fsr_counts, loading_conductance
+from teleop.kernels.sensor import conductance_loop, fsr_counts  # noqa: F401 (conductance_loop: KS.conductance_loop)
 from teleop.kernels.tension import OK, null1_terms, null1_tensions
 
 
@@ -93,15 +93,6 @@ def contact_moment(o, F, out):
     out[5] = o[0] * F[1] - o[1] * F[0]
 
 
-
-
-@njit
-def conductance_loop(u, c, out):
-    """out (m,): max(sum_j c_j u^j, 0) for equivalent tensions u (m,) [N]: an FSR's loading-branch
-    conductance [S] from the calibration's power-series coefficients c."""
-    for k in range(u.shape[0]):
-        out[k] = loading_conductance(c, u[k])
-    return out
 
 
 @njit
