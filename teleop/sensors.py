@@ -19,7 +19,9 @@ import numpy as np
 from numpy.polynomial import Polynomial
 
 from teleop.errors import InputError
-from teleop.kernels.sensor import branch_lag_loop, conductance_loop, fsr_counts, polynomial_loop
+from teleop.kernels.jit import broadcast_call
+from teleop.kernels.sensor import (adc_round_loop, branch_lag_loop, conductance2counts_loop, conductance_loop,
+                                   fbg_force_loop, fsr_counts, polynomial_loop)
 
 G = 9.80665  # standard gravity [m/s^2], converts the seed's calibration weights to newtons
 LOADING, UNLOADING = 1, -1
@@ -206,9 +208,6 @@ class FsrCalibration:
     def conductance2counts(self, g) -> np.ndarray:
         """ADC counts (float, unrounded) for conductance g [S]: adc_max G R / (1 + G R) (kernel
         sensor.conductance2counts, array-broadcast)."""
-        from teleop.kernels.jit import broadcast_call
-        from teleop.kernels.sensor import conductance2counts_loop
-
         return broadcast_call(conductance2counts_loop, g, self.r_divider, self.adc_max)
 
 
@@ -358,9 +357,6 @@ def synthesize_fsr_counts(t, branch, cal: FsrCalibration, rng: np.random.Generat
 
 def adc_counts(c, adc_max) -> np.ndarray:
     """Rounded, clipped ADC counts (int64) for counts c (float, unrounded): kernel sensor.adc_round."""
-    from teleop.kernels.jit import broadcast_call
-    from teleop.kernels.sensor import adc_round_loop
-
     return np.asarray(broadcast_call(adc_round_loop, c, adc_max)).astype(np.int64)
 
 
@@ -432,9 +428,6 @@ class FbgParams:
 def fbg2force(dl1_pm, dl2_pm, p: FbgParams = FbgParams()) -> np.ndarray:
     """Force [N] F = (dl2 - r dl1) / S from Bragg shifts of FBG1 (temperature) and FBG2 (force + temperature) [pm]
     (kernel sensor.fbg_force, array-broadcast)."""
-    from teleop.kernels.jit import broadcast_call
-    from teleop.kernels.sensor import fbg_force_loop
-
     return np.asarray(broadcast_call(fbg_force_loop, dl1_pm, dl2_pm, p.r, p.S_pm_N))
 
 
