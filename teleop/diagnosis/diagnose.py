@@ -130,10 +130,13 @@ class Diagnosis:
                     before = Fit(after.model, {}, math.nan, rms((d.y - y1_without)[self.hold]), after.k, after.n_eff)
                 y0 = predict(d, before.model)
                 loc = locate(d, d.y - y0, d.y, index=self.hold, change=y1 - y1_without)
-                params = dict(after.model.effects)[name]
-                block = _param_block(self.rec, d, name, params, after.stderr.get(name, {}))
+                # the parameters as identified: the final model's (an effect added later is fitted jointly
+                # with those before it, which then give up what they had absorbed of it)
+                final = res.final
+                params = dict(final.model.effects)[name]
+                block = _param_block(self.rec, d, name, params, final.stderr.get(name, {}))
                 if name == "backlash" and not d.link.through_spring:  # also in motor units
-                    g = abs(after.model.gain)
+                    g = abs(final.model.gain)
                     w = block["width"]
                     block["width_input"] = {"value": w["value"] / g,
                                             "stderr": None if w["stderr"] is None else w["stderr"] / g,
@@ -152,7 +155,15 @@ class Diagnosis:
                     "link": d.link.kind,
                     "alternatives": [{"effect": n, "rmse_after": r} for n, r in alts],
                 })
-        out.sort(key=lambda f: -f["improvement"])
+        # importance: the channels by what their first finding explains (the improvement ratio, comparable
+        # across units); within a channel the greedy order, each effect added where it explained most of what
+        # was left (a Coulomb friction that takes 0.35 N to 0.055 N comes before the viscous friction that
+        # takes 0.055 N to 0.004 N, though the latter's ratio is larger)
+        lead = {}
+        for f in out:
+            lead.setdefault(f["channel"], f["improvement"])
+        order = {id(f): k for k, f in enumerate(out)}
+        out.sort(key=lambda f: (-lead[f["channel"]], f["channel"], order[id(f)]))
         return out
 
     def unexplained(self) -> list[dict]:
