@@ -222,3 +222,11 @@ def test_run_stepped_ticks_at_exact_periods_and_sets_the_devices_clock():
     assert tp.times == pytest.approx([k * 250e-6 for k in range(40)], rel=1e-12, abs=0)  # whatever the speed
     assert seen == tp.times                                # the devices read the tick's own time
     assert log.n == 40 and not log.lateness[:40].any() and list(log.start[:3]) == [0, 250_000, 500_000]
+
+
+def test_run_stepped_keeps_its_own_clock_when_none_is_given():
+    from teleop.loop.timing import run_stepped
+
+    tp = Stub()
+    log = run_stepped(tp, 0.003, 1000.0)
+    assert tp.times == pytest.approx([0.0, 1e-3, 2e-3], rel=1e-12, abs=0) and log.n == 3

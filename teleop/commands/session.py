@@ -85,7 +85,9 @@ def run(args) -> int:
         raise InputError(f"--record {args.record}: expected a file name ending in .mcap")
     if args.sim_clock and not args.robot_inline:
         raise InputError("--sim-clock needs --robot-inline (a robot process runs on the wall clock)")
-    if args.sim_clock and not args.haptic.startswith(("sim://?", "sim://#")) and args.haptic != "sim://":
+    from teleop.loop.session import is_simulated_stylus
+
+    if args.sim_clock and not is_simulated_stylus(args.haptic):
         raise InputError(f"--sim-clock needs a simulated stylus (--haptic sim://...), got {args.haptic}")
     if args.live is not None:
         from teleop.live.server import check_port

@@ -22,7 +22,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from teleop.diagnosis.links import (LinkData, LinkModel, effect_signals, fast_replace, fit_baseline,
-                                   is_contact_law, predict)
+                                   is_contact_law, moves, predict)
 from teleop.physics import REGISTRY, get_effect
 
 ACCEPT = 1.20        # held-out RMSE must fall by >= 20 % for an effect to be named
@@ -244,11 +244,8 @@ def wrong_form(name: str, params: dict, d: LinkData) -> bool:
 
 def drive_step(d: LinkData) -> float:
     """The drive's typical travel [its unit] in one sample: the median per-sample move while moving."""
-    dx = np.abs(np.diff(d.x))
-    moving = dx[dx > 1e-9 * max(float(np.max(dx)), 1e-300)] if dx.size else dx
-    if not moving.size:
-        return 0.0
-    return float(np.median(moving))
+    moving = moves(d.x)
+    return float(np.median(moving)) if moving.size else 0.0
 
 
 def _pick(cands: list[Fit], d: LinkData) -> Fit | None:

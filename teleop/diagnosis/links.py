@@ -56,16 +56,16 @@ def noise_sigma(x: np.ndarray) -> float:
     commanded position)."""
     d3 = np.diff(x, 3)
     sigma = 1.4826 * float(np.median(np.abs(d3 - np.median(d3)))) / np.sqrt(20.0) if d3.size else 0.0
-    moves = _moves(x)
-    if moves.size > 10:
-        q = float(np.min(moves))
-        if q > 0 and np.mean(np.abs(moves / q - np.round(moves / q)) < 0.01) > 0.95:
+    steps = moves(x)
+    if steps.size > 10:
+        q = float(np.min(steps))
+        if q > 0 and np.mean(np.abs(steps / q - np.round(steps / q)) < 0.01) > 0.95:
             sigma = max(sigma, q / np.sqrt(12.0))
     return sigma
 
 
-def _moves(x: np.ndarray) -> np.ndarray:
-    """|x_k+1 - x_k| of the samples where x moves at all."""
+def moves(x: np.ndarray) -> np.ndarray:
+    """|x_k+1 - x_k| of the samples where x moves at all (identify.drive_step, noise_sigma, is_exact)."""
     dx = np.abs(np.diff(x))
     return dx[dx > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)] if dx.size else dx
 
@@ -74,8 +74,8 @@ def is_exact(x: np.ndarray) -> bool:
     """True for an exact drive (a commanded position, a noise-free simulation): its noise is below EXACT of
     its median per-sample move, so every reversal in it is motion (an operator's tremor reverses a command
     hundreds of times in 20 s, and a friction flips with each) and nothing is smoothed or thresholded."""
-    moves = _moves(x)
-    return bool(moves.size) and noise_sigma(x) <= EXACT * float(np.median(moves))
+    steps = moves(x)
+    return bool(steps.size) and noise_sigma(x) <= EXACT * float(np.median(steps))
 
 
 def smooth_width(x: np.ndarray, dt: float) -> int:
@@ -196,8 +196,10 @@ class LinkData:
         def cut(a):
             return None if a is None else a[sl]
         v = self.v
-        if v is None and self.x is not None and sl.step not in (None, 1) and is_exact(self.x):
-            v = clean_motion(self.x, self.t, self.backward)[1]
+        if v is None and self.x is not None and sl.step not in (None, 1):
+            if "exact_rate" not in self.cache:   # once per LinkData: fits decimate it again and again
+                self.cache["exact_rate"] = clean_motion(self.x, self.t, self.backward)[1] if is_exact(self.x) else None
+            v = self.cache["exact_rate"]
         return LinkData(self.link, self.t[sl], self.u[sl], self.y[sl], cut(self.x), cut(self.load),
                         cut(self.temperature), cut(self.theta), self.resolution_s, self.known, self.backward, cut(v))
 

@@ -156,6 +156,11 @@ def default_estimator(frame_dt: float, cal=None):
     return ReadingEstimator(default_geometry(), "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt))
 
 
+def is_simulated_stylus(url: str) -> bool:
+    """True for a `sim://` stylus URL (devices.simulated), the one device that can run on a simulated clock."""
+    return url == "sim://" or url.startswith(("sim://?", "sim://#"))
+
+
 def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | None = None,
                 params: LoopParams | None = None, estimator=None, seed: int | None = None,
                 spin_us: float | None = None, flush_interval: float = 0.1, haptic=None, robot=None,
@@ -183,7 +188,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     realtime = realtime and not sim_clock  # flat out under SCHED_FIFO would starve the machine
     clock = SimClock() if sim_clock else None
     if sim_clock and haptic is None:
-        if not haptic_url.startswith("sim://?") and haptic_url != "sim://":
+        if not is_simulated_stylus(haptic_url):
             raise ValueError(f"a simulated clock needs a simulated stylus (sim://), got {haptic_url}")
         haptic = open_device(haptic_url, clock=clock)
     params = params or LoopParams()

@@ -224,6 +224,7 @@ def run_stepped(tp, seconds: float, rate_hz: float, log: TimingLog | None = None
     if on_start is not None:
         on_start(time.time_ns())
     tp.start(0.0)
+    clock = clock if clock is not None else SimClock()
     for k in range(n):
         tp.lateness_ns = 0
         clock.now = now = k * period * 1e-9
