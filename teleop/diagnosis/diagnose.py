@@ -88,7 +88,10 @@ def _param_block(rec: Recording, d: LinkData, name: str, params: dict, stderr: d
     pos, force = _link_units(rec, d)
     eff = get_effect(name)
     out = {}
+    plain = all(params[s.name] == s.default and s.name not in stderr for s in eff.params if s.shape)
     for spec in eff.params:
+        if spec.shape and plain:   # the plain form: its general form's parameters say nothing
+            continue
         se = stderr.get(spec.name)
         out[spec.name] = {"value": float(params[spec.name]),
                           "stderr": None if se is None else float(se),

@@ -39,18 +39,19 @@ EXCLUDED = ("linear_contact", "thermal_drift_time")
 ALTERNATIVES_TO_CAPSTAN = ("pulley_friction",)
 
 
-def fixed_params(d: LinkData, name: str) -> dict:
+def fixed_params(d: LinkData, name: str, general: bool = False) -> dict:
     """Parameters held fixed when fitting `name` on link data d: those identifiable only as a product or
     sum with another (capstan theta with mu, unless a bend-angle channel is recorded; a pulley chain's
-    wrap with its mu; the thermal T0 with the baseline offset), and those the recording's metadata says the
-    user's simulation already has (`LinkData.known`)."""
-    out = {}
+    wrap with its mu; the thermal T0 with the baseline offset), the parameters of the effect's general
+    form at their plain defaults (ParamSpec.shape) unless `general`, and those the recording's metadata
+    says the user's simulation already has (`LinkData.known`)."""
+    out = {} if general else {s.name: s.default for s in get_effect(name).params if s.shape}
     if name == "capstan_friction":
-        out = {"theta": get_effect(name).spec("theta").default}
+        out["theta"] = get_effect(name).spec("theta").default
     elif name in ("pulley_friction", "pulley_elongation"):   # mu and the wrap: only their product shows
-        out = {"wrap": get_effect(name).spec("wrap").default}
+        out["wrap"] = get_effect(name).spec("wrap").default
     elif name == "thermal_drift" and d.temperature is not None:
-        out = {"T0": float(np.mean(d.temperature))}
+        out["T0"] = float(np.mean(d.temperature))
     return {**out, **d.known.get(name, {})}
 
 
@@ -134,10 +135,22 @@ def _target_signals(d: LinkData, m: LinkModel, name: str):
     return fast_replace(sig, force=predict(d, m) - m.offset), d.y - m.offset
 
 
+def held_params(d: LinkData, name: str, p: dict, free_shape: tuple = ()) -> dict:
+    """Parameters of effect `name` (current values p) that a fit of the chain holds: fixed_params, and the
+    general form's parameters (ParamSpec.shape) while they are at their plain defaults, unless named
+    "name.param" in free_shape (a chain whose effect has its general form keeps fitting it)."""
+    out = fixed_params(d, name, general=True)
+    for spec in get_effect(name).params:
+        if spec.shape and f"{name}.{spec.name}" not in free_shape and p.get(spec.name, spec.default) == spec.default:
+            out.setdefault(spec.name, spec.default)
+    return out
+
+
 def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_idx: slice,
-              starts: int = 1, seed: int = 0, freeze: bool = False) -> Fit:
+              starts: int = 1, seed: int = 0, freeze: bool = False, free_shape: tuple = ()) -> Fit:
     """Fit baseline gain/offset and the parameters of effects `names` (appended to start's chain);
-    freeze: keep the parameters of start's effects (a quick screen of an addition)."""
+    freeze: keep the parameters of start's effects but their states (ParamSpec.state; a quick screen of an
+    addition); free_shape: general form parameters ("effect.param") fitted as well (see held_params)."""
     effects = list(start.effects)
     known = {n for n, _ in effects}
     for name in names:
@@ -150,10 +163,11 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
     # free parameter layout: gain, offset, then each effect's free params in the unit space of its specs
     layout, k = [], 2
     for i, (name, p) in enumerate(effects):
+        held = held_params(d, name, p, free_shape)
         for spec in get_effect(name).params:
-            if spec.name not in fixed_params(d, name):
+            if spec.name not in held:
                 k += 1
-                if not (freeze and i < len(start.effects)):
+                if not (freeze and i < len(start.effects)) or spec.state:   # a state is the record's own
                     layout.append((i, spec))
     ysc = max(float(np.std(d.y[fit_idx])), 1e-12)
     g0 = start.gain if start.gain != 0 else 1.0
@@ -213,7 +227,7 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
     # a baseline effect may end on a bound (mu = 0: this sheath has no capstan friction); an added
     # effect that does has the wrong form for the data
     pinned = tuple(f"{model.effects[i][0]}.{spec.name}" for (i, spec), wi in zip(layout, best.x[2:])
-                   if i >= model.base and min(1 + math.sin(wi), 1 - math.sin(wi)) < 2e-3)
+                   if i >= model.base and not spec.state and min(1 + math.sin(wi), 1 - math.sin(wi)) < 2e-3)
     return Fit(model, stderr, rf, rms(r_all[hold_idx]), k, n_eff, pinned)
 
 
@@ -407,6 +421,8 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
                 delay = (tau, r_delay)   # a plain delay explains it better: name nothing
                 break
         pays = pick is not None and (pick.rmse_hold * ACCEPT <= current.rmse_hold) and delta_bic(pick, current) < 0
+        if pays:
+            pick = general_form(d, pick, [n for n in pick.names if n not in current.names], fit_idx, hold_idx, seed)
         if pays and foreign(d, current, pick, hold_idx):
             break
         if not pays and round_ == 0 and len(cands) >= 2:
@@ -420,6 +436,29 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
         steps.append((current, pick))
         current = pick
     return LinkResult(d, base, tuple(steps), ranking, current, delay)
+
+
+def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:
+    """`pick` with the general form of the effects it adds (ParamSpec.shape: backlash's elastic part, wide
+    play, growth with position and start) when that form pays: held-out RMSE lower by more than PARSIMONY
+    and a better information criterion. A shape parameter that ends on its plain bound is held there and
+    the rest refitted once. Else `pick` as it is."""
+    free = tuple(f"{n}.{s.name}" for n in added for s in get_effect(n).params if s.shape)
+    if not free:
+        return pick
+    for _ in range(2):
+        try:
+            f = fit_chain(d, pick.model, (), fit_idx, hold_idx, seed=seed, free_shape=free)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            return pick
+        if not f.at_bound:
+            break
+        free = tuple(n for n in free if n not in f.at_bound)
+        if not free:
+            return pick
+    if f.at_bound or f.rmse_hold * (1 + PARSIMONY) > pick.rmse_hold or delta_bic(f, pick) >= 0:
+        return pick
+    return f
 
 
 def _play_restarts(d: LinkData, start: LinkModel, fit_idx: slice, hold_idx: slice, seed: int) -> list:

@@ -16,6 +16,8 @@ simulated robot, the loop's tick) keep the state.
 - `play_inverse_step`: the inverse of the play operator (backlash feed-forward, seed 002): the command
   x = y_d + r s leads the wanted output y_d by up to the half-width r on the side s of its motion,
   rate-limited and kept within limits.
+- `play_mix_step`: the general play (backlash) of a tendon in a sheath: an elastic part, a main play and a
+  wide play, the lag scaling with the position (physics.backlash).
 - `capstan_state_step`: the friction state phi in [-1, 1] of the `dynamic` estimator: the sensor tension
   t e^(phi mu Theta) moves by k dx while the cable sticks, d phi = k dx / (mu Theta t_sensor), clipped at
   +-1 where it slips (a slack cable, t <= 1e-6 N, slips at once).
@@ -129,6 +131,16 @@ def capstan_tip_step(F_tip, F_motor, mu_theta):
     return clamp(F_tip, lo, hi)
 
 
+@njit
+def play_mix_step(z1, z2, x, r1, r2, w1, w2, grow):
+    """One sample of the general play at position x: plays of half-widths r1 and r2 (states z1, z2, clamped
+    into [x - r, x + r]) lag x by (z - x); the output is x + e^(grow x) (w1 (z1 - x) + w2 (z2 - x)), weights w
+    of the two plays (1 - w1 - w2: the elastic part that follows x at once). Returns (z1, z2, y)."""
+    z1 = clamp(z1, x - r1, x + r1)
+    z2 = clamp(z2, x - r2, x + r2)
+    return z1, z2, x + math.exp(grow * x) * (w1 * (z1 - x) + w2 * (z2 - x))
+
+
 # ------------------------------------------------------------------ array forms: loops over the steps above
 @njit
 def dahl_run(x, sigma, Fc, F0, out):
@@ -138,6 +150,17 @@ def dahl_run(x, sigma, Fc, F0, out):
         if k > 0:
             F = dahl_step(F, x[k] - x[k - 1], sigma, Fc)
         out[k] = F
+    return out
+
+
+@njit
+def play_mix_run(x, r1, r2, w1, w2, grow, start, out):
+    """out (n,): play_mix_step along the positions x (n,), each play starting at x[0] + start r (start in
+    [-1, 1]: where in its band the play was when the record began)."""
+    z1 = x[0] + start * r1
+    z2 = x[0] + start * r2
+    for k in range(x.shape[0]):
+        z1, z2, out[k] = play_mix_step(z1, z2, x[k], r1, r2, w1, w2, grow)
     return out
 
 

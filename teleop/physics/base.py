@@ -121,6 +121,11 @@ class ParamSpec:
 
     `log=True` fits it on a log scale (for quantities spanning decades; then lower > 0).
     Values given to an effect must be >= 0 when lower >= 0, and > 0 when `positive` (a divisor).
+    `shape=True`: a parameter of the effect's general form whose default is the plain form (backlash's
+    elastic part, wide play, growth and start): fits hold it at its default unless asked to free it.
+    `state=True`: an initial state of the record, not a property of the link (where a play began in its
+    band): fitted on every recording (never carried from one to another), and a value on a bound is a
+    state the data can hold, not a sign that the effect's form is wrong.
     """
 
     name: str
@@ -131,6 +136,8 @@ class ParamSpec:
     doc: str
     log: bool = False
     positive: bool = False
+    shape: bool = False
+    state: bool = False
 
     def __post_init__(self):
         if not self.lower < self.upper or (self.log and self.lower <= 0):

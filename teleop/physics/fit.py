@@ -61,14 +61,16 @@ def rmse(effect: Effect | str, signals: Signals, y, params: Mapping[str, float],
 
 def fit(effect: Effect | str, signals: Signals, y, fixed: Mapping[str, float] | None = None,
         guess: Mapping[str, float] | None = None, mask=None, n_starts: int = 4, seed: int = 0,
-        max_nfev: int = 200) -> FitResult:
+        max_nfev: int = 200, general: bool = False) -> FitResult:
     """Identify `effect`'s free parameters so that effect.apply(signals, p) matches y (n,).
 
     fixed: parameters held at given values; guess: starting values tried first (the effect's
     data-driven guess is tried as well); mask: (n,) bool or index array of samples that enter the
     residual (the model always runs over the whole signal, so stateful effects see their full history:
     use it for held-out validation);
-    n_starts: number of starts (guesses, then seeded perturbations of the first); seed: for those.
+    n_starts: number of starts (guesses, then seeded perturbations of the first); seed: for those;
+    general: also fit the parameters of the effect's general form (ParamSpec.shape; else held at their
+    defaults, the plain form).
     """
     effect = get_effect(effect) if isinstance(effect, str) else effect
     y = np.asarray(y, dtype=float)
@@ -77,6 +79,8 @@ def fit(effect: Effect | str, signals: Signals, y, fixed: Mapping[str, float] | 
     signals.require(effect.inputs, f"fit '{effect.name}'")
     fixed = dict(fixed or {})
     effect.check(fixed)
+    if not general:
+        fixed = {**{p.name: p.default for p in effect.params if p.shape}, **fixed}
     free = [p for p in effect.params if p.name not in fixed]
     sel = np.arange(y.size) if mask is None else np.asarray(mask)
     if sel.dtype == bool:
