@@ -379,16 +379,26 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
     """Greedy identification on one link beyond its baseline (`simulation_baseline` with the effects
     `baseline`); see the module docstring."""
     base = simulation_baseline(d, fit_idx, hold_idx, baseline, seed)
-    current = base
-    steps = []
     ranking = {}
     pool = [n for n in applicable(d) if n not in base.names]
     if "capstan_friction" in base.names:
         # a lumped pulley chain's friction is the capstan law plus a constant bending loss on force data
         # alone: beside a capstan baseline it would rename Coulomb friction, not find the pulleys
         pool = [n for n in pool if n not in ALTERNATIVES_TO_CAPSTAN]
+    steps, current, delay = _grow(d, base, (), pool, 0, fit_idx, hold_idx, seed, progress, ranking)
+    return LinkResult(d, base, steps, ranking, current, delay)
+
+
+def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int, fit_idx: slice,
+          hold_idx: slice, seed: int, progress, ranking: dict) -> tuple:
+    """The greedy rounds from `first_round` on, from the chain `current` reached by `steps`: (steps,
+    final Fit, delay). Where an added effect's general form pays (`general_form`), the plain form and the
+    general one each continue (the general form competes with the effects the plain one could still take:
+    a play's gradual take-up or a pulley's elongation), and the final chain with the better held-out RMSE is
+    kept (within PARSIMONY, the one with fewer parameters)."""
+    steps = list(steps)
     delay = ()
-    for round_ in range(MAX_EFFECTS):
+    for round_ in range(first_round, MAX_EFFECTS):
         cands = []
         for name in pool:
             if name in current.names:
@@ -415,14 +425,12 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 pass
         if round_ == 0 and d.link.kind != "contact":
-            tau, r_delay = delay_fit(d, fit_idx, hold_idx, base.model)
-            if abs(tau) > 0 and r_delay * ACCEPT <= base.rmse_hold and (
+            tau, r_delay = delay_fit(d, fit_idx, hold_idx, current.model)   # round 0: the baseline
+            if abs(tau) > 0 and r_delay * ACCEPT <= current.rmse_hold and (
                     pick is None or r_delay * (1 + PARSIMONY) < pick.rmse_hold):
                 delay = (tau, r_delay)   # a plain delay explains it better: name nothing
                 break
         pays = pick is not None and (pick.rmse_hold * ACCEPT <= current.rmse_hold) and delta_bic(pick, current) < 0
-        if pays:
-            pick = general_form(d, pick, [n for n in pick.names if n not in current.names], fit_idx, hold_idx, seed)
         if pays and foreign(d, current, pick, hold_idx):
             break
         if not pays and round_ == 0 and len(cands) >= 2:
@@ -433,9 +441,16 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
                 continue
         if not pays:
             break
+        general = general_form(d, pick, [n for n in pick.names if n not in current.names], fit_idx, hold_idx, seed)
+        if general is not pick:
+            ends = [_grow(d, f, tuple(steps) + ((current, f),), pool, round_ + 1, fit_idx, hold_idx, seed,
+                          progress, ranking) for f in (general, pick)]
+            best = min(e[1].rmse_hold for e in ends)
+            close = [e for e in ends if e[1].rmse_hold <= best * (1 + PARSIMONY)]
+            return min(close, key=lambda e: (e[1].k, e[1].rmse_hold))
         steps.append((current, pick))
         current = pick
-    return LinkResult(d, base, tuple(steps), ranking, current, delay)
+    return tuple(steps), current, delay
 
 
 def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:
