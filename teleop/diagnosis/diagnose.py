@@ -88,7 +88,7 @@ def _param_block(rec: Recording, d: LinkData, name: str, params: dict, stderr: d
     pos, force = _link_units(rec, d)
     eff = get_effect(name)
     out = {}
-    plain = all(params[s.name] == s.default and s.name not in stderr for s in eff.params if s.shape)
+    plain = not any(s.name in stderr for s in eff.params if s.shape)   # no general-form parameter fitted
     for spec in eff.params:
         if spec.shape and plain:   # the plain form: its general form's parameters say nothing
             continue

@@ -42,7 +42,8 @@ ALTERNATIVES_TO_CAPSTAN = ("pulley_friction",)
 def fixed_params(d: LinkData, name: str, general: bool = False) -> dict:
     """Parameters held fixed when fitting `name` on link data d: those identifiable only as a product or
     sum with another (capstan theta with mu, unless a bend-angle channel is recorded; a pulley chain's
-    wrap with its mu; the thermal T0 with the baseline offset), the parameters of the effect's general
+    wrap with its mu; the thermal T0 with the baseline offset; backlash's reference position with its
+    width), the parameters of the effect's general
     form at their plain defaults (ParamSpec.shape) unless `general`, and those the recording's metadata
     says the user's simulation already has (`LinkData.known`)."""
     out = {} if general else {s.name: s.default for s in get_effect(name).params if s.shape}
@@ -52,6 +53,8 @@ def fixed_params(d: LinkData, name: str, general: bool = False) -> dict:
         out["wrap"] = get_effect(name).spec("wrap").default
     elif name == "thermal_drift" and d.temperature is not None:
         out["T0"] = float(np.mean(d.temperature))
+    elif name == "backlash":   # the general form's width holds at the record's mean tip position
+        out["x_ref"] = float(np.mean(d.u if d.link.through_spring else d.y))
     return {**out, **d.known.get(name, {})}
 
 

@@ -8,8 +8,9 @@ General form (a tendon in a sheath, measured on a surgical instrument's jaw): th
 and not all of one width. A part of the motion (`elastic`) reaches the tip at once (the preloaded cable's
 stretch unloads first); of the rest, a fraction `tail` is taken up only over a band TAIL_RATIO times wider
 (sheath friction slipping progressively along the tendon: a slow creep after the main take-up); and the lag
-scales as e^(grow x) with the tip's position x (the tendon's tension, and so the friction's stretch, changes
-along the stroke; `width` is then the width at x = 0). `start` in [-1, 1] is where in its band each play was
+scales as e^(grow (x - x_ref)) with the tip's position x (the tendon's tension, and so the friction's
+stretch, changes along the stroke; the scale is 1 at x_ref, where `elastic` is the part that follows at
+once; a fit holds x_ref at the record's mean tip position). `start` in [-1, 1] is where in its band each play was
 when the record began (0: centred). This is a Prandtl-Ishlinskii operator with three play widths (0, w,
 TAIL_RATIO w) and a position-dependent output scale; with elastic = tail = grow = start = 0 it is the plain
 play, computed by the same prefix scan as before. Per sample: kernels.friction.play_mix_step.
@@ -50,7 +51,8 @@ def general_backlash(x: np.ndarray, p: Mapping[str, float]) -> np.ndarray:
     """(n,) tip position [m or rad] of the general form (module docstring) from motor positions x (n,)."""
     x = np.ascontiguousarray(x, dtype=float)
     r1, r2, w1, w2 = mix_layout(p)
-    return play_mix_run(x, r1, r2, w1, w2, float(p["grow"]), float(p["start"]), np.empty_like(x))
+    out = play_mix_run(x - p["x_ref"], r1, r2, w1, w2, float(p["grow"]), float(p["start"]), np.empty_like(x))
+    return out + p["x_ref"]
 
 
 def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
@@ -71,8 +73,10 @@ PARAMS = (ParamSpec("width", "m", 1e-8, 100.0, 5e-4, "total play (dead band) wid
                     "(general form)", shape=True),
           ParamSpec("tail", "1", 0.0, 0.95, 0.0, f"fraction of the play taken up over a {TAIL_RATIO:g}x wider "
                     "band (general form)", shape=True),
-          ParamSpec("grow", "1/m", -50.0, 50.0, 0.0, "the lag scales as exp(grow x) with the tip position x "
-                    "(1/rad for a rotary joint; general form)", shape=True),
+          ParamSpec("grow", "1/m", -50.0, 50.0, 0.0, "the lag scales as exp(grow (x - x_ref)) with the tip "
+                    "position x (1/rad for a rotary joint; general form)", shape=True),
+          ParamSpec("x_ref", "m", -1e6, 1e6, 0.0, "where the lag's scale is 1 (fits hold it at the record's mean "
+                    "tip position; general form)", shape=True),
           ParamSpec("start", "1", -1.0, 1.0, 0.0, "where in its band the play began (-1 .. 1, 0 centred; "
                     "general form)", shape=True, state=True))
 
@@ -94,10 +98,12 @@ class BacklashStep(Step):
             return float(self.y)
         r1, r2, w1, w2 = mix_layout(p)
         if self.z is None:
-            self.z = (x + p["start"] * r1, x + p["start"] * r2)
-        z1, z2, y = play_mix_step(self.z[0], self.z[1], float(x), r1, r2, w1, w2, float(p["grow"]))
+            xr = float(x) - p["x_ref"]
+            self.z = (xr + p["start"] * r1, xr + p["start"] * r2)
+        xr = float(x) - p["x_ref"]
+        z1, z2, y = play_mix_step(self.z[0], self.z[1], xr, r1, r2, w1, w2, float(p["grow"]))
         self.z = (z1, z2)
-        return float(y)
+        return float(y + p["x_ref"])
 
 
 BACKLASH = register(Effect(

@@ -74,9 +74,14 @@ def test_diagnosis_takes_the_general_form_where_the_data_has_it(tmp_path, seed, 
     first = doc["findings"][0]
     assert first["effect"] == "backlash"
     p = first["params"]
-    assert p["width"]["value"] == pytest.approx(GENERAL["width"], rel=0.2)
+    assert p["width"]["value"] == pytest.approx(GENERAL["width"], rel=0.2)   # the main play's width
     if general:
-        assert p["elastic"]["value"] == pytest.approx(GENERAL["elastic"], abs=0.1)
+        # the fit refers the lag's scale to the record's mean tip position x_ref (the truth's reference is 0):
+        # the part that follows at once there is 1 - (1 - elastic) e^(grow x_ref)
+        x_ref = p["x_ref"]["value"]
+        assert x_ref == pytest.approx(float(np.mean(tip)), abs=0.01)
+        elastic = 1 - (1 - GENERAL["elastic"]) * np.exp(GENERAL["grow"] * x_ref)
+        assert p["elastic"]["value"] == pytest.approx(elastic, abs=0.1)
         assert p["tail"]["value"] == pytest.approx(GENERAL["tail"], abs=0.1)
         assert p["grow"]["value"] == pytest.approx(GENERAL["grow"], abs=0.2)
         assert doc["channels"]["tip_pos"]["rmse_model"] < 1e-3   # the noise is 0.5 mrad
