@@ -427,13 +427,27 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
                     pick = joint
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 pass
+        if round_ > 0 and not _pays(pick, current):
+            # the screen holds the chain's effects as they were fitted, and an effect fitted first absorbs
+            # what it can of the next (a Coulomb friction takes the steady part of a Dahl's): refit the
+            # best few screened additions jointly with the chain before concluding that nothing pays; the
+            # joint refit frees the whole chain, so it must pay the threshold twice over
+            joint = []
+            for f in sorted(cands, key=lambda g: g.rmse_hold)[:PAIR_TOP]:
+                try:
+                    joint.append(fit_chain(d, f.model, (), fit_idx, hold_idx, seed=seed))
+                except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+                    pass
+            rescue = _pick(joint, d)
+            if rescue is not None and rescue.rmse_hold * ACCEPT ** 2 <= current.rmse_hold:
+                pick = rescue
         if round_ == 0 and d.link.kind != "contact":
             tau, r_delay = delay_fit(d, fit_idx, hold_idx, current.model)   # round 0: the baseline
             if abs(tau) > 0 and r_delay * ACCEPT <= current.rmse_hold and (
                     pick is None or r_delay * (1 + PARSIMONY) < pick.rmse_hold):
                 delay = (tau, r_delay)   # a plain delay explains it better: name nothing
                 break
-        pays = pick is not None and (pick.rmse_hold * ACCEPT <= current.rmse_hold) and delta_bic(pick, current) < 0
+        pays = _pays(pick, current)
         if pays and foreign(d, current, pick, hold_idx):
             break
         if not pays and round_ == 0 and len(cands) >= 2:
@@ -454,6 +468,11 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
         steps.append((current, pick))
         current = pick
     return tuple(steps), current, delay
+
+
+def _pays(pick: Fit | None, current: Fit) -> bool:
+    """An addition pays: held-out RMSE lower by ACCEPT and a better information criterion."""
+    return pick is not None and pick.rmse_hold * ACCEPT <= current.rmse_hold and delta_bic(pick, current) < 0
 
 
 def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:

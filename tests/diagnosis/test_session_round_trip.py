@@ -1,8 +1,8 @@
 """The diagnosis handed back to the simulation, on a real recorded session (teleop bench session-diagnose): a
 Coulomb friction switched on in the simulated robot beyond its sheath's capstan is named on the exported
 cable, in every column subset, and the model saved from the diagnosis, loaded back into the simulated robot,
-replays the session's commands with a residual several times smaller than the plain robot's; a compound
-(Coulomb + viscous) is named as both."""
+replays the session's commands with a residual several times smaller than the plain robot's; compounds
+(Coulomb + viscous, Coulomb + Dahl) are named as both."""
 
 import pytest
 
@@ -29,6 +29,18 @@ def test_a_compound_is_named_as_both(tmp_path):
     assert out["found"][0]["effect"] in ("coulomb_friction", "viscous_friction") and out["pass"]
     assert abs(out["recovered"]["coulomb_friction"]["Fc"] - 0.3) < 0.1 * 0.3
     assert abs(out["recovered"]["viscous_friction"]["b"] - 20.0) < 0.2 * 20.0
+
+
+def test_a_coulomb_plus_dahl_compound_is_named_as_both(tmp_path):
+    # the Coulomb friction fitted first takes the steady part of the Dahl's; a screen holding it there saw the
+    # Dahl pay x1.01 and the diagnosis stopped at the Coulomb (replay x2.95)
+    out = bench_session_diagnosis([("coulomb_friction", {"Fc": 0.3}), ("dahl_hysteresis", {"sigma": 2000.0, "Fc": 0.2})],
+                                  seconds=20.0, seed=2, cable=1, work=tmp_path, subsets=False)
+    assert [f["effect"] for f in out["found"]][:2] == ["coulomb_friction", "dahl_hysteresis"], out["found"]
+    assert abs(out["recovered"]["coulomb_friction"]["Fc"] - 0.3) < 0.1 * 0.3
+    assert abs(out["recovered"]["dahl_hysteresis"]["Fc"] - 0.2) < 0.1 * 0.2
+    assert abs(out["recovered"]["dahl_hysteresis"]["sigma"] - 2000.0) < 0.2 * 2000.0
+    assert out["shrink"] >= 10.0 and out["pass"], out["replay_rmse_N"]
 
 
 @pytest.mark.parametrize("text, match", [("coulomb_friction:Fk=1", "no parameter 'Fk'"),
