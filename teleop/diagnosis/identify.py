@@ -420,27 +420,24 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
         if not cands:
             break
         pick = _pick(cands, d)
-        if pick is not None and round_ > 0:  # refine the screened addition jointly with the chain
-            try:
-                joint = fit_chain(d, pick.model, (), fit_idx, hold_idx, seed=seed)
-                if joint.rmse_fit <= pick.rmse_fit and not joint.at_bound:
-                    pick = joint
-            except (ValueError, FloatingPointError, np.linalg.LinAlgError):
-                pass
-        if round_ > 0 and not _pays(pick, current):
+        if round_ > 0:
             # the screen holds the chain's effects as they were fitted, and an effect fitted first absorbs
-            # what it can of the next (a Coulomb friction takes the steady part of a Dahl's): refit the
-            # best few screened additions jointly with the chain before concluding that nothing pays; the
-            # joint refit frees the whole chain, so it must pay the threshold twice over
+            # what it can of the next (a Coulomb friction takes the steady part of a Dahl's, a thermal drift
+            # fitted first leaves a Coulomb that a Stribeck mimics): the best few screened additions are
+            # refitted jointly with the chain and the pick is made among those. Where no screened addition
+            # paid, the joint one must pay the threshold twice over (the joint refit frees the whole chain)
             joint = []
             for f in sorted(cands, key=lambda g: g.rmse_hold)[:PAIR_TOP]:
                 try:
                     joint.append(fit_chain(d, f.model, (), fit_idx, hold_idx, seed=seed))
                 except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                     pass
-            rescue = _pick(joint, d)
-            if rescue is not None and rescue.rmse_hold * ACCEPT ** 2 <= current.rmse_hold:
-                pick = rescue
+            best = _pick(joint, d)
+            if _pays(pick, current):
+                if _pays(best, current):
+                    pick = best
+            elif best is not None and best.rmse_hold * ACCEPT ** 2 <= current.rmse_hold:
+                pick = best
         if round_ == 0 and d.link.kind != "contact":
             tau, r_delay = delay_fit(d, fit_idx, hold_idx, current.model)   # round 0: the baseline
             if abs(tau) > 0 and r_delay * ACCEPT <= current.rmse_hold and (
