@@ -47,7 +47,9 @@ def fixed_params(d: LinkData, name: str, general: bool = False) -> dict:
     form at their plain defaults (ParamSpec.shape) unless `general`, and those the recording's metadata
     says the user's simulation already has (`LinkData.known`)."""
     out = {} if general else {s.name: s.default for s in get_effect(name).params if s.shape}
-    if name == "capstan_friction":
+    if name == "capstan_friction" and not (d.theta is None and "mu" in d.known.get(name, {})):
+        # theta with mu: only the product shows; a known mu (the user's simulation has it) and no recorded
+        # bend leave the wrap to be fitted
         out["theta"] = get_effect(name).spec("theta").default
     elif name in ("pulley_friction", "pulley_elongation"):   # mu and the wrap: only their product shows
         out["wrap"] = get_effect(name).spec("wrap").default
