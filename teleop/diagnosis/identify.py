@@ -46,7 +46,7 @@ def fixed_params(d: LinkData, name: str, general: bool = False) -> dict:
     width), the parameters of the effect's general
     form at their plain defaults (ParamSpec.shape) unless `general`, and those the recording's metadata
     says the user's simulation already has (`LinkData.known`)."""
-    out = {} if general else {s.name: s.default for s in get_effect(name).params if s.shape}
+    out = {} if general else get_effect(name).plain_form()
     if name == "capstan_friction" and not (d.theta is None and "mu" in d.known.get(name, {})):
         # theta with mu: only the product shows; a known mu (the user's simulation has it) and no recorded
         # bend leave the wrap to be fitted
@@ -271,11 +271,15 @@ def _pick(cands: list[Fit], d: LinkData) -> Fit | None:
     """Best held-out RMSE, preferring fewer parameters among candidates within PARSIMONY of it; fits
     with a parameter pinned on its bound (the effect's form does not fit the data) never win."""
     cands = [c for c in cands if not c.at_bound and not any(wrong_form(n, p, d) for n, p in c.model.effects)]
-    if not cands:
-        return None
-    best = min(c.rmse_hold for c in cands)
-    close = [c for c in cands if c.rmse_hold <= best * (1 + PARSIMONY)]
-    return min(close, key=lambda c: (c.k, c.rmse_hold))
+    return _parsimonious(cands) if cands else None
+
+
+def _parsimonious(items: list, fit=lambda item: item):
+    """The item whose Fit (fit(item)) has the fewest parameters among those within PARSIMONY of the best
+    held-out RMSE (ties: the lower RMSE)."""
+    best = min(fit(c).rmse_hold for c in items)
+    close = [c for c in items if fit(c).rmse_hold <= best * (1 + PARSIMONY)]
+    return min(close, key=lambda c: (fit(c).k, fit(c).rmse_hold))
 
 
 @dataclass(frozen=True)
@@ -434,12 +438,12 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
                     joint.append(fit_chain(d, f.model, (), fit_idx, hold_idx, seed=seed))
                 except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                     pass
-            best = _pick(joint, d)
+            refit = _pick(joint, d)
             if _pays(pick, current):
-                if _pays(best, current):
-                    pick = best
-            elif best is not None and best.rmse_hold * ACCEPT ** 2 <= current.rmse_hold:
-                pick = best
+                if _pays(refit, current):
+                    pick = refit
+            elif refit is not None and refit.rmse_hold * ACCEPT ** 2 <= current.rmse_hold:
+                pick = refit
         if round_ == 0 and d.link.kind != "contact":
             tau, r_delay = delay_fit(d, fit_idx, hold_idx, current.model)   # round 0: the baseline
             if abs(tau) > 0 and r_delay * ACCEPT <= current.rmse_hold and (
@@ -461,9 +465,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
         if general is not pick:
             ends = [_grow(d, f, tuple(steps) + ((current, f),), pool, round_ + 1, fit_idx, hold_idx, seed,
                           progress, ranking) for f in (general, pick)]
-            best = min(e[1].rmse_hold for e in ends)
-            close = [e for e in ends if e[1].rmse_hold <= best * (1 + PARSIMONY)]
-            return min(close, key=lambda e: (e[1].k, e[1].rmse_hold))
+            return _parsimonious(ends, fit=lambda end: end[1])
         steps.append((current, pick))
         current = pick
     return tuple(steps), current, delay

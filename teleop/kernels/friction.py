@@ -154,11 +154,16 @@ def dahl_run(x, sigma, Fc, F0, out):
 
 
 @njit
+def play_mix_start(x0, r1, r2, start):
+    """(z1, z2): the general play's states at the first position x0, start in [-1, 1] (where in its band each
+    play was when the record began)."""
+    return x0 + start * r1, x0 + start * r2
+
+
+@njit
 def play_mix_run(x, r1, r2, w1, w2, grow, start, out):
-    """out (n,): play_mix_step along the positions x (n,), each play starting at x[0] + start r (start in
-    [-1, 1]: where in its band the play was when the record began)."""
-    z1 = x[0] + start * r1
-    z2 = x[0] + start * r2
+    """out (n,): play_mix_step along the positions x (n,), from play_mix_start at x[0]."""
+    z1, z2 = play_mix_start(x[0], r1, r2, start)
     for k in range(x.shape[0]):
         z1, z2, out[k] = play_mix_step(z1, z2, x[k], r1, r2, w1, w2, grow)
     return out

@@ -22,7 +22,7 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.kernels.friction import play_mix_run, play_mix_step
+from teleop.kernels.friction import play_mix_run, play_mix_start, play_mix_step
 from teleop.physics.base import Effect, ParamSpec, Signals, Step, register
 from teleop.physics.scan import clamp_step, play
 
@@ -89,18 +89,18 @@ class BacklashStep(Step):
     def reset(self) -> None:
         self.y = None
         self.z = None
+        self.plain = is_plain(self.params)   # fixed with the parameters: decided once, not per sample
 
     def step(self, x: float) -> float:
         p = self.params
-        if is_plain(p):
+        if self.plain:
             r = 0.5 * p["width"]
             self.y = x if self.y is None else clamp_step(self.y, x - r, x + r)
             return float(self.y)
         r1, r2, w1, w2 = mix_layout(p)
-        if self.z is None:
-            xr = float(x) - p["x_ref"]
-            self.z = (xr + p["start"] * r1, xr + p["start"] * r2)
         xr = float(x) - p["x_ref"]
+        if self.z is None:
+            self.z = play_mix_start(xr, r1, r2, float(p["start"]))
         z1, z2, y = play_mix_step(self.z[0], self.z[1], xr, r1, r2, w1, w2, float(p["grow"]))
         self.z = (z1, z2)
         return float(y + p["x_ref"])

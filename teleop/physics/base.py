@@ -227,6 +227,10 @@ class Effect:
         """Typical parameter values."""
         return {p.name: p.default for p in self.params}
 
+    def plain_form(self) -> dict:
+        """{name: default} of the general form's parameters (ParamSpec.shape): held there, the plain form."""
+        return {p.name: p.default for p in self.params if p.shape}
+
     def check(self, params: Mapping[str, float] | None) -> dict:
         """A full, validated {name: float} dict: missing names take defaults, unknown names raise."""
         out = self.defaults()

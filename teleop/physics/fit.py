@@ -80,7 +80,7 @@ def fit(effect: Effect | str, signals: Signals, y, fixed: Mapping[str, float] | 
     fixed = dict(fixed or {})
     effect.check(fixed)
     if not general:
-        fixed = {**{p.name: p.default for p in effect.params if p.shape}, **fixed}
+        fixed = {**effect.plain_form(), **fixed}
     free = [p for p in effect.params if p.name not in fixed]
     sel = np.arange(y.size) if mask is None else np.asarray(mask)
     if sel.dtype == bool:
