@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.diagnosis.identify import Fit, LinkResult, fit_chain, identify_link, rms, simulation_baseline
+from teleop.diagnosis.identify import Fit, LinkResult, added, fit_chain, identify_link, rms, simulation_baseline
 from teleop.diagnosis.links import LinkData, find_links, is_exact, link_data, predict
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
@@ -122,13 +122,17 @@ class Diagnosis:
         out = []
         for res in self.links:
             d = res.data
-            for before, after, name in (
-                    (b, a, n) for b, a in res.steps for n in a.names if n not in b.names):
+            for before, after, name in ((b, a, n) for b, a in res.steps for n in added(b, a)):
                 y1 = predict(d, after.model)
-                # the effect's own signature: the final model with and without it (same gain and offset)
-                y1_without = predict(d, after.model.with_effects(
-                    [(n, p) for n, p in after.model.effects if n != name]))
-                if len([n for n in after.names if n not in before.names]) > 1:
+                # the effect's own signature: the final model with and without it (same gain and offset),
+                # or, where the step turns a baseline effect general, with it in its plain form
+                if name in after.names and name in before.names:
+                    plain = get_effect(name).plain_form()
+                    without = [(n, {**p, **plain} if n == name else p) for n, p in after.model.effects]
+                else:
+                    without = [(n, p) for n, p in after.model.effects if n != name]
+                y1_without = predict(d, after.model.with_effects(without))
+                if len(added(before, after)) > 1:
                     # a pair that pays only together: each one's share is what the pair loses without it
                     before = Fit(after.model, {}, math.nan, rms((d.y - y1_without)[self.hold]), after.k, after.n_eff)
                 y0 = predict(d, before.model)
@@ -157,16 +161,21 @@ class Diagnosis:
                     "improvement": before.rmse_hold / max(after.rmse_hold, 1e-300),
                     "link": d.link.kind,
                     "alternatives": [{"effect": n, "rmse_after": r} for n, r in alts],
+                    **({"general_form_of_baseline": True} if name in before.names else {}),
                 })
         # importance: the channels by what their first finding explains (the improvement ratio, comparable
         # across units); within a channel the greedy order, each effect added where it explained most of what
         # was left (a Coulomb friction that takes 0.35 N to 0.055 N comes before the viscous friction that
         # takes 0.055 N to 0.004 N, though the latter's ratio is larger)
+        # the general form of a baseline effect (a pretension the sheath grips) refines what the simulation
+        # has: it comes after the effects the simulation lacks
         lead = {}
         for f in out:
-            lead.setdefault(f["channel"], f["improvement"])
+            lead.setdefault((f.get("general_form_of_baseline", False), f["channel"]), f["improvement"])
         order = {id(f): k for k, f in enumerate(out)}
-        out.sort(key=lambda f: (-lead[f["channel"]], f["channel"], order[id(f)]))
+        out.sort(key=lambda f: (f.get("general_form_of_baseline", False),
+                                -lead[(f.get("general_form_of_baseline", False), f["channel"])], f["channel"],
+                                order[id(f)]))
         return out
 
     def unexplained(self) -> list[dict]:

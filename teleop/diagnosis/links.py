@@ -402,9 +402,12 @@ def predict(d: LinkData, m: LinkModel) -> np.ndarray:
     chain = [(n, p) for n, p in m.effects if get_effect(n).link != "sensor"]
     if kind == "position":
         z = sig.x
-        for name, p in chain:
+        for i, (name, p) in enumerate(chain):
             z = get_effect(name).apply(sig, p)
-            sig = sig.replace(x=z)
+            # as Signals.replace, unchecked; the rate is derived only where a later effect reads it (the
+            # fitting loop runs this tens of thousands of times)
+            later = {c for n, _ in chain[i + 1:] for c in get_effect(n).inputs + get_effect(n).optional}
+            sig = fast_replace(sig, x=z, v=np.gradient(z, sig.t) if "v" in later else None)
         y = m.gain * z + m.offset if d.link.through_spring else z
     elif kind == "force":
         z = sig.load

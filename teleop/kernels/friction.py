@@ -143,6 +143,16 @@ def play_mix_step(z1, z2, x, r1, r2, w1, w2, grow):
 
 # ------------------------------------------------------------------ array forms: loops over the steps above
 @njit
+def clamp_run(y0, lo, hi, out):
+    """out (n,): y_k = clamp(y_k-1, lo_k, hi_k) from y_-1 = y0 (the play operator's recursion; lo <= hi)."""
+    y = y0
+    for k in range(lo.shape[0]):
+        y = clamp(y, lo[k], hi[k])
+        out[k] = y
+    return out
+
+
+@njit
 def dahl_run(x, sigma, Fc, F0, out):
     """out (n,): Dahl force [N] along the positions x (n,) [m], from F0 at the first sample."""
     F = F0

@@ -97,7 +97,10 @@ def _theta(signals: Signals, params: Mapping[str, float]):
 
 
 def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return tip2motor_transitions(signals.x, signals.load, p["mu"], _theta(signals, p), p["k"])
+    P = p.get("preload", 0.0)
+    if P == 0.0:
+        return tip2motor_transitions(signals.x, signals.load, p["mu"], _theta(signals, p), p["k"])
+    return tip2motor_transitions(signals.x, signals.load + P, p["mu"], _theta(signals, p), p["k"]) - P
 
 
 def _guess(signals: Signals, y: np.ndarray) -> dict:
@@ -120,6 +123,9 @@ PARAMS = (
               "mu and theta are identifiable only as a product: fix one when fitting)"),
     ParamSpec("k", "N/m", 1.0, 1e8, 2e4, "stick stiffness during reversals (motor force per motor travel)",
               log=True),
+    ParamSpec("preload", "N", 0.0, 50.0, 0.0, "pretension the cable carries beside the load (an antagonistic "
+              "pair's, or a load sensor zeroed under tension): the sheath grips load + preload, the motor "
+              "force is read from the preload (general form; 0: the plain law)", shape=True),
 )
 
 
@@ -135,12 +141,14 @@ class CapstanStep(Step):
     def step(self, x: float, load: float, theta: float | None = None) -> float:
         p = self.params
         mu_theta = p["mu"] * (p["theta"] if theta is None else theta)
+        P = p.get("preload", 0.0)
+        T = float(load) + P   # the tension the sheath grips
         if self.x_prev is None:  # starts on the tip force, clamped into its band
-            self.F = capstan_play_step(float(load), 0.0, float(load), mu_theta, p["k"])
+            self.F = capstan_play_step(T, 0.0, T, mu_theta, p["k"])
         else:
-            self.F = capstan_play_step(self.F, float(x - self.x_prev), float(load), mu_theta, p["k"])
+            self.F = capstan_play_step(self.F, float(x - self.x_prev), T, mu_theta, p["k"])
         self.x_prev = x
-        return float(self.F)
+        return float(self.F) - P
 
 
 class CapstanCompensator:

@@ -1,15 +1,16 @@
-"""Vectorised per-sample recursions: play (clamp) operators and first-order affine recurrences.
+"""Per-sample recursions over whole signals: play (clamp) operators and first-order affine recurrences.
 
 Hysteretic and stateful models need `y_k = f_k(y_{k-1})` for every sample. Two families cover all the
-effects in this package, and both compose in closed form, so the whole signal is solved by a
-Hillis-Steele prefix scan in ceil(log2 n) vectorised numpy passes instead of a Python loop:
+effects in this package:
 
-- clamp maps  f_k(y) = min(max(y, a_k), b_k)          (a_k <= b_k): the play operator;
-  f_2(f_1(y)) = clamp(y, clip(a_1, a_2, b_2), clip(b_1, a_2, b_2));
-- affine maps f_k(y) = alpha_k y + beta_k:           first-order filters, Dahl, the SLS branch;
-  f_2(f_1(y)) = alpha_2 alpha_1 y + (alpha_2 beta_1 + beta_2).
-
-Both are exact up to floating-point reassociation (relative differences ~1e-15 versus the loop).
+- clamp maps  f_k(y) = min(max(y, a_k), b_k)          (a_k <= b_k): the play operator; run by the compiled
+  loop `teleop.kernels.friction.clamp_run` over the one clamp kernel (exact: min and max do not round;
+  20x faster than the prefix scan it replaced, 23 us against 416 us for 20 000 samples, and the
+  diagnosis's fits call it tens of thousands of times);
+- affine maps f_k(y) = alpha_k y + beta_k:           first-order filters, the SLS branch; these compose
+  in closed form, f_2(f_1(y)) = alpha_2 alpha_1 y + (alpha_2 beta_1 + beta_2), so the whole signal is
+  solved by a Hillis-Steele prefix scan in ceil(log2 n) vectorised numpy passes (exact up to
+  floating-point reassociation, relative differences ~1e-15 versus the loop).
 """
 
 from __future__ import annotations
@@ -17,23 +18,14 @@ from __future__ import annotations
 import numpy as np
 
 from teleop.kernels.friction import clamp as _clamp_kernel
+from teleop.kernels.friction import clamp_run as _clamp_run
 
 
 def clamp_scan(y0: float, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """y (n,): y_k = min(max(y_{k-1}, lo_k), hi_k) with y_{-1} = y0; needs lo <= hi elementwise."""
-    A = np.array(lo, dtype=float, copy=True)
-    B = np.array(hi, dtype=float, copy=True)
-    n = A.shape[0]
-    s = 1
-    while s < n:
-        a, b = A[s:], B[s:]
-        # composite(k) = f_k..f_{k-s+1} o composite(k-s): clamp the earlier bounds into the later ones
-        newA = np.minimum(np.maximum(A[:-s], a), b)
-        newB = np.minimum(np.maximum(B[:-s], a), b)
-        A[s:] = newA
-        B[s:] = newB
-        s *= 2
-    return np.minimum(np.maximum(y0, A), B)
+    lo = np.ascontiguousarray(lo, dtype=float)
+    hi = np.ascontiguousarray(hi, dtype=float)
+    return _clamp_run(float(y0), lo, hi, np.empty(lo.shape[0]))
 
 
 def affine_scan(y0: float, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
