@@ -126,7 +126,8 @@ class Diagnosis:
                 y1 = predict(d, after.model)
                 # the effect's own signature: the final model with and without it (same gain and offset),
                 # or, where the step turns a baseline effect general, with it in its plain form
-                if name in after.names and name in before.names:
+                refines = name in before.names   # a baseline effect turned general (before a pair's rebinding)
+                if refines:
                     plain = get_effect(name).plain_form()
                     without = [(n, {**p, **plain} if n == name else p) for n, p in after.model.effects]
                 else:
@@ -161,7 +162,7 @@ class Diagnosis:
                     "improvement": before.rmse_hold / max(after.rmse_hold, 1e-300),
                     "link": d.link.kind,
                     "alternatives": [{"effect": n, "rmse_after": r} for n, r in alts],
-                    **({"general_form_of_baseline": True} if name in before.names else {}),
+                    **({"general_form_of_baseline": True} if refines else {}),
                 })
         # importance: the channels by what their first finding explains (the improvement ratio, comparable
         # across units); within a channel the greedy order, each effect added where it explained most of what
