@@ -11,6 +11,10 @@ held-out RMSE is within PARSIMONY of the best, the one with the fewest parameter
 greedily while they pay. An effect whose own contribution is best located where no catalogue effect acts
 (FOREIGN: periodic in position) is not named; when no single effect pays, pairs of the PAIR_TOP best are
 fitted jointly (`_pair`); a pure delay that fits better than any effect names nothing (`delay_fit`).
+An added effect's general form (ParamSpec.shape) is tried once it is named (`general_form`); the baseline's
+own, in place of the additions once they are exhausted (`_general_baseline`: the capstan's pretension).
+The fit part is scored with Huber's loss (`robust_rms`) for the information criterion; held-out scores are
+plain RMSEs.
 """
 
 from __future__ import annotations

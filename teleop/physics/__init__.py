@@ -28,7 +28,7 @@ Catalogue (registry key: inputs -> output, parameters):
 - position link, motor -> tip position:
   backlash (x -> x; width), cable_compliance (x, load -> x; k)
 - force link, tip load -> motor force (x increasing = pulling):
-  capstan_friction (x, load [, theta] -> load; mu, theta, k), coulomb_friction (v, load; Fc),
+  capstan_friction (x, load [, theta] -> load; mu, theta, k; general form: preload), coulomb_friction (v, load; Fc),
   viscous_friction (v, load; b), stribeck_friction (v, load; Fc, Fs, vs), dahl_hysteresis (x, load; sigma, Fc),
   pulley_friction (x, load -> load; mu, wrap, bend, k: seed 002's cable-pulley chain, lumped)
 - position link over pulleys: pulley_elongation (x, load -> x; c, mu, wrap, bend, k)
