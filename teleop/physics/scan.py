@@ -21,11 +21,20 @@ from teleop.kernels.friction import clamp as _clamp_kernel
 from teleop.kernels.friction import clamp_run as _clamp_run
 
 
-def clamp_scan(y0: float, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """y (n,): y_k = min(max(y_{k-1}, lo_k), hi_k) with y_{-1} = y0; needs lo <= hi elementwise."""
-    lo = np.ascontiguousarray(lo, dtype=float)
-    hi = np.ascontiguousarray(hi, dtype=float)
-    return _clamp_run(float(y0), lo, hi, np.empty(lo.shape[0]))
+def clamp_scan(y0, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """y (n, ...): y_k = min(max(y_{k-1}, lo_k), hi_k) with y_{-1} = y0 along the first axis (trailing axes,
+    e.g. (n, 6) cables, are independent recursions; y0 a scalar or broadcast to them); needs lo <= hi."""
+    lo, hi = np.broadcast_arrays(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))
+    if lo.ndim == 1:
+        return _clamp_run(float(y0), np.ascontiguousarray(lo), np.ascontiguousarray(hi), np.empty(lo.shape[0]))
+    n = lo.shape[0]
+    L, H = lo.reshape(n, -1), hi.reshape(n, -1)
+    Y0 = np.broadcast_to(np.asarray(y0, dtype=float), lo.shape[1:]).reshape(-1)
+    out = np.empty((n, L.shape[1]))
+    for j in range(L.shape[1]):
+        out[:, j] = _clamp_run(float(Y0[j]), np.ascontiguousarray(L[:, j]), np.ascontiguousarray(H[:, j]),
+                               np.empty(n))
+    return out.reshape(lo.shape)
 
 
 def affine_scan(y0: float, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:

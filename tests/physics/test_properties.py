@@ -25,6 +25,18 @@ def test_clamp_scan_equals_loop(lo, seed, y0):
     np.testing.assert_array_equal(clamp_scan(y0, lo, hi), ref)
 
 
+def test_clamp_scan_runs_trailing_axes_independently():
+    # (n, 6) cables with one start each, as the sensor models call it: each column is its own recursion
+    rng = np.random.default_rng(3)
+    lo = np.cumsum(rng.normal(0, 0.3, (500, 6)), axis=0)
+    hi = lo + rng.uniform(0, 2, (500, 6))
+    y0 = rng.normal(0, 1, 6)
+    out = clamp_scan(y0, lo, hi)
+    assert out.shape == (500, 6)
+    for j in range(6):
+        np.testing.assert_array_equal(out[:, j], clamp_scan(y0[j], lo[:, j], hi[:, j]))
+
+
 @SETTINGS
 @given(alpha=st.lists(st.floats(0, 1), min_size=1, max_size=70), seed=st.integers(0, 100), y0=st.floats(-5, 5))
 def test_affine_scan_equals_loop(alpha, seed, y0):
