@@ -23,13 +23,14 @@ def figure(diag, findings: list | None = None):
         d = res.data
         yb, yf = predict(d, res.baseline.model), predict(d, res.final.model)
         t = d.t[hold]
-        m = res.final.model
-        names = "+".join(n for n, _ in m.effects[m.base:]) or "no finding"
+        mine = [f for f in findings if f["channel"] == d.link.output]
+        names = "+".join(f["effect"] + (" (general form)" if f.get("general_form_of_baseline") else "")
+                         for f in mine) or "no finding"
         base_names = "+".join(res.baseline.model.baseline_names)
         base_label = f"baseline{' (' + base_names + ')' if base_names else ''}"
         u_out, u_in = diag.rec.units.get(d.link.output, ""), diag.rec.units.get(d.link.input, "")
         y_label = f"{d.link.output} [{u_out}]"
-        wins = [w for f in findings if f["channel"] == d.link.output for w in f["where"]["windows"]]
+        wins = [w for f in mine for w in f["where"]["windows"]]
         # the held-out part (its first 10 s when longer)
         t0 = t[0]
         t1 = min(t[-1], t0 + 10.0)
@@ -69,7 +70,7 @@ def figure(diag, findings: list | None = None):
             ax.set_title(f"located window {w0:.2f}-{w1:.2f} s")
             ax.legend(loc="best", fontsize=7)
         else:
-            ax.set_title("no located window (no finding)")
+            ax.set_title("no located window in the held-out part" if mine else "no located window (no finding)")
         ax.set_xlabel("t [s]")
         ax = row[3]
         ax.plot(d.u[hold], d.y[hold], "k.", ms=1, label="measured")

@@ -105,3 +105,22 @@ def test_real_spindle_torque_at_40_percent_load_beats_the_generic_peer():
     assert peer["model_rmse"] <= peer["sindy_rmse"]
     found = next(f for f in doc["findings"] if f["channel"] == "motor_force")
     assert found["effect"] == "capstan_friction" and found["params"]["preload"]["value"] > 0
+
+
+def test_the_plot_names_the_general_form(tmp_path):
+    import matplotlib
+    matplotlib.use("Agg")
+    from teleop.diagnosis.plot import figure
+
+    t, x, load = _strokes(6)
+    rng = np.random.default_rng(106)
+    motor = _stepped({"mu": 0.15, "theta": THETA, "k": 2e4, "preload": 1.0}, x, load) + 0.3
+    path = write_interchange(tmp_path / "p.csv", t,
+                             {"motor_pos": x + rng.normal(0, 2e-6, t.size),
+                              "motor_force": motor + rng.normal(0, 0.01, t.size),
+                              "tip_force": load + rng.normal(0, 0.01, t.size)},
+                             {"motor_pos": "m", "motor_force": "N", "tip_force": "N"}, {"load": "external"})
+    fig = figure(diagnose(read_interchange(path)))
+    labels = [txt.get_text() for ax in fig.axes if ax.get_legend() for txt in ax.get_legend().get_texts()]
+    assert any("capstan_friction (general form)" in s for s in labels), labels
+    assert not any("no finding" in s for s in labels)
