@@ -170,13 +170,12 @@ class Diagnosis:
         # takes 0.055 N to 0.004 N, though the latter's ratio is larger)
         # the general form of a baseline effect (a pretension the sheath grips) refines what the simulation
         # has: it comes after the effects the simulation lacks
+        group = {id(f): (f.get("general_form_of_baseline", False), f["channel"]) for f in out}
         lead = {}
         for f in out:
-            lead.setdefault((f.get("general_form_of_baseline", False), f["channel"]), f["improvement"])
+            lead.setdefault(group[id(f)], f["improvement"])
         order = {id(f): k for k, f in enumerate(out)}
-        out.sort(key=lambda f: (f.get("general_form_of_baseline", False),
-                                -lead[(f.get("general_form_of_baseline", False), f["channel"])], f["channel"],
-                                order[id(f)]))
+        out.sort(key=lambda f: (group[id(f)][0], -lead[group[id(f)]], f["channel"], order[id(f)]))
         return out
 
     def unexplained(self) -> list[dict]:

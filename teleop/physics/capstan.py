@@ -97,9 +97,7 @@ def _theta(signals: Signals, params: Mapping[str, float]):
 
 
 def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
-    P = p.get("preload", 0.0)
-    if P == 0.0:
-        return tip2motor_transitions(signals.x, signals.load, p["mu"], _theta(signals, p), p["k"])
+    P = p.get("preload", 0.0)   # + 0.0 and - 0.0 leave the plain law's floats as they are
     return tip2motor_transitions(signals.x, signals.load + P, p["mu"], _theta(signals, p), p["k"]) - P
 
 

@@ -25,8 +25,6 @@ def clamp_scan(y0, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """y (n, ...): y_k = min(max(y_{k-1}, lo_k), hi_k) with y_{-1} = y0 along the first axis (trailing axes,
     e.g. (n, 6) cables, are independent recursions; y0 a scalar or broadcast to them); needs lo <= hi."""
     lo, hi = np.broadcast_arrays(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))
-    if lo.ndim == 1:
-        return _clamp_run(float(y0), np.ascontiguousarray(lo), np.ascontiguousarray(hi), np.empty(lo.shape[0]))
     n = lo.shape[0]
     L, H = lo.reshape(n, -1), hi.reshape(n, -1)
     Y0 = np.broadcast_to(np.asarray(y0, dtype=float), lo.shape[1:]).reshape(-1)

@@ -15,6 +15,7 @@ from teleop.diagnosis.identify import robust_rms, rms
 from teleop.diagnosis.recording_io import read_interchange, read_recording, write_interchange
 from teleop.physics import Signals, get_effect
 from tests._data import MRDLAB, needs_mrdlab
+from tests._signals import multisine
 
 THETA = get_effect("capstan_friction").spec("theta").default
 
@@ -23,18 +24,27 @@ def _strokes(seed: int, fs: float = 500.0, seconds: float = 20.0):
     """t [s], motor position x [m] (multi-sine, ~12 mm), tip load [N] (2 N +- 1.5 N, slower)."""
     rng = np.random.default_rng(seed)
     t = np.arange(int(seconds * fs)) / fs
-    x = np.zeros_like(t)
-    for amp, f in zip(rng.dirichlet(np.ones(3)) * 0.012, rng.uniform(0.1, 0.6, 3)):
-        x += amp * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
-    load = np.full_like(t, 2.0)
-    for amp, f in zip(rng.dirichlet(np.ones(2)) * 1.5, rng.uniform(0.05, 0.3, 2)):
-        load += amp * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
-    return t, x, load
+    x = multisine(rng, t, 0.012, 3, 0.1, 0.6)
+    return t, x, 2.0 + multisine(rng, t, 1.5, 2, 0.05, 0.3)
 
 
 def _stepped(params: dict, x: np.ndarray, load: np.ndarray) -> np.ndarray:
     st = get_effect("capstan_friction").make_step(params)
     return np.array([st.step(x=float(a), load=float(b)) for a, b in zip(x, load)])
+
+
+def _recording(tmp_path, seed: int, preload: float, k: float):
+    """A force-link recording of the capstan with `preload` [N] (mu 0.15, stick stiffness k [N/m]), made
+    sample by sample with the Step form, offset 0.3 N, sensor noise 0.01 N (forces) and 2 um (position)."""
+    t, x, load = _strokes(seed)
+    rng = np.random.default_rng(seed + 100)
+    motor = _stepped({"mu": 0.15, "theta": THETA, "k": k, "preload": preload}, x, load) + 0.3
+    path = write_interchange(tmp_path / "p.csv", t,
+                             {"motor_pos": x + rng.normal(0, 2e-6, t.size),
+                              "motor_force": motor + rng.normal(0, 0.01, t.size),
+                              "tip_force": load + rng.normal(0, 0.01, t.size)},
+                             {"motor_pos": "m", "motor_force": "N", "tip_force": "N"}, {"load": "external"})
+    return read_interchange(path)
 
 
 def test_step_and_array_forms_agree_and_the_plain_law_is_unchanged():
@@ -65,16 +75,7 @@ def test_a_large_pretension_gives_a_pairs_band():
 
 @pytest.mark.parametrize("seed, preload, k", [(3, 3.0, 2e3), (6, 1.0, 2e4), (5, 0.0, 2e3)])
 def test_diagnosis_reports_the_pretension_where_the_data_has_it(tmp_path, seed, preload, k):
-    t, x, load = _strokes(seed)
-    rng = np.random.default_rng(seed + 100)
-    truth = {"mu": 0.15, "theta": THETA, "k": k, "preload": preload}
-    motor = _stepped(truth, x, load) + 0.3
-    path = write_interchange(tmp_path / "p.csv", t,
-                             {"motor_pos": x + rng.normal(0, 2e-6, t.size),
-                              "motor_force": motor + rng.normal(0, 0.01, t.size),
-                              "tip_force": load + rng.normal(0, 0.01, t.size)},
-                             {"motor_pos": "m", "motor_force": "N", "tip_force": "N"}, {"load": "external"})
-    doc = diagnose(read_interchange(path)).as_dict()
+    doc = diagnose(_recording(tmp_path, seed, preload, k)).as_dict()
     if preload == 0.0:   # the plain capstan is the baseline itself: nothing beyond it
         assert doc["findings"] == []
         return
@@ -112,15 +113,7 @@ def test_the_plot_names_the_general_form(tmp_path):
     matplotlib.use("Agg")
     from teleop.diagnosis.plot import figure
 
-    t, x, load = _strokes(6)
-    rng = np.random.default_rng(106)
-    motor = _stepped({"mu": 0.15, "theta": THETA, "k": 2e4, "preload": 1.0}, x, load) + 0.3
-    path = write_interchange(tmp_path / "p.csv", t,
-                             {"motor_pos": x + rng.normal(0, 2e-6, t.size),
-                              "motor_force": motor + rng.normal(0, 0.01, t.size),
-                              "tip_force": load + rng.normal(0, 0.01, t.size)},
-                             {"motor_pos": "m", "motor_force": "N", "tip_force": "N"}, {"load": "external"})
-    fig = figure(diagnose(read_interchange(path)))
+    fig = figure(diagnose(_recording(tmp_path, 6, 1.0, 2e4)))
     labels = [txt.get_text() for ax in fig.axes if ax.get_legend() for txt in ax.get_legend().get_texts()]
     assert any("capstan_friction (general form)" in s for s in labels), labels
     assert not any("no finding" in s for s in labels)

@@ -13,6 +13,7 @@ from teleop.diagnosis.recording_io import read_interchange, read_recording, writ
 from teleop.physics import Signals, get_effect
 from teleop.physics.backlash import backlash
 from tests._data import MRDLAB, needs_mrdlab
+from tests._signals import multisine
 
 GENERAL = {"width": 0.06, "elastic": 0.3, "tail": 0.15, "grow": 0.4, "start": -0.7}
 
@@ -20,10 +21,7 @@ GENERAL = {"width": 0.06, "elastic": 0.3, "tail": 0.15, "grow": 0.4, "start": -0
 def _trajectory(seed: int, fs: float = 500.0, seconds: float = 20.0):
     rng = np.random.default_rng(seed)
     t = np.arange(int(seconds * fs)) / fs
-    x = np.zeros_like(t)
-    for amp, f in zip(rng.dirichlet(np.ones(3)) * 0.6, rng.uniform(0.1, 0.6, 3)):
-        x += amp * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
-    return t, x + 0.8
+    return t, multisine(rng, t, 0.6, 3, 0.1, 0.6) + 0.8
 
 
 def _stepped(params: dict, x: np.ndarray) -> np.ndarray:
