@@ -43,7 +43,7 @@ EXCLUDED = ("linear_contact", "thermal_drift_time")
 ALTERNATIVES_TO_CAPSTAN = ("pulley_friction",)
 
 
-def fixed_params(d: LinkData, name: str, general: bool = False) -> dict:
+def fixed_params(d: LinkData, name: str, general: bool = False, direction: float = 1.0) -> dict:
     """Parameters held fixed when fitting `name` on link data d: those identifiable only as a product or
     sum with another (capstan theta with mu, unless a bend-angle channel is recorded; a pulley chain's
     wrap with its mu; the thermal T0 with the baseline offset; backlash's reference position with its
@@ -61,6 +61,8 @@ def fixed_params(d: LinkData, name: str, general: bool = False) -> dict:
         out["T0"] = float(np.mean(d.temperature))
     elif name == "backlash":   # the general form's width holds at the record's mean tip position
         out["x_ref"] = float(np.mean(d.u if d.link.through_spring else d.y))
+    elif name == "parallel_spring" and d.x is not None:   # counted from the record's mean drive position
+        out["x_ref"] = direction * float(np.mean(d.x))
     return {**out, **d.known.get(name, {})}
 
 
@@ -187,7 +189,7 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
             sig, target = _target_signals(d, LinkModel(start.link, start.gain, start.offset, start.direction,
                                                        start.load_sign, tuple(effects), start.base), name)
             p0 = get_effect(name).initial_guess(sig, target)
-            p0.update(fixed_params(d, name))
+            p0.update(fixed_params(d, name, direction=start.direction))
             effects.append((name, p0))
     # free parameter layout: gain, offset, then each effect's free params in the unit space of its specs
     layout, k = [], 2
@@ -486,6 +488,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
             cands.append(f)
             if progress is not None:
                 progress(1)
+        cands = [f for f in cands if not load_alike(d, current, f, hold_idx)]
         if not cands:
             break
         pick = _pick(cands, d)
@@ -514,7 +517,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
                 delay = (tau, r_delay)   # a plain delay explains it better: name nothing
                 break
         pays = _pays(pick, current)
-        if pays and foreign(d, current, pick, hold_idx):
+        if pays and foreign(d, current, pick, fit_idx, hold_idx):
             break
         if not pays and round_ == 0 and len(cands) >= 2:
             pair = _pair(d, current, cands, fit_idx, hold_idx, seed)
@@ -582,15 +585,55 @@ def _play_restarts(d: LinkData, start: LinkModel, fit_idx: slice, hold_idx: slic
 FOREIGN = ("periodic in position",)
 
 
-def foreign(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
-    """True when the effect `pick` adds to `current` acts where no catalogue effect does (FOREIGN)."""
+def foreign(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
+    """True when the effect `pick` adds to `current` acts where no catalogue effect does (FOREIGN), or is a
+    position-only effect (POSITION_ONLY) that a sinusoid in position fitted on top of `current` beats on
+    held-out data (`periodic_rmse`: the spring's contribution is by construction a function of position,
+    so its location cannot tell it from a pulley's eccentricity; its shape can)."""
     from teleop.diagnosis.locate import locate
 
     new = [n for n in pick.names if n not in current.names]
+    if any(n in POSITION_ONLY for n in new) and periodic_rmse(d, current.model, fit_idx, hold_idx) < pick.rmse_hold:
+        return True
     y1 = predict(d, pick.model)
     y1_without = predict(d, pick.model.with_effects([(n, p) for n, p in pick.model.effects if n not in new]))
     y0 = predict(d, current.model)
     return locate(d, d.y - y0, d.y, index=hold_idx, change=y1 - y1_without).condition in FOREIGN
+
+
+def periodic_rmse(d: LinkData, model: LinkModel, fit_idx: slice, hold_idx: slice) -> float:
+    """Held-out RMSE of `model` plus the sinusoid in the drive position (the harmonic over the travel that
+    projects most of the fit part's residual, locate.periodic_features; amplitude, phase and a constant by
+    least squares on the fit part): the uncatalogued alternative a position-only effect must beat."""
+    from teleop.diagnosis.locate import periodic_features
+
+    r = d.y - predict(d, model)
+    phase = 2 * np.pi * (d.x - d.x.min()) / (float(np.ptp(d.x)) + 1e-300)
+    A = np.column_stack([np.ones(d.n), periodic_features(phase, r, fit_idx)])
+    coef, *_ = np.linalg.lstsq(A[fit_idx], r[fit_idx], rcond=None)
+    return rms((r - A @ coef)[hold_idx])
+
+
+#: effects that are a function of the drive position alone: told apart from the load only where the load is
+#: not itself a function of the position, and from a periodic force (an eccentric pulley) by their shape
+POSITION_ONLY = ("parallel_spring",)
+LOAD_ALIKE_R2 = 0.95
+
+
+def load_alike(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
+    """True (the candidate is dropped) when `pick` adds a position-only effect (POSITION_ONLY) whose own
+    contribution the link's load explains (R^2 >= LOAD_ALIKE_R2 on the held-out part): a spring-loaded
+    tip's force is its position times the spring rate, and a parallel spring there is a change of the
+    baseline gain, or whatever else the gain and a position term can mimic together (a delayed load
+    sensor), not a spring beside the transmission."""
+    from teleop.diagnosis.locate import r2
+
+    new = [n for n in pick.names if n not in current.names]
+    if d.link.kind != "force" or not any(n in POSITION_ONLY for n in new):
+        return False
+    y1 = predict(d, pick.model)
+    y1_without = predict(d, pick.model.with_effects([(n, p) for n, p in pick.model.effects if n not in new]))
+    return r2((y1 - y1_without)[hold_idx], d.u[hold_idx, None]) >= LOAD_ALIKE_R2
 
 
 PAIR_TOP = 3   # when no single effect pays, pairs of the best few singles (held-out, fit) are fitted jointly

@@ -30,7 +30,8 @@ Catalogue (registry key: inputs -> output, parameters):
 - force link, tip load -> motor force (x increasing = pulling):
   capstan_friction (x, load [, theta] -> load; mu, theta, k; general form: preload), coulomb_friction (v, load; Fc),
   viscous_friction (v, load; b), stribeck_friction (v, load; Fc, Fs, vs), dahl_hysteresis (x, load; sigma, Fc),
-  pulley_friction (x, load -> load; mu, wrap, bend, k: seed 002's cable-pulley chain, lumped)
+  pulley_friction (x, load -> load; mu, wrap, bend, k: seed 002's cable-pulley chain, lumped),
+  parallel_spring (x, load -> load; k, x_ref; general form: c): a spring beside the transmission
 - position link over pulleys: pulley_elongation (x, load -> x; c, mu, wrap, bend, k)
 - sensor, true force -> reading:
   sensor_hysteresis (force; h, delta), thermal_drift (force, temperature; c, T0),
@@ -51,6 +52,7 @@ from teleop.physics.capstan import (CapstanCompensator, capstan_band, capstan_in
                                     motor2tip_transitions, tip2motor, tip2motor_transitions)
 from teleop.physics.backlash import backlash
 from teleop.physics.compliance import cable_stretch
+from teleop.physics.spring import spring_force
 from teleop.physics.pulley import Pulley, PulleyChain, pulley_band, pulley_elongation, pulley_motor_force
 from teleop.physics.friction import coulomb, dahl, stribeck, viscous
 from teleop.physics.sensor_effects import hysteresis_offset, thermal_offset
@@ -60,7 +62,7 @@ from teleop.physics.fit import FitResult, fit, rmse
 __all__ = [
     "CHANNELS", "REGISTRY", "Effect", "ParamSpec", "Signals", "Step", "chain", "get_effect", "register",
     "CapstanCompensator", "capstan_band", "capstan_in", "capstan_out", "motor2tip", "motor2tip_transitions",
-    "tip2motor", "tip2motor_transitions", "backlash", "cable_stretch", "coulomb", "dahl", "stribeck",
+    "tip2motor", "tip2motor_transitions", "backlash", "cable_stretch", "spring_force", "coulomb", "dahl", "stribeck",
     "viscous", "hysteresis_offset", "thermal_offset", "damped_force", "hertz_force", "linear_force",
     "sls_force", "FitResult", "fit", "rmse", "Pulley", "PulleyChain", "pulley_band", "pulley_elongation",
     "pulley_motor_force",
