@@ -10,7 +10,8 @@ proportional to load    load and load x direction (load centred: a constant load
                         'after motion reversals')
 during holds            indicator of |v| below 2 % of the peak speed
 loading vs unloading    sign of the output's rate of change (held through pauses)
-with position           position and its square about the mean (a static, conservative force: a spring)
+with position           position and its square about the mean (force links: a static, conservative force
+                        beside the transmission, a spring)
 drifting with temperature, drifting with time, periodic in position (sin/cos of the strongest of 64
 harmonics over the travel), with indentation rate, with indentation depth (d^2: stiffening).
 """
@@ -68,8 +69,9 @@ def condition_features(d: LinkData, output: np.ndarray) -> dict:
         f["at low speed"] = (np.sign(v) * np.exp(-np.abs(v) / max(v_low, 1e-300)))[:, None]
         f["during holds"] = (~moving).astype(float)[:, None]
         f["periodic in position"] = 2 * np.pi * (d.x - d.x.min()) / span   # phase; harmonic picked later
-        dx = (d.x - float(np.mean(d.x))) / span
-        f["with position"] = np.column_stack([dx, dx * dx])
+        if d.link.kind == "force":   # a force beside the transmission (a spring); on a position link a
+            dx = (d.x - float(np.mean(d.x))) / span   # static function of position is the gain's or the load's
+            f["with position"] = np.column_stack([dx, dx * dx])
         if d.load is not None or d.link.kind == "force":
             load = d.u if d.link.kind == "force" else d.load
             dl = load - np.mean(load)
