@@ -587,29 +587,44 @@ FOREIGN = ("periodic in position",)
 
 def foreign(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
     """True when the effect `pick` adds to `current` acts where no catalogue effect does (FOREIGN), or is a
-    position-only effect (POSITION_ONLY) that a sinusoid in position fitted on top of `current` beats on
-    held-out data (`periodic_rmse`: the spring's contribution is by construction a function of position,
-    so its location cannot tell it from a pulley's eccentricity; its shape can)."""
+    position-only effect that a sinusoid in position beats (`periodic_beats`)."""
     from teleop.diagnosis.locate import locate
 
-    new = [n for n in pick.names if n not in current.names]
-    if any(n in POSITION_ONLY for n in new) and periodic_rmse(d, current.model, fit_idx, hold_idx) < pick.rmse_hold:
+    new = _new(current, pick)
+    if periodic_beats(d, current, pick, fit_idx, hold_idx):
         return True
-    y1 = predict(d, pick.model)
-    y1_without = predict(d, pick.model.with_effects([(n, p) for n, p in pick.model.effects if n not in new]))
     y0 = predict(d, current.model)
-    return locate(d, d.y - y0, d.y, index=hold_idx, change=y1 - y1_without).condition in FOREIGN
+    return locate(d, d.y - y0, d.y, index=hold_idx, change=_change(d, pick, new)).condition in FOREIGN
+
+
+def _new(current: Fit, pick: Fit) -> list[str]:
+    """Names of the effects `pick` adds to `current`."""
+    return [n for n in pick.names if n not in current.names]
+
+
+def _change(d: LinkData, pick: Fit, new: list[str]) -> np.ndarray:
+    """(n,) the contribution of effects `new` to `pick`'s prediction: with them minus without them."""
+    without = pick.model.with_effects([(n, p) for n, p in pick.model.effects if n not in new])
+    return predict(d, pick.model) - predict(d, without)
+
+
+def periodic_beats(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
+    """True when `pick` adds a position-only effect (POSITION_ONLY) and a sinusoid in position fitted on top
+    of `current` (`periodic_rmse`) does better on held-out data: the spring's contribution is by
+    construction a function of position, so its location cannot tell it from a pulley's eccentricity; its
+    shape can."""
+    return (any(n in POSITION_ONLY for n in _new(current, pick))
+            and periodic_rmse(d, current.model, fit_idx, hold_idx) < pick.rmse_hold)
 
 
 def periodic_rmse(d: LinkData, model: LinkModel, fit_idx: slice, hold_idx: slice) -> float:
     """Held-out RMSE of `model` plus the sinusoid in the drive position (the harmonic over the travel that
     projects most of the fit part's residual, locate.periodic_features; amplitude, phase and a constant by
     least squares on the fit part): the uncatalogued alternative a position-only effect must beat."""
-    from teleop.diagnosis.locate import periodic_features
+    from teleop.diagnosis.locate import periodic_features, travel_phase
 
     r = d.y - predict(d, model)
-    phase = 2 * np.pi * (d.x - d.x.min()) / (float(np.ptp(d.x)) + 1e-300)
-    A = np.column_stack([np.ones(d.n), periodic_features(phase, r, fit_idx)])
+    A = np.column_stack([np.ones(d.n), periodic_features(travel_phase(d.x), r, fit_idx)])
     coef, *_ = np.linalg.lstsq(A[fit_idx], r[fit_idx], rcond=None)
     return rms((r - A @ coef)[hold_idx])
 
@@ -628,12 +643,10 @@ def load_alike(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
     sensor), not a spring beside the transmission."""
     from teleop.diagnosis.locate import r2
 
-    new = [n for n in pick.names if n not in current.names]
+    new = _new(current, pick)
     if d.link.kind != "force" or not any(n in POSITION_ONLY for n in new):
         return False
-    y1 = predict(d, pick.model)
-    y1_without = predict(d, pick.model.with_effects([(n, p) for n, p in pick.model.effects if n not in new]))
-    return r2((y1 - y1_without)[hold_idx], d.u[hold_idx, None]) >= LOAD_ALIKE_R2
+    return r2(_change(d, pick, new)[hold_idx], d.u[hold_idx, None]) >= LOAD_ALIKE_R2
 
 
 PAIR_TOP = 3   # when no single effect pays, pairs of the best few singles (held-out, fit) are fitted jointly

@@ -52,6 +52,11 @@ def _travel_since_reversal(x: np.ndarray, s: np.ndarray) -> np.ndarray:
     return np.abs(x - x[idx])
 
 
+def travel_phase(x: np.ndarray) -> np.ndarray:
+    """(n,) the position as a phase over the travel [rad]: 0 at its lowest, 2 pi at its highest."""
+    return 2 * np.pi * (x - x.min()) / (float(np.ptp(x)) + 1e-300)
+
+
 def condition_features(d: LinkData, output: np.ndarray) -> dict:
     """condition -> (n, k) regressors available for this link."""
     f = {}
@@ -68,7 +73,7 @@ def condition_features(d: LinkData, output: np.ndarray) -> dict:
         v_low = float(np.percentile(np.abs(v[moving]), 10)) if moving.sum() > 10 else 0.1 * vmax
         f["at low speed"] = (np.sign(v) * np.exp(-np.abs(v) / max(v_low, 1e-300)))[:, None]
         f["during holds"] = (~moving).astype(float)[:, None]
-        f["periodic in position"] = 2 * np.pi * (d.x - d.x.min()) / span   # phase; harmonic picked later
+        f["periodic in position"] = travel_phase(d.x)   # harmonic picked later
         if d.link.kind == "force":   # a force beside the transmission (a spring); on a position link a
             dx = (d.x - float(np.mean(d.x))) / span   # static function of position is the gain's or the load's
             f["with position"] = np.column_stack([dx, dx * dx])

@@ -12,10 +12,10 @@ import pytest
 
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.identify import robust_rms, rms
-from teleop.diagnosis.recording_io import read_interchange, read_recording, write_interchange
+from teleop.diagnosis.recording_io import read_recording
 from teleop.physics import Signals, get_effect
 from tests._data import MRDLAB, needs_mrdlab
-from tests._signals import multisine
+from tests._signals import force_link_recording, multisine
 
 THETA = get_effect("capstan_friction").spec("theta").default
 
@@ -37,14 +37,8 @@ def _recording(tmp_path, seed: int, preload: float, k: float):
     """A force-link recording of the capstan with `preload` [N] (mu 0.15, stick stiffness k [N/m]), made
     sample by sample with the Step form, offset 0.3 N, sensor noise 0.01 N (forces) and 2 um (position)."""
     t, x, load = _strokes(seed)
-    rng = np.random.default_rng(seed + 100)
     motor = _stepped({"mu": 0.15, "theta": THETA, "k": k, "preload": preload}, x, load) + 0.3
-    path = write_interchange(tmp_path / "p.csv", t,
-                             {"motor_pos": x + rng.normal(0, 2e-6, t.size),
-                              "motor_force": motor + rng.normal(0, 0.01, t.size),
-                              "tip_force": load + rng.normal(0, 0.01, t.size)},
-                             {"motor_pos": "m", "motor_force": "N", "tip_force": "N"}, {"load": "external"})
-    return read_interchange(path)
+    return force_link_recording(tmp_path / "p.csv", t, x, motor, load, seed + 100)
 
 
 def test_step_and_array_forms_agree_and_the_plain_law_is_unchanged():

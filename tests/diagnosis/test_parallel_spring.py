@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.recording_io import read_interchange, read_recording, write_interchange
+from teleop.diagnosis.recording_io import read_interchange, read_recording
 from teleop.physics import Signals, get_effect
 from tests._data import MRDLAB, needs_mrdlab
-from tests._signals import multisine
+from tests._signals import force_link_recording, multisine
 
 THETA = get_effect("capstan_friction").spec("theta").default
 SHEATH = {"mu": 0.15, "theta": THETA, "k": 2e4}
@@ -42,15 +42,8 @@ def _recording(tmp_path, seed: int, spring: dict | None, load_of_position: bool 
     t, x, load = _strokes(seed)
     if load_of_position:   # a spring-loaded tip: the load is the position times the spring rate
         load = 2.0 + 150.0 * x
-    rng = np.random.default_rng(seed + 100)
     motor = _stepped(spring, x, load) + 0.3
-    load = np.interp(t - lag, t, load)
-    path = write_interchange(tmp_path / "s.csv", t,
-                             {"motor_pos": x + rng.normal(0, 2e-6, t.size),
-                              "motor_force": motor + rng.normal(0, 0.01, t.size),
-                              "tip_force": load + rng.normal(0, 0.01, t.size)},
-                             {"motor_pos": "m", "motor_force": "N", "tip_force": "N"}, {"load": "external"})
-    return read_interchange(path)
+    return force_link_recording(tmp_path / "s.csv", t, x, motor, np.interp(t - lag, t, load), seed + 100)
 
 
 def test_step_and_array_forms_agree():
