@@ -685,6 +685,8 @@ def _pair(d: LinkData, current: Fit, cands: list, fit_idx: slice, hold_idx: slic
             f = min(fits, key=lambda g: g.rmse_fit)
             if f.at_bound or any(wrong_form(n, p, d) for n, p in f.model.effects):
                 continue
+            if periodic_beats(d, current, f, fit_idx, hold_idx):   # a spring in a pair faces the same guard
+                continue
             if f.rmse_hold * ACCEPT ** 2 <= current.rmse_hold and delta_bic(f, current) < 0:
                 if best is None or f.rmse_hold < best.rmse_hold:
                     best = f
