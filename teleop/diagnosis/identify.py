@@ -217,7 +217,7 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
 
     def resid(w, data):
         r = (predict(data, unpack(w)) - data.y) / ysc
-        return np.nan_to_num(r, nan=1e3, posinf=1e3, neginf=-1e3)
+        return r if np.isfinite(r).all() else np.nan_to_num(r, nan=1e3, posinf=1e3, neginf=-1e3)
 
     # bounded unit-space parameters u in [0, 1] enter as u = (1 + sin w) / 2 (unbounded w: MINPACK's
     # Levenberg-Marquardt, no BLAS threads); a parameter ending on a bound shows as u in {0, 1}
@@ -478,7 +478,10 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
             if name in current.names:
                 continue
             try:
-                f = fit_chain(d, current.model, (name,), fit_idx, hold_idx, seed=seed, freeze=round_ > 0)
+                # a position-only force moves the gain, and the gain multiplies the load's own hysteresis
+                # loop, which a friction already in the chain had taken its share of: the chain refits too
+                f = fit_chain(d, current.model, (name,), fit_idx, hold_idx, seed=seed,
+                              freeze=round_ > 0 and name not in POSITION_ONLY)
                 if name == "backlash" and d.link.kind == "position" and not current.model.effects:
                     f = min([f] + _play_restarts(d, current.model, fit_idx, hold_idx, seed), key=lambda g: g.rmse_fit)
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
@@ -486,6 +489,8 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
             if round_ == 0:
                 ranking[name] = f
             cands.append(f)
+            if name in POSITION_ONLY:
+                cands.extend(_curved(d, f, name, fit_idx, hold_idx, seed))
             if progress is not None:
                 progress(1)
         cands = [f for f in cands if not load_alike(d, current, f, hold_idx)]
@@ -500,6 +505,9 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
             # paid, the joint one must pay the threshold twice over (the joint refit frees the whole chain)
             joint = []
             for f in sorted(cands, key=lambda g: g.rmse_hold)[:PAIR_TOP]:
+                if _new(current, f)[-1] in POSITION_ONLY:   # fitted with the chain free already
+                    joint.append(f)
+                    continue
                 try:
                     joint.append(fit_chain(d, f.model, (), fit_idx, hold_idx, seed=seed))
                 except (ValueError, FloatingPointError, np.linalg.LinAlgError):
@@ -537,6 +545,26 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
     return tuple(steps), current, delay
 
 
+def _curved(d: LinkData, plain: Fit, name: str, fit_idx: slice, hold_idx: slice, seed: int) -> list:
+    """[the position-only effect `name` of the Fit `plain` in its general form (ParamSpec.shape freed,
+    the chain refitted with it)] as a candidate of its own where it beats the plain form as every general
+    form must (held-out RMSE lower by PARSIMONY, a better information criterion), else []. Wherever the
+    load follows the drive position, a position-only force's linear part is the baseline gain's to take
+    and its curvature is what tells it apart, so the general form cannot wait for the plain one to pay."""
+    shape = tuple(f"{name}.{s.name}" for s in get_effect(name).params if s.shape)
+    try:
+        f = fit_chain(d, plain.model, (), fit_idx, hold_idx, seed=seed, free_shape=shape)
+    except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+        return []
+    better = f.rmse_hold * (1 + PARSIMONY) <= plain.rmse_hold and delta_bic(f, plain) < 0
+    # and the curvature must be what it gains by, not a better start of the plain form's parameters: the
+    # same fit with the general form's parameters at their plain defaults is worse by PARSIMONY
+    flat = _evaluate(d, f.model.with_effects([(n, _plain(n, p) if n == name else p) for n, p in f.model.effects]),
+                     fit_idx, hold_idx, plain.k)
+    needed = flat.rmse_hold >= f.rmse_hold * (1 + PARSIMONY)
+    return [f] if better and needed and not f.at_bound else []
+
+
 def _pays(pick: Fit | None, current: Fit) -> bool:
     """An addition pays: held-out RMSE lower by ACCEPT and a better information criterion."""
     return pick is not None and pick.rmse_hold * ACCEPT <= current.rmse_hold and delta_bic(pick, current) < 0
@@ -547,7 +575,8 @@ def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: 
     play, growth with position and start) when that form pays: held-out RMSE lower by more than PARSIMONY
     and a better information criterion. A shape parameter that ends on its plain bound is held there and
     the rest refitted once. Else `pick` as it is."""
-    free = tuple(f"{n}.{s.name}" for n in added for s in get_effect(n).params if s.shape)
+    # a position-only effect's general form was a candidate of its own (_curved), under the same rule
+    free = tuple(f"{n}.{s.name}" for n in added if n not in POSITION_ONLY for s in get_effect(n).params if s.shape)
     if not free:
         return pick
     for _ in range(2):
@@ -610,11 +639,12 @@ def _change(d: LinkData, pick: Fit, new: list[str]) -> np.ndarray:
 
 def periodic_beats(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
     """True when `pick` adds a position-only effect (POSITION_ONLY) and a sinusoid in position fitted on top
-    of `current` (`periodic_rmse`) does better on held-out data: the spring's contribution is by
-    construction a function of position, so its location cannot tell it from a pulley's eccentricity; its
-    shape can."""
+    of `current` (`periodic_rmse`) does as well on held-out data (within PARSIMONY, or better): the spring's
+    contribution is by construction a function of position, so its location cannot tell it from a
+    pulley's eccentricity; its shape can, where it fits clearly better (a spring's curvature standing in
+    for a late load sensor fits no better than the sinusoid)."""
     return (any(n in POSITION_ONLY for n in _new(current, pick))
-            and periodic_rmse(d, current.model, fit_idx, hold_idx) < pick.rmse_hold)
+            and periodic_rmse(d, current.model, fit_idx, hold_idx) < pick.rmse_hold * (1 + PARSIMONY))
 
 
 def periodic_rmse(d: LinkData, model: LinkModel, fit_idx: slice, hold_idx: slice) -> float:
@@ -640,13 +670,25 @@ def load_alike(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
     contribution the link's load explains (R^2 >= LOAD_ALIKE_R2 on the held-out part): a spring-loaded
     tip's force is its position times the spring rate, and a parallel spring there is a change of the
     baseline gain, or whatever else the gain and a position term can mimic together (a delayed load
-    sensor), not a spring beside the transmission."""
+    sensor), not a spring beside the transmission. In its general form the test is on the part no gain
+    can take, the contribution of the general form's parameters (a spring's curvature): the linear part
+    trades freely with the gain wherever the load follows the position, whatever its size."""
     from teleop.diagnosis.locate import r2
 
     new = _new(current, pick)
     if d.link.kind != "force" or not any(n in POSITION_ONLY for n in new):
         return False
-    return r2(_change(d, pick, new)[hold_idx], d.u[hold_idx, None]) >= LOAD_ALIKE_R2
+    change = _change(d, pick, new)
+    shaped = pick.model.with_effects([(n, _plain(n, p) if n in new else p) for n, p in pick.model.effects])
+    if shaped != pick.model:
+        change = predict(d, pick.model) - predict(d, shaped)
+    return r2(change[hold_idx], d.u[hold_idx, None]) >= LOAD_ALIKE_R2
+
+
+def _plain(name: str, p: dict) -> dict:
+    """Parameters p of effect `name` with its general form's parameters (ParamSpec.shape) at their plain
+    defaults."""
+    return {**p, **{s.name: s.default for s in get_effect(name).params if s.shape and s.name in p}}
 
 
 PAIR_TOP = 3   # when no single effect pays, pairs of the best few singles (held-out, fit) are fitted jointly

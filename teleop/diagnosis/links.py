@@ -29,7 +29,6 @@ effects = motor force; contact: contact law (baseline or a catalogue contact eff
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -334,9 +333,9 @@ def clean_motion(x: np.ndarray, t: np.ndarray, backward: bool = False) -> tuple[
 def fast_replace(sig: Signals, **changes) -> Signals:
     """A copy of `sig` with channels replaced by arrays already known to be valid (n,) floats; unlike
     Signals.replace nothing is re-checked or re-derived (the fitting loop calls this thousands of times)."""
-    out = copy.copy(sig)
-    for k, v in changes.items():
-        object.__setattr__(out, k, v)
+    out = object.__new__(type(sig))   # a shallow copy, without the copy module's reduce protocol
+    out.__dict__.update(sig.__dict__)
+    out.__dict__.update(changes)
     return out
 
 

@@ -31,7 +31,7 @@ Catalogue (registry key: inputs -> output, parameters):
   capstan_friction (x, load [, theta] -> load; mu, theta, k; general form: preload), coulomb_friction (v, load; Fc),
   viscous_friction (v, load; b), stribeck_friction (v, load; Fc, Fs, vs), dahl_hysteresis (x, load; sigma, Fc),
   pulley_friction (x, load -> load; mu, wrap, bend, k: seed 002's cable-pulley chain, lumped),
-  parallel_spring (x, load -> load; k, x_ref; general form: c): a spring beside the transmission
+  parallel_spring (x, load -> load; k, x_ref; general form: g): a spring beside the transmission
 - position link over pulleys: pulley_elongation (x, load -> x; c, mu, wrap, bend, k)
 - sensor, true force -> reading:
   sensor_hysteresis (force; h, delta), thermal_drift (force, temperature; c, T0),

@@ -119,7 +119,9 @@ class Signals:
 class ParamSpec:
     """One model parameter: SI unit, fit bounds [lower, upper], a typical value, and its meaning.
 
-    `log=True` fits it on a log scale (for quantities spanning decades; then lower > 0).
+    `log=True` fits it on a log scale (for quantities spanning decades; then lower > 0), or, with `tiny` > 0,
+    a signed quantity spanning decades (lower < 0 < upper) on asinh(value / tiny): linear within +-tiny,
+    logarithmic beyond, either sign (a stiffness that may be negative).
     Values given to an effect must be >= 0 when lower >= 0, and > 0 when `positive` (a divisor).
     `shape=True`: a parameter of the effect's general form whose default is the plain form (backlash's
     elastic part, wide play, growth and start): fits hold it at its default unless asked to free it.
@@ -138,28 +140,39 @@ class ParamSpec:
     positive: bool = False
     shape: bool = False
     state: bool = False
+    tiny: float = 0.0
 
     def __post_init__(self):
-        if not self.lower < self.upper or (self.log and self.lower <= 0):
+        signed = self.log and self.tiny > 0
+        if not self.lower < self.upper or (self.log and not signed and self.lower <= 0) or (
+                signed and not self.lower < 0 < self.upper):
             raise ValueError(f"ParamSpec {self.name}: bad bounds [{self.lower}, {self.upper}]")
 
-    def to_unit(self, value: float) -> float:
-        """Map a value in [lower, upper] to [0, 1] (linearly or in log)."""
+    def _scale(self, value: float) -> float:
+        """The fit's coordinate of `value`: log, asinh(value / tiny) (signed log) or the value itself."""
         if self.log:
-            return (math.log(value) - math.log(self.lower)) / (math.log(self.upper) - math.log(self.lower))
-        return (value - self.lower) / (self.upper - self.lower)
+            return math.asinh(value / self.tiny) if self.tiny > 0 else math.log(value)
+        return value
+
+    def to_unit(self, value: float) -> float:
+        """Map a value in [lower, upper] to [0, 1] (linearly, in log or in signed log)."""
+        lo, hi = self._scale(self.lower), self._scale(self.upper)
+        return (self._scale(value) - lo) / (hi - lo)
 
     def from_unit(self, u: float) -> float:
         """Inverse of `to_unit`."""
+        lo, hi = self._scale(self.lower), self._scale(self.upper)
+        z = lo + u * (hi - lo)
         if self.log:
-            return math.exp(math.log(self.lower) + u * (math.log(self.upper) - math.log(self.lower)))
-        return self.lower + u * (self.upper - self.lower)
+            return self.tiny * math.sinh(z) if self.tiny > 0 else math.exp(z)
+        return z
 
     def dvalue_du(self, value: float) -> float:
         """d value / d u at `value` (for standard errors)."""
+        span = self._scale(self.upper) - self._scale(self.lower)
         if self.log:
-            return value * (math.log(self.upper) - math.log(self.lower))
-        return self.upper - self.lower
+            return (math.hypot(self.tiny, value) if self.tiny > 0 else value) * span
+        return span
 
     def clip(self, value: float) -> float:
         """`value` clipped into [lower, upper]."""

@@ -49,27 +49,27 @@ def _recording(tmp_path, seed: int, spring: dict | None, load_of_position: bool 
 def test_step_and_array_forms_agree():
     t, x, load = _strokes(0)
     eff = get_effect("parallel_spring")
-    for p in ({"k": 200.0, "x_ref": 0.001}, {"k": 50.0, "c": -40.0, "x_ref": -0.002}):
+    for p in ({"k": 200.0, "x_ref": 0.001}, {"k": 50.0, "g": -4e3, "x_ref": -0.002}, {"k": -30.0, "g": 2e4, "x_ref": 0.0}):
         st = eff.make_step(p)
         stepped = np.array([st.step(x=float(a), load=float(b)) for a, b in zip(x, load)])
         arr = eff.apply(Signals(t=t, x=x, load=load), p)
         assert np.max(np.abs(arr - stepped)) < 1e-12
         dx = x - p["x_ref"]
-        assert np.allclose(arr - load, p["k"] * dx * (1 + p.get("c", 0.0) * dx), rtol=1e-12, atol=1e-15)
+        assert np.allclose(arr - load, p["k"] * dx + 0.5 * p.get("g", 0.0) * dx * dx, rtol=1e-12, atol=1e-15)
 
 
-@pytest.mark.parametrize("seed, k, c", [(2, 200.0, 0.0), (4, 120.0, 60.0)])
-def test_diagnosis_names_the_spring_beside_the_sheath(tmp_path, seed, k, c):
-    rec = _recording(tmp_path, seed, {"k": k, "c": c, "x_ref": 0.0})
+@pytest.mark.parametrize("seed, k, g", [(2, 200.0, 0.0), (4, 120.0, 1.44e4)])
+def test_diagnosis_names_the_spring_beside_the_sheath(tmp_path, seed, k, g):
+    rec = _recording(tmp_path, seed, {"k": k, "g": g, "x_ref": 0.0})
     doc = diagnose(rec).as_dict()
     assert [f["effect"] for f in doc["findings"]] == ["parallel_spring"], doc["findings"]
     f = doc["findings"][0]
     assert f["where"]["condition"] == "with position"
-    # the fit counts the spring from the record's mean position: its stiffness there is k (1 + 2 c x_mean)
+    # the fit counts the spring from the record's mean position: its stiffness there is k + g x_mean
     x_ref = f["params"]["x_ref"]["value"]
-    assert f["params"]["k"]["value"] == pytest.approx(k * (1 + 2 * c * x_ref), rel=0.2)
-    if c:
-        assert f["params"]["c"]["value"] == pytest.approx(c / (1 + 2 * c * x_ref), rel=0.3)
+    assert f["params"]["k"]["value"] == pytest.approx(k + g * x_ref, rel=0.2)
+    if g:
+        assert f["params"]["g"]["value"] == pytest.approx(g, rel=0.3)
     assert f["improvement"] >= 2.0
     assert doc["channels"]["motor_force"]["rmse_model"] < 0.02   # the noise is 0.01 N
 
@@ -84,6 +84,22 @@ def test_a_load_that_follows_the_position_hides_the_spring(tmp_path):
         assert "parallel_spring" not in [f["effect"] for f in doc["findings"]], doc["findings"]
         if lag == 0.0:
             assert doc["findings"] == []
+
+
+def test_a_curved_spring_shows_where_the_load_follows_the_position(tmp_path):
+    # on a spring-loaded tip the gain takes any linear force of the position, so a spring beside the
+    # sheath shows only by its curvature: a stiffness that changes sign mid-stroke (k < 0 at the mean
+    # position, g > 0) is named in its general form, its gradient g within 20 %
+    k, g = -50.0, 7e3              # N/m, N/m^2: the stiffness k + g dx changes sign at dx = 7 mm
+    t, x, _ = _strokes(5)
+    load = 2.0 + 150.0 * x
+    rec = force_link_recording(tmp_path / "s.csv", t, x, _stepped({"k": k, "g": g, "x_ref": 0.0}, x, load) + 0.3,
+                               load, 105)
+    doc = diagnose(rec).as_dict()
+    assert [f["effect"] for f in doc["findings"]] == ["parallel_spring"], doc["findings"]
+    assert doc["findings"][0]["params"]["g"]["value"] == pytest.approx(g, rel=0.2)   # the same about any x_ref
+    assert doc["findings"][0]["improvement"] >= 2.0
+    assert doc["channels"]["motor_force"]["rmse_model"] < 0.02
 
 
 @needs_mrdlab

@@ -58,7 +58,7 @@ def scenario(name: str) -> Scenario:
     if name == "dahl_hysteresis":
         return Scenario(Signals(t=t, x=x, load=load), {"sigma": 2e3, "Fc": 0.3}, 0.02)
     if name == "parallel_spring":
-        return Scenario(Signals(t=t, x=x, load=load), {"k": 150.0}, 0.02, {"x_ref": 1e-3, "c": 40.0})
+        return Scenario(Signals(t=t, x=x, load=load), {"k": 150.0}, 0.02, {"x_ref": 1e-3, "g": 1.2e4})
     if name == "sensor_hysteresis":
         F = 5.0 + 3.0 * np.sin(2 * np.pi * 0.5 * t) + sum_of_sines(t, 1.0, seed=5)
         return Scenario(Signals(t=t, force=F), {"h": 0.3, "delta": 0.5}, 0.02)

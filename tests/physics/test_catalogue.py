@@ -7,6 +7,7 @@ import pytest
 
 from teleop.errors import InputError
 from teleop.physics import REGISTRY, Signals, chain, fit, get_effect
+from teleop.physics.base import ParamSpec
 
 from ._scenarios import scenario
 from ._signals import assert_params_close, noisy, step_matches_apply
@@ -68,6 +69,25 @@ def test_specs_are_consistent(name):
     json.dumps(eff.describe(), allow_nan=False)
     y = eff.apply(scenario(name).signals)  # defaults work
     assert y.shape == scenario(name).signals.t.shape and np.isfinite(y).all()
+
+
+def test_signed_log_scale_spans_decades_of_either_sign():
+    # a stiffness that may be negative (parallel_spring's k and g): asinh(value / tiny) maps [lower, upper]
+    # onto [0, 1] monotonically, 0 to the middle, and d value / d u is the mapping's own derivative
+    p = ParamSpec("k", "N/m", -1e9, 1e9, 1.0, "test", log=True, tiny=1e-6)
+    vals = [-1e9, -3.0, -1e-7, 0.0, 2e-6, 0.02, 150.0, 1e9]
+    units = [p.to_unit(v) for v in vals]
+    assert units[0] == 0.0 and units[-1] == 1.0 and units[3] == pytest.approx(0.5) and np.all(np.diff(units) > 0)
+    for v in vals:
+        assert p.from_unit(p.to_unit(v)) == pytest.approx(v, rel=1e-9, abs=1e-15)
+        u, h = p.to_unit(v), 1e-7
+        if 0 < u - h and u + h < 1:
+            slope = (p.from_unit(u + h) - p.from_unit(u - h)) / (2 * h)
+            assert p.dvalue_du(v) == pytest.approx(slope, rel=1e-4)
+    # the resolution is logarithmic: 0.02 and 150 are as far apart in u as 2e-3 and 15
+    assert p.to_unit(150.0) - p.to_unit(0.02) == pytest.approx(p.to_unit(15.0) - p.to_unit(2e-3), rel=1e-6)
+    with pytest.raises(ValueError):
+        ParamSpec("k", "N/m", 0.0, 1e9, 1.0, "test", log=True, tiny=1e-6)   # a signed scale needs both signs
 
 
 def test_bad_inputs_give_one_line_input_errors():
