@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.diagnosis.identify import Fit, LinkResult, added, fit_chain, identify_link, rms, simulation_baseline
+from teleop.diagnosis.identify import (Fit, LinkResult, added, fit_chain, identify_link, rms, simulation_baseline,
+                                      with_plain)
 from teleop.diagnosis.links import LinkData, find_links, is_exact, link_data, predict
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
@@ -128,11 +129,10 @@ class Diagnosis:
                 # or, where the step turns a baseline effect general, with it in its plain form
                 refines = name in before.names   # a baseline effect turned general (before a pair's rebinding)
                 if refines:
-                    plain = get_effect(name).plain_form()
-                    without = [(n, {**p, **plain} if n == name else p) for n, p in after.model.effects]
+                    y1_without = predict(d, with_plain(after.model, (name,)))
                 else:
                     without = [(n, p) for n, p in after.model.effects if n != name]
-                y1_without = predict(d, after.model.with_effects(without))
+                    y1_without = predict(d, after.model.with_effects(without))
                 if len(added(before, after)) > 1:
                     # a pair that pays only together: each one's share is what the pair loses without it
                     before = Fit(after.model, {}, math.nan, rms((d.y - y1_without)[self.hold]), after.k, after.n_eff)

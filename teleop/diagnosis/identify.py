@@ -564,8 +564,7 @@ def _curved(d: LinkData, plain: Fit, name: str, fit_idx: slice, hold_idx: slice,
     better = f.rmse_hold * (1 + PARSIMONY) <= plain.rmse_hold and delta_bic(f, plain) < 0
     # and the curvature must be what it gains by, not a better start of the plain form's parameters: the
     # same fit with the general form's parameters at their plain defaults is worse by PARSIMONY
-    flat = _evaluate(d, f.model.with_effects([(n, _plain(n, p) if n == name else p) for n, p in f.model.effects]),
-                     fit_idx, hold_idx, plain.k)
+    flat = _evaluate(d, with_plain(f.model, (name,)), fit_idx, hold_idx, plain.k)
     needed = flat.rmse_hold >= f.rmse_hold * (1 + PARSIMONY)
     return [f] if better and needed and not f.at_bound else []
 
@@ -683,17 +682,15 @@ def load_alike(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
     new = _new(current, pick)
     if d.link.kind != "force" or not any(n in POSITION_ONLY for n in new):
         return False
-    change = _change(d, pick, new)
-    shaped = pick.model.with_effects([(n, _plain(n, p) if n in new else p) for n, p in pick.model.effects])
-    if shaped != pick.model:
-        change = predict(d, pick.model) - predict(d, shaped)
+    plain = with_plain(pick.model, new)
+    change = predict(d, pick.model) - predict(d, plain) if plain != pick.model else _change(d, pick, new)
     return r2(change[hold_idx], d.u[hold_idx, None]) >= LOAD_ALIKE_R2
 
 
-def _plain(name: str, p: dict) -> dict:
-    """Parameters p of effect `name` with its general form's parameters (ParamSpec.shape) at their plain
-    defaults."""
-    return {**p, **{s.name: s.default for s in get_effect(name).params if s.shape and s.name in p}}
+def with_plain(model: LinkModel, names) -> LinkModel:
+    """`model` with the effects `names` in their plain form (ParamSpec.shape parameters at their defaults)."""
+    return model.with_effects([(n, {**p, **get_effect(n).plain_form()} if n in names else p)
+                               for n, p in model.effects])
 
 
 PAIR_TOP = 3   # when no single effect pays, pairs of the best few singles (held-out, fit) are fitted jointly
