@@ -131,8 +131,7 @@ class Diagnosis:
                 if refines:
                     y1_without = predict(d, with_plain(after.model, (name,)))
                 else:
-                    without = [(n, p) for n, p in after.model.effects if n != name]
-                    y1_without = predict(d, after.model.with_effects(without))
+                    y1_without = predict(d, after.model.without((name,)))
                 if len(added(before, after)) > 1:
                     # a pair that pays only together: each one's share is what the pair loses without it
                     before = Fit(after.model, {}, math.nan, rms((d.y - y1_without)[self.hold]), after.k, after.n_eff)

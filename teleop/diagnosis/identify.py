@@ -540,7 +540,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
                 continue
         if not pays:
             break
-        general = general_form(d, pick, [n for n in pick.names if n not in current.names], fit_idx, hold_idx, seed)
+        general = general_form(d, pick, _new(current, pick), fit_idx, hold_idx, seed)
         if general is not pick:
             ends = [_grow(d, f, tuple(steps) + ((current, f),), pool, round_ + 1, fit_idx, hold_idx, seed,
                           progress, ranking) for f in (general, pick)]
@@ -637,8 +637,7 @@ def _new(current: Fit, pick: Fit) -> list[str]:
 
 def _change(d: LinkData, pick: Fit, new: list[str]) -> np.ndarray:
     """(n,) the contribution of effects `new` to `pick`'s prediction: with them minus without them."""
-    without = pick.model.with_effects([(n, p) for n, p in pick.model.effects if n not in new])
-    return predict(d, pick.model) - predict(d, without)
+    return predict(d, pick.model) - predict(d, pick.model.without(new))
 
 
 def periodic_beats(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
@@ -738,8 +737,8 @@ def _pair(d: LinkData, current: Fit, cands: list, fit_idx: slice, hold_idx: slic
         return []
     a, b = best.names[-2], best.names[-1]
     k_one = current.k + len(get_effect(a).params)
-    only_a = _evaluate(d, best.model.with_effects([e for e in best.model.effects if e[0] != b]), fit_idx, hold_idx, k_one)
-    only_b = _evaluate(d, best.model.with_effects([e for e in best.model.effects if e[0] != a]), fit_idx, hold_idx, k_one)
+    only_a = _evaluate(d, best.model.without((b,)), fit_idx, hold_idx, k_one)
+    only_b = _evaluate(d, best.model.without((a,)), fit_idx, hold_idx, k_one)
     if min(only_a.rmse_hold, only_b.rmse_hold) < best.rmse_hold * ACCEPT:   # each one must be needed
         return []
     return [(current, best)]

@@ -275,6 +275,10 @@ class LinkModel:
         base = sum(1 for n in self.baseline_names if n in names)
         return LinkModel(self.link, self.gain, self.offset, self.direction, self.load_sign, effects, base)
 
+    def without(self, names) -> "LinkModel":
+        """This model with the effects `names` taken out (same gain and offset)."""
+        return self.with_effects([(n, p) for n, p in self.effects if n not in names])
+
     @property
     def baseline_names(self) -> tuple:
         """Names of the baseline's effects."""
