@@ -17,7 +17,7 @@ from urllib.parse import parse_qs, urlparse
 
 import numpy as np
 
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 
 def _direct_init(cls):
@@ -155,7 +155,7 @@ class RobotReading:
         fsr_counts: (6,) raw FSR ADC readings [counts].
         position_steps: (6,) motor positions [microsteps] relative to home.
         commanded_lengths: (6,) last accepted cable-length command [m].
-        status: firmware status flags, teleop.robot_status.RobotStatus (bit 0 homed, bit 1 watchdog stop, bit 2
+        status: firmware status flags, teleop.core.robot_status.RobotStatus (bit 0 homed, bit 1 watchdog stop, bit 2
             host STOP latch).
         boot_id: firmware boot identifier (changes after a reset).
         wrench_truth: (6,) ground-truth external wrench [N, N m] when the backend has one (the seed's

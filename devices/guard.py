@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from devices.base import DeviceError
-from teleop.rendering import clamp_norm
+from teleop.core.rendering import clamp_norm
 
 
 def guarded_force(dev, force, who: str) -> tuple:

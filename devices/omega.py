@@ -16,7 +16,7 @@ import numpy as np
 
 from devices.base import OMEGA_SPEC, ContextDevice, DeviceError, DeviceUnavailable, HapticSample
 from devices.guard import guarded_force
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 
 class OmegaStylus(ContextDevice):

@@ -15,12 +15,12 @@ import time
 import numpy as np
 
 from devices.base import TOUCH_SPEC, ContextDevice, DeviceError, DeviceSpec, HapticSample, RobotReading, RobotSpec
-from teleop.errors import InputError
-from teleop.recording import TOPIC_ROBOT
+from teleop.core.errors import InputError
+from teleop.io.recording import TOPIC_ROBOT
 
 
 def _load(path: str):
-    from teleop.recording import read_session
+    from teleop.io.recording import read_session
 
     s = read_session(path)
     if not s.records:

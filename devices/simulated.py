@@ -26,10 +26,10 @@ import numpy as np
 
 from devices.base import OMEGA_SPEC, TOUCH_SPEC, ContextDevice, DeviceError, DeviceSpec, HapticSample
 from devices.guard import guarded_force
-from teleop.errors import InputError
-from teleop.kernels import operator as KO
-from teleop.kernels.operator import operator_steps, script_offset
-from teleop.kinematics import rotation_zyx
+from teleop.core.errors import InputError
+from teleop.core.kernels import operator as KO
+from teleop.core.kernels.operator import operator_steps, script_offset
+from teleop.core.kinematics import rotation_zyx
 
 SCRIPTS = ("hold", "sine", "pokes", "recorded")
 
@@ -304,7 +304,7 @@ def from_url(parsed, options: dict) -> SimulatedStylus:
 def load_points(path: str) -> np.ndarray:
     """(N, 4) t, x, y, z [s, m] from a CSV (header t_s,x_m,y_m,z_m) or a session recording's stylus track."""
     if path.endswith(".mcap"):
-        from teleop.recording import read_session
+        from teleop.io.recording import read_session
 
         s = read_session(path)
         rows = [(m["t"], *m["measured_cp"]) for m in s.messages("/stylus")]

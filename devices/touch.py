@@ -18,7 +18,7 @@ import numpy as np
 
 from devices.base import TOUCH_SPEC, ContextDevice, DeviceError, DeviceUnavailable, HapticSample
 from devices.guard import guarded_force
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 MM = 1e-3
 

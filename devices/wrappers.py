@@ -5,7 +5,7 @@
   physics step never stalls the haptic tick and shares no interpreter lock with it.
 - `DelayedRobot`: readings arrive `delay` reads late (link latency).
 - `BacklashCompensatedRobot`: the inverse of each cable's play added to the commanded lengths (backlash
-  feed-forward, teleop.diagnosis.feedforward), within the robot's length and speed limits.
+  feed-forward, teleop.core.control.feedforward), within the robot's length and speed limits.
 - `NoisyStylus`: Gaussian noise on the stylus position (seeded).
 - `LoggedDevice`: keeps every call and result (for tests and debugging).
 """
@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from devices.base import ContextDevice, DeviceError, HapticSample, RobotReading
-from teleop.kernels.safety import all_finite
+from teleop.core.kernels.safety import all_finite
 
 # ------------------------------------------------------------------------------------------------------------
 # generic wrappers
@@ -78,7 +78,7 @@ class DelayedRobot(Wrapper):
 
 class BacklashCompensatedRobot(Wrapper):
     """Commands each cable up to half its play `width` [m] ahead of the wanted length on the side of the wanted
-    motion (teleop.diagnosis.feedforward.BacklashFeedforward): the loop commands the lengths it wants at the cable,
+    motion (teleop.core.control.feedforward.BacklashFeedforward): the loop commands the lengths it wants at the cable,
     the robot gets the motor-side lengths that make a play of `width` deliver them. Each command moves at
     most v_max * `period` [s] (the robot spec's v_max; `period` the time between commands) and stays inside
     [l_min, l_max]. Readings report the wanted lengths as their commanded lengths (the loop's own commands:
@@ -102,13 +102,13 @@ class BacklashCompensatedRobot(Wrapper):
     def compensation(self) -> dict:
         """What is added to the commands (stored in the session metadata)."""
         w = np.broadcast_to(np.asarray(self.width, dtype=float), (6,))
-        from teleop.diagnosis.feedforward import TAU_S, V0_M_S
+        from teleop.core.control.feedforward import TAU_S, V0_M_S
 
         return {"kind": "backlash_feedforward", "width_mm": (w * 1e3).tolist(), "period_s": self.period,
                 "v0_mm_s": V0_M_S * 1e3, "tau_s": TAU_S}
 
     def open(self):
-        from teleop.diagnosis.feedforward import BacklashFeedforward
+        from teleop.core.control.feedforward import BacklashFeedforward
 
         self.device.open()
         self.wanted = self._src = self._out = self._t = None
@@ -323,7 +323,7 @@ class ProcessRobot(ContextDevice):
         self.firmware_version = None
 
     def open(self) -> None:
-        from teleop.kernels.warm import warm_up
+        from teleop.loop.warm import warm_up
 
         warm_up()   # compiled (cold cache) or loaded here, before the fork: the child inherits them ready
         ctx = mp.get_context("fork")

@@ -2,12 +2,12 @@
 sheath to a tip that pulls a spring (or carries an external load), with motor and tip force sensors.
 
 This is the project's simulation of the setup that `teleop diagnose` takes as its baseline: the sheath
-always has capstan friction over its bend (teleop.physics capstan law with stick transitions), the tip
+always has capstan friction over its bend (teleop.core.physics capstan law with stick transitions), the tip
 pulls a linear preloaded spring. On top of it any catalogue effects can be switched on (`effects`), or
 physics outside the catalogue (`OUTSIDE`: a stiffening spring, a pulley eccentricity, a sensor delay), and
 the recording is written as interchange CSV (DESIGN.md) with any subset of the columns, in mm and deg.
 
-It shares with the diagnosis only the physics models (teleop.physics); the CSV is written here, not by the
+It shares with the diagnosis only the physics models (teleop.core.physics); the CSV is written here, not by the
 diagnosis' writer, so a recording from this bench is "made elsewhere" as far as the diagnosis knows.
 
 Units: SI inside (m, N, s, rad); the CSV carries mm, deg, N, C.
@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from teleop.physics import get_effect
-from teleop.physics.capstan import tip2motor_transitions
+from teleop.core.physics import get_effect
+from teleop.core.physics.capstan import tip2motor_transitions
 
 #: catalogue effects this bench can conceal, and the channel each shows on
 RIG_EFFECTS = ("backlash", "coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis",
@@ -107,7 +107,7 @@ def observable(effect: str, columns, load: str) -> bool:
 
 
 def _apply(name: str, params: dict, **channels) -> np.ndarray:
-    from teleop.physics import Signals
+    from teleop.core.physics import Signals
     return get_effect(name).apply(Signals(**channels), params)
 
 

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 ATTRIBUTION = ("Material moduli: Soft-Robotics-Materials-Database (LucMarechal, Univ. Savoie Mont Blanc, "
                "SYMME Lab), ODbL 1.0; phantom-material-database (abubakardawood), CC BY 4.0; Smooth-On datasheets.")

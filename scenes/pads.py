@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from scenes.materials import PAD_THICKNESS, contact_stiffness, get_material
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 # Footprint quadrature of a flat tip (unit disc): 3 equal-area rings x 8 angles, equal weights.
 _RING_R = np.sqrt((np.arange(3) + 0.5) / 3.0)

@@ -1,9 +1,9 @@
 """Per-sample forward kinematics and pose terms of the simulated robot.
 
 The loop commands one length vector per tick and the pose moves by micrometres between ticks, so the
-simulated slave solves its forward kinematics from the previous pose (teleop.kernels.geometry
+simulated slave solves its forward kinematics from the previous pose (teleop.core.kernels.geometry
 forward_kinematics: Gauss-Newton, a couple of iterations per tick). `pose_terms` gives what the robot needs
-at a pose (teleop.kernels.sim.pose_terms): the structure matrix A (eq 8, as teleop.kinematics.structure_matrix),
+at a pose (teleop.core.kernels.sim.pose_terms): the structure matrix A (eq 8, as teleop.core.kinematics.structure_matrix),
 the capstan wraps Theta_i = theta_i (eq 6) + theta0 and the tool-tip offset R tip.
 """
 
@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from teleop.errors import InputError
-from teleop.geometry import Geometry
-from teleop.kernels import sim as KS
-from teleop.kernels.geometry import forward_kinematics
-from teleop.kinematics import FREE_AXIAL, check_lengths
+from teleop.core.errors import InputError
+from teleop.core.geometry import Geometry
+from teleop.core.kernels import sim as KS
+from teleop.core.kernels.geometry import forward_kinematics
+from teleop.core.kinematics import FREE_AXIAL, check_lengths
 
 FREE = tuple(FREE_AXIAL.tolist())  # axial geometry: the roll alpha is not set by the cables
 
@@ -56,7 +56,7 @@ class PoseFollower:
         """solve_into, and when the pose moved, the pose terms at it written into `terms` (v, theta0, tip, off,
         A, theta, tip_off, target: the arguments of kernel sim.pose_target after the pose and the geometry's
         anchors) in the same kernel call (sim.follow_pose), which first checks L (n,) float64 against the
-        geometry's length limits (teleop.kinematics.check_lengths raises with the reason, the pose unchanged);
+        geometry's length limits (teleop.core.kinematics.check_lengths raises with the reason, the pose unchanged);
         the pose's (6,) array if it moved, else None."""
         worst, moved, bad = KS.follow_pose(L, *self._limits, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12,
                                            self.max_residual, *terms)

@@ -21,7 +21,7 @@ Along one cable, from the motor to the FSR (x_c = the cable's travel, increasing
                                      tare at power-on (t = 0)
     -> the FSR's own hysteresis, divider and ADC (scenes.sim_robot, unchanged).
 
-Every formula is the catalogue's (teleop.physics: stribeck, dahl, pulley_motor_force with the lumped
+Every formula is the catalogue's (teleop.core.physics: stribeck, dahl, pulley_motor_force with the lumped
 chain, and the thermal_drift_time effect; the backlash play operator in scenes.sim_robot); this module only
 chains them per cable and keeps each state in the catalogue's per-sample Steps, so the batch path
 (`SimRobot.run`, m samples, the array forms) and the per-reading path (m = 1, the Steps) agree.
@@ -39,9 +39,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.errors import InputError
-from teleop.physics import Signals, dahl, get_effect, pulley_motor_force, stribeck
-from teleop.physics.pulley import lumped_chain
+from teleop.core.errors import InputError
+from teleop.core.physics import Signals, dahl, get_effect, pulley_motor_force, stribeck
+from teleop.core.physics.pulley import lumped_chain
 
 EFFECTS = ("backlash", "stribeck_friction", "dahl_hysteresis", "pulley_friction", "thermal_drift_time")
 PLANTS = ("matched", "rich")
@@ -72,7 +72,7 @@ class RichPlantParams:
             stick (0.2 mm at 5e3 N/m) and of another shape (exponential, not linear); seed 000 [20] models
             pulley-bearing friction in a CDPR with Dahl's law, seed 000 §3 reports transitions after each
             reversal on the single-cable bench.
-        pulley_mu, pulley_wrap, pulley_bend, pulley_k: the guide pulley (teleop.physics pulley_friction):
+        pulley_mu, pulley_wrap, pulley_bend, pulley_k: the guide pulley (teleop.core.physics pulley_friction):
             equivalent friction coefficient [-] of a 6 mm plastic pulley on a steel pin (cable on pulley and
             the shaft's friction folded in, seed 002's nomenclature), 0.04; wrap 0.5 rad (the ~30 deg
             deflection into the press block); bending loss EI / R^2 [N]: a 0.3 mm 7x7 steel cable has EI

@@ -2,17 +2,17 @@
 
 One reading = `substeps` physics steps of dt. Per reading:
   cable lengths (commanded, ideal steppers) -> pose (forward kinematics, batched Newton on
-  teleop.kinematics.poses2lengths) -> tip target p + R tip -> pybullet: the contact tip is a small mass
+  teleop.core.kinematics.poses2lengths) -> tip target p + R tip -> pybullet: the contact tip is a small mass
   held on the commanded tip through a series spring (tip_stiffness, the loop's lumped compliance) and meets
   the pad's calibrated contact -> contact wrench f (the Nano17 ground truth, moments about p with the force
   at the tool tip) -> tip tensions t = wrench2tensions(f, A(pose), pretension) (A t + f = 0, eq 8)
-  -> sheath friction between the FSR and the end effector: teleop.physics capstan_friction with
+  -> sheath friction between the FSR and the end effector: teleop.core.physics capstan_friction with
      Theta_i = theta_i (eq 6) + theta0, motor position x = -length (shortening = pulling), stick
      transitions of stiffness k at reversals
   -> FSR: hysteresis as friction lag between the calibration's loading and unloading branches
-     (teleop.sensors.FsrBranchLag), divider -> ADC counts + Gaussian noise, rounded.
+     (teleop.core.sensors.FsrBranchLag), divider -> ADC counts + Gaussian noise, rounded.
 With `backlash` (URL `backlash_mm=W`) each cable's motor-to-cable transmission has play: the realized
-lengths are the play operator (teleop.physics backlash) of the commanded ones, cable by cable, and the pose
+lengths are the play operator (teleop.core.physics backlash) of the commanded ones, cable by cable, and the pose
 is their least-squares forward kinematics (the elastic equilibrium of six equally stiff taut cables).
 The batch path `run(lengths)` does the same with the array forms of those models (fast); `read()` uses
 their per-sample Step forms; both give the same counts for the same seed (tested).
@@ -31,17 +31,17 @@ from scenes.pose_follow import PoseFollower
 from scenes.rich_plant import RichPlant, RichPlantParams
 from scenes.sim_sensors import FbgArray, fbg_cables
 from scenes.world import PadWorld, WorldParams
-from teleop.errors import InputError
-from teleop.geometry import Geometry, default_geometry
-from teleop.kernels import sim as KS
-from teleop.kernels import tension as KT
-from teleop.kernels.friction import capstan_play_run, capstan_play_step
-from teleop.kinematics import FREE_AXIAL, check_lengths, poses2lengths
-from teleop.physics import get_effect
-from teleop.physics.backlash import backlash
-from teleop.robot_status import robot_status
-from teleop.sensors import FsrBranchLag, FsrCalibration, adc_counts, default_fsr_calibration
-from teleop.tension import TensionSolver, wrench2tensions
+from teleop.core.errors import InputError
+from teleop.core.geometry import Geometry, default_geometry
+from teleop.core.kernels import sim as KS
+from teleop.core.kernels import tension as KT
+from teleop.core.kernels.friction import capstan_play_run, capstan_play_step
+from teleop.core.kinematics import FREE_AXIAL, check_lengths, poses2lengths
+from teleop.core.physics import get_effect
+from teleop.core.physics.backlash import backlash
+from teleop.core.robot_status import robot_status
+from teleop.core.sensors import FsrBranchLag, FsrCalibration, adc_counts, default_fsr_calibration
+from teleop.core.tension import TensionSolver, wrench2tensions
 
 
 @dataclass(frozen=True)
@@ -49,11 +49,11 @@ class SimRobotParams:
     """Physics of the simulated slave (SI). Defaults and their sources:
 
     Attributes:
-        geometry: CDPR geometry (teleop.geometry.default_geometry: seed 000 robot, mu = 0.056 fitted to
+        geometry: CDPR geometry (teleop.core.geometry.default_geometry: seed 000 robot, mu = 0.056 fitted to
             seed 000 Fig 9, theta0 = 140 deg from seed 000 §3).
         world: pybullet constants (1 kHz, 10 g tip, 1.5 mm flat tip).
         substeps: physics steps per reading (1: readings at 1 kHz).
-        sensor: the tension sensors read (teleop.sensors.SENSOR_KINDS): "fsr" the FSR array; "fbg" also a
+        sensor: the tension sensors read (teleop.core.sensors.SENSOR_KINDS): "fsr" the FSR array; "fbg" also a
             distal FBG on every cable, "one" on cable `fbg_cable` only (scenes.sim_sensors; RobotReading.fbg_pm).
         pretension: reference cable tension of the tension distribution [N]; seed 000 Fig 9 pre-tensions
             the cable with 1.96-2.94 N; 2.85 N is the middle of the [0.2, 5.5] N tension range.
@@ -77,7 +77,7 @@ class SimRobotParams:
             which a compliant robot renders alike (382 N/m, the stiffness that would make Table 1's three
             forces come from one commanded depth, puts them 5 % apart), and its letter scan separates
             rigid from silicone. Table 1 does not give its poke depths (its pokes were teleoperated at
-            "an estimated 0.5 mm/s"), so palpation reproduces its loads instead (teleop.protocols.palpation).
+            "an estimated 0.5 mm/s"), so palpation reproduces its loads instead (teleop.apps.protocols.palpation).
             None = rigid (the tip tracks exactly).
         ee_damping_ratio: damping ratio of the contact tip on its series spring [-].
         plant: effects the estimators do not model, switched on in every cable (scenes.rich_plant
@@ -181,12 +181,12 @@ def capstan_angles_batch(poses, geom: Geometry) -> np.ndarray:
 
 
 def structure_matrices(poses, geom: Geometry) -> np.ndarray:
-    """(n, 6, 6) structure matrices A of eq 8 (as teleop.kinematics.structure_matrix, batched)."""
+    """(n, 6, 6) structure matrices A of eq 8 (as teleop.core.kinematics.structure_matrix, batched)."""
     return pose_terms_batch(poses, geom)[0]
 
 
 def wrenches2tensions(f, A, t_min: float, t_max: float, t_ref: float) -> np.ndarray:
-    """(n, 6) tensions for wrenches f (n, 6) and structure matrices A (n, 6, 6): teleop.tension's
+    """(n, 6) tensions for wrenches f (n, 6) and structure matrices A (n, 6, 6): teleop.core.tension's
     distribution (A t + f = 0, the one-dimensional null space n > 0, closest to t_ref, clipped to the
     feasible interval; kernel tension.null1_tensions per sample). Samples it cannot decide (rank != 5,
     infeasible) go to wrench2tensions (which raises with the reason, or solves a wider null space)."""
@@ -201,7 +201,7 @@ def wrenches2tensions(f, A, t_min: float, t_max: float, t_ref: float) -> np.ndar
 
 
 def fsr_conductance(u, cal: FsrCalibration) -> np.ndarray:
-    """Conductance [S] of FSRs at equivalent tension u [N] (teleop.sensors.FsrBranchLag): the calibration's
+    """Conductance [S] of FSRs at equivalent tension u [N] (teleop.core.sensors.FsrBranchLag): the calibration's
     loading branch (= cal.reading(u, LOADING): its power series, clipped at 0; kernel linalg.horner)."""
     u = np.asarray(u, dtype=float)
     flat = np.ascontiguousarray(u.reshape(-1))
@@ -248,12 +248,12 @@ class SimRobot(ContextDevice):
         pad: the pad in the scene (default: the 60 mm z-test pad).
         params: physics (SimRobotParams).
         seed: seeds the ADC noise.
-        calibration: FSR calibration shared with the estimator side (default teleop.sensors').
+        calibration: FSR calibration shared with the estimator side (default teleop.core.sensors').
     """
 
     def __init__(self, pad: Pad | None = None, params: SimRobotParams = SimRobotParams(), seed: int = 0,
                  calibration: FsrCalibration | None = None, model=None):
-        self.model = model   # an identified link model (teleop.diagnosis.model_io): its findings switched on
+        self.model = model   # an identified link model (teleop.io.model_io): its findings switched on
         self.pad = pad if pad is not None else z_test_pad()
         self.params = params
         self.seed = int(seed)
@@ -381,7 +381,7 @@ class SimRobot(ContextDevice):
         status = KS.reading_counts(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
                                    self._cap, f, t_tip, t_fsr, steps, direct, *self._lag_args, noise, k, counts)
         if status != KT.OK:
-            # not the one-dimensional null space, or infeasible: teleop.tension decides (raises with the reason)
+            # not the one-dimensional null space, or infeasible: teleop.core.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
             for i in range(len(x)):
                 F0, x0 = (t_tip[i], x[i]) if np.isnan(self._cap[1, i]) else self._cap[:, i]
@@ -489,7 +489,7 @@ class SimRobot(ContextDevice):
 
 class _AddedEffects:
     """The findings of an identified link model (teleop diagnose --save-model) switched on in every cable,
-    per sample (the physics Steps of teleop.physics, the same models the diagnosis fitted):
+    per sample (the physics Steps of teleop.core.physics, the same models the diagnosis fitted):
 
     - force link and sensor effects: the tension at the FSR -> with the added friction or sensor effect,
       along the motor position x = -length (hauling in is +).
@@ -508,7 +508,7 @@ class _AddedEffects:
             if kind not in model.links:
                 return [[] for _ in range(n)]
             m = model.links[kind]
-            from teleop.physics import get_effect
+            from teleop.core.physics import get_effect
             return [[(get_effect(name), get_effect(name).make_step(p)) for name, p in m.effects[m.base:]]
                     for _ in range(n)]
         self.force = steps("force")
@@ -563,7 +563,7 @@ def from_url(parsed, options: dict) -> SimRobot:
         raise InputError(f"sim://robot: cable must be a cable index, got {options['cable']!r}") from None
     model = None
     if "model" in options:
-        from teleop.diagnosis.model_io import load_model
+        from teleop.io.model_io import load_model
         model = load_model(str(options["model"]))
     params = SimRobotParams(substeps=substeps, backlash=play_w, **sensing)
     if "plant" in options:  # plant=matched|rich, the rich plant's cables drawn from the seed; backlash_mm wins

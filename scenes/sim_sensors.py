@@ -4,25 +4,25 @@
 - ``fbg``: every cable carries seed 001's dual-grating FBG sensor on its distal sheath (seed 001 sec. 2.1.2:
   the sensor measures the sheath's compression, equal to the tendon's tension, 3 cm before the sheath's
   end). It reads the tension at the end effector t_tip (the friction of those last 3 cm is left out)
-  through the catalogue's sensor_hysteresis (teleop.physics.sensor_effects: the loading/unloading offset
+  through the catalogue's sensor_hysteresis (teleop.core.physics.sensor_effects: the loading/unloading offset
   +-h with a play-type switch of half-width delta) and gives the Bragg shifts of eq 2 with the sensor's
-  temperature and noise (teleop.sensors.synthesize_fbg: dl1 = kT1 dT, dl2 = S F + kT2 dT, the noise split
+  temperature and noise (teleop.core.sensors.synthesize_fbg: dl1 = kT1 dT, dl2 = S F + kT2 dT, the noise split
   between the gratings). The FSR array stays on the robot (its counts are still read).
 - ``one``: the FSR array plus that FBG on one cable (`cable`, default 0): seed 001's sensor-model approach.
 
 The sensor temperature warms from the room's (where the shifts were zeroed) toward the body's after the
 robot is switched on, each cable's sensor a little differently: T_i(t) = room + (body - room + o_i)
 (1 - exp(-t / tau)), o_i uniform in +-spread (seeded). Eq 3 removes it on the estimator's side
-(teleop.estimation.sensor_reading); FBG2 alone would read kT2 dT / S = 9 N off at 12 degC.
+(teleop.core.estimation.sensor_reading); FBG2 alone would read kT2 dT / S = 9 N off at 12 degC.
 
 Defaults: seed 001's reported sensor (sec. 3.1), read so that its figures hold together:
 - calibration (what the estimator's eq 3 uses): S 34.12 pm/N, r 2.28, kT1 11.23, kT2 25.62 pm/degC
-  (teleop.sensors.FbgParams).
+  (teleop.core.sensors.FbgParams).
 - hysteresis: 4.798 % of the 20 N calibration span is a 0.96 N loading-unloading gap. The 12.59 pm (0.37 N)
   RMSE is that of one line through the loading and the unloading data, so it holds the hysteresis: an abrupt
   +-0.48 N switch alone would leave 0.48 N RMSE. A play-type switch over half the span (delta = 10 N) with
   h = 0.96 N gives the 0.96 N gap and 0.40 N RMSE about one line over 0-20-0 N (measured with
-  teleop.physics.hysteresis_offset), i.e. the seed's two figures; small load swings then move the offset
+  teleop.core.physics.hysteresis_offset), i.e. the seed's two figures; small load swings then move the offset
   by h dF / delta (a 1 N swing: 0.1 N).
 - temperature: compensated with its own r, the seed's sensor still missed by 0.68 N (low-passed, Fig 4c)
   over 24.21 degC of heating: the sensor's FBG2 follows temperature 0.68 x 34.12 / 24.21 = 0.96 pm/degC
@@ -37,9 +37,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from teleop.errors import InputError
-from teleop.physics import hysteresis_offset
-from teleop.sensors import FbgParams, check_sensor_kind, synthesize_fbg
+from teleop.core.errors import InputError
+from teleop.core.physics import hysteresis_offset
+from teleop.core.sensors import FbgParams, check_sensor_kind, synthesize_fbg
 
 
 @dataclass(frozen=True)
@@ -137,7 +137,7 @@ def identify_one_sensor_on(params, seed: int = 0, cable: int = 0, travel: float 
     """Seed 001's identification run on a simulated robot with `params` (sensor "one"): with the pad slid out
     of reach, the end effector goes `travel` [m] along -z and back `cycles` times at `speed` [m/s], hauling the
     instrumented cable in and paying it out at its pretension; its FSR (proximal) and FBG (distal) tensions
-    give Kp, Kr (teleop.estimation.sensor_reading.identify_one_sensor). Cached per (params, seed, cable)."""
+    give Kp, Kr (teleop.core.estimation.sensor_reading.identify_one_sensor). Cached per (params, seed, cable)."""
     key = (repr(params), int(seed), int(cable), travel, speed, int(cycles))
     if key not in _IDENTIFIED:
         _IDENTIFIED[key] = _identify(params, seed, cable, travel, speed, cycles)
@@ -146,9 +146,9 @@ def identify_one_sensor_on(params, seed: int = 0, cable: int = 0, travel: float 
 
 def _identify(params, seed, cable, travel, speed, cycles):
     from scenes.sim_robot import SimRobot, home_pose
-    from teleop.estimation.sensor_reading import identify_one_sensor
-    from teleop.kinematics import poses2lengths
-    from teleop.sensors import FsrConverter
+    from teleop.core.estimation.sensor_reading import identify_one_sensor
+    from teleop.core.kinematics import poses2lengths
+    from teleop.core.sensors import FsrConverter
 
     p = replace(params, sensor="one", fbg_cable=int(cable))
     q0 = home_pose()
@@ -173,8 +173,8 @@ def loop_estimator(robot_url: str, frame_dt: float, cal=None):
     from urllib.parse import parse_qs, urlparse
 
     from devices.base import open_device
-    from teleop.estimation.kalman import KalmanNoise
-    from teleop.estimation.sensor_reading import make_estimator
+    from teleop.core.estimation.kalman import KalmanNoise
+    from teleop.core.estimation.sensor_reading import make_estimator
 
     u = urlparse(robot_url)
     if (u.scheme, u.netloc) != ("sim", "robot") or parse_qs(u.query).get("sensor", ["fsr"])[-1] == "fsr":

@@ -1,6 +1,6 @@
 """pybullet world of one pad and the end effector's tip: contact forces are the F/T ground truth.
 
-Frame {B} of the robot (teleop.kinematics): the pad's top surface is the plane z = surface_z facing -z,
+Frame {B} of the robot (teleop.core.kinematics): the pad's top surface is the plane z = surface_z facing -z,
 the pad fills z in [surface_z, surface_z + thickness], its centre on the z axis. The tip is a sphere whose
 touching point is the robot's tool tip (see WorldParams.contact_radius); it is a dynamic body driven
 either kinematically (a stiff fixed constraint: calibration, a rigid robot) or through a Cartesian spring
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenes.pads import Pad
-from teleop.kernels.sim import series_spring_force
+from teleop.core.kernels.sim import series_spring_force
 
 
 _BANNER_SILENCED = []

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from teleop.diagnosis.recording_io import read_interchange, write_interchange
+from teleop.io.recording_io import read_interchange, write_interchange
 
 
 def multisine(rng: np.random.Generator, t: np.ndarray, total: float, n: int, f_lo: float, f_hi: float) -> np.ndarray:

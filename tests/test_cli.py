@@ -8,12 +8,12 @@ import sys
 import numpy as np
 import pytest
 
-from teleop import cli
-from teleop.cli import main
+from teleop.apps import cli
+from teleop.apps.cli import main
 
 
 def run(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "teleop.cli", *args], capture_output=True, text=True, cwd=cwd)
+    return subprocess.run([sys.executable, "-m", "teleop.apps.cli", *args], capture_output=True, text=True, cwd=cwd)
 
 
 def test_geometry_command_writes_json(tmp_path):
@@ -69,7 +69,7 @@ ARGPARSE_ERRORS = [
     (["bench", "diagnose", "--seed", "-7"], "teleop bench diagnose", ["--seed", "-7", ">= 0"]),
     (["nosuch"], "teleop", ["'nosuch'", "choose from"]),
     (["--bogus"], "teleop", ["--bogus"]),
-    # range checks (teleop.argtypes)
+    # range checks (teleop.apps.argtypes)
     (["bench", "link", "--stream-seconds", "-1"], "teleop bench link", ["--stream-seconds", "> 0", "-1"]),
     (["session", "--robot-rate", "0"], "teleop session", ["--robot-rate", "50 to 10000 Hz", "got 0"]),
     (["session", "--robot-rate", "3"], "teleop session", ["--robot-rate", "50 to 10000 Hz"]),  # no Kalman gain
@@ -138,10 +138,10 @@ def test_ctrl_c_during_a_recorded_session_exit_130_recording_closed_and_marked(t
     import signal
     import time
 
-    from teleop.recording import read_session
+    from teleop.io.recording import read_session
 
     rec, out = tmp_path / "s.mcap", tmp_path / "s.json"
-    p = subprocess.Popen([sys.executable, "-m", "teleop.cli", "session", "--seconds", "600", "--no-realtime",
+    p = subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "session", "--seconds", "600", "--no-realtime",
                           "--record", str(rec), "--json", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True, start_new_session=True)
     try:

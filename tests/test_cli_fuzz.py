@@ -2,7 +2,7 @@
 inputs, uncreatable and directory outputs, in every subcommand (found by walking the parser, so a new
 subcommand or option is fuzzed without editing this file).
 
-Whatever the arguments: no traceback (any exception out of `teleop.cli.main` fails), exit code 0 or 2 (1 for
+Whatever the arguments: no traceback (any exception out of `teleop.apps.cli.main` fails), exit code 0 or 2 (1 for
 `replay`'s "differs"), and on exit 2 exactly one stderr line naming a flag or a file of the command line, and
 no output file created. Commands whose work is long (studies, benchmarks, the loop) only have their checks
 run: their work functions are replaced by a sentinel, and half of their command lines get an argument that
@@ -22,8 +22,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from teleop import argtypes
-from teleop.cli import build_parser, main
+from teleop.apps import argtypes
+from teleop.apps.cli import build_parser, main
 from teleop.loop.session import run_session as REAL_RUN_SESSION
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -32,14 +32,14 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 CHEAP = {("geometry",), ("export",), ("replay",)}
 
 # where each long command's work begins: module, attribute
-WORK = [("teleop.protocols.palpation", "run_test"), ("teleop.protocols.blind.rig", "SimRig"),
-        ("teleop.protocols.blind.rig", "RehearsalStation"), ("teleop.protocols.blind.rig", "BackgroundSession"),
-        ("teleop.protocols.blind.rig", "transparency"), ("teleop.protocols.blind.human", "run_human_study"),
+WORK = [("teleop.apps.protocols.palpation", "run_test"), ("teleop.apps.protocols.blind.rig", "SimRig"),
+        ("teleop.apps.protocols.blind.rig", "RehearsalStation"), ("teleop.apps.protocols.blind.rig", "BackgroundSession"),
+        ("teleop.apps.protocols.blind.rig", "transparency"), ("teleop.apps.protocols.blind.human", "run_human_study"),
         ("teleop.loop.session", "run_session"), ("teleop.diagnosis.diagnose", "diagnose"),
-        ("teleop.diagnosis.generator", "case_plan"), ("teleop.bench.tick", "bench_tick"),
-        ("teleop.bench.sim", "bench_sim"), ("devices.arduino.build", "build_firmware"),
-        ("teleop.bench.cable", "fig9"), ("teleop.bench.cable", "fig11"), ("teleop.bench.cable", "fig13"),
-        ("teleop.campaign.runner", "run_campaign")]
+        ("teleop.diagnosis.generator", "case_plan"), ("teleop.apps.bench.tick", "bench_tick"),
+        ("teleop.apps.bench.sim", "bench_sim"), ("devices.arduino.build", "build_firmware"),
+        ("teleop.apps.bench.cable", "fig9"), ("teleop.apps.bench.cable", "fig11"), ("teleop.apps.bench.cable", "fig13"),
+        ("teleop.apps.campaign.runner", "run_campaign")]
 # A new long command: add where its work begins here, or the fuzzer runs that work for real on every valid
 # command line it draws (slow, though still checked for tracebacks and one-line errors).
 
@@ -120,7 +120,7 @@ def _kind(action: argparse.Action) -> str:
         return "output"
     if t is argtypes.input_file:
         return "input"
-    if t in (int, float) or getattr(t, "__module__", "") == "teleop.argtypes" or "fraction" in getattr(t, "__name__", ""):
+    if t in (int, float) or getattr(t, "__module__", "") == "teleop.apps.argtypes" or "fraction" in getattr(t, "__name__", ""):
         return "number"
     return "string"
 

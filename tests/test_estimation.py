@@ -5,21 +5,21 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from teleop.bench.tick import ReferenceTick
-from teleop.errors import InputError
-from teleop.estimation.calibrate import fit_dynamic_params, no_load_forces
-from teleop.estimation.direction import DirectionTracker
-from teleop.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
-from teleop.estimation.kalman import (FilterpyWrenchKalman, KalmanNoise, SteadyWrenchKalman, _dare_gain,
+from teleop.apps.bench.tick import ReferenceTick
+from teleop.core.errors import InputError
+from teleop.core.estimation.calibrate import fit_dynamic_params, no_load_forces
+from teleop.core.estimation.direction import DirectionTracker
+from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
+from teleop.core.estimation.kalman import (FilterpyWrenchKalman, KalmanNoise, SteadyWrenchKalman, _dare_gain,
                                       bandwidth_hz, make_filterpy, wrench_kalman_params)
-from teleop.estimation.tick import TickComputer
-from teleop.estimation.turn import AxisTurnFit, TurnCompensation, fit_turn_compensation
-from teleop.geometry import default_geometry
-from teleop.kinematics import capstan_angles, poses2lengths, pose2lengths, structure_matrix
-from teleop.physics.capstan import tip2motor, tip2motor_transitions
-from teleop.physics.friction import dahl, viscous
-from teleop.rendering import Renderer, RenderParams
-from teleop.tension import tensions2wrench, wrench2tensions
+from teleop.core.estimation.tick import TickComputer
+from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation, fit_turn_compensation
+from teleop.core.geometry import default_geometry
+from teleop.core.kinematics import capstan_angles, poses2lengths, pose2lengths, structure_matrix
+from teleop.core.physics.capstan import tip2motor, tip2motor_transitions
+from teleop.core.physics.friction import dahl, viscous
+from teleop.core.rendering import Renderer, RenderParams
+from teleop.core.tension import tensions2wrench, wrench2tensions
 
 G = default_geometry()
 PROPS = settings(derandomize=True, max_examples=40, deadline=None)
@@ -304,8 +304,8 @@ def test_reading_estimator_follows_the_loop_protocol_and_round_trips_its_descrip
     import json
 
     from devices.base import RobotReading
-    from teleop.estimation.reading import ReadingEstimator
-    from teleop.sensors import LOADING, default_fsr_calibration, synthesize_fsr_counts
+    from teleop.core.estimation.reading import ReadingEstimator
+    from teleop.core.sensors import LOADING, default_fsr_calibration, synthesize_fsr_counts
 
     cal = default_fsr_calibration()
     poly = tuple((0.01, -0.02, 0.0) for _ in range(6))
@@ -328,9 +328,9 @@ def test_reading_estimator_follows_the_loop_protocol_and_round_trips_its_descrip
 
 
 def test_reading_estimator_tensions_equal_the_fsr_converter():
-    """The loop's float FSR path (branch trigger, per-count table) against teleop.sensors.FsrConverter."""
-    from teleop.estimation.reading import ReadingEstimator
-    from teleop.sensors import LOADING, FsrConverter, default_fsr_calibration, synthesize_fsr_counts
+    """The loop's float FSR path (branch trigger, per-count table) against teleop.core.sensors.FsrConverter."""
+    from teleop.core.estimation.reading import ReadingEstimator
+    from teleop.core.sensors import LOADING, FsrConverter, default_fsr_calibration, synthesize_fsr_counts
 
     cal = default_fsr_calibration()
     est = ReadingEstimator(G, "dynamic", cal=cal, deadband_counts=4.0)

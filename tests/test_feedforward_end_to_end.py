@@ -5,9 +5,9 @@ import json
 
 import pytest
 
-from teleop.cli import main
-from teleop.diagnosis.feedforward import model_backlash_width
-from teleop.diagnosis.model_io import load_model
+from teleop.apps.cli import main
+from teleop.core.control.feedforward import model_backlash_width
+from teleop.io.model_io import load_model
 
 
 def test_session_recording_to_diagnosed_backlash_model(tmp_path, capsys):

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from teleop.errors import InputError
-from teleop.geometry import default_geometry, load_geometry
+from teleop.core.errors import InputError
+from teleop.core.geometry import default_geometry, load_geometry
 
 GOOD = """
 [geometry]

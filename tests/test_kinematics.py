@@ -5,9 +5,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from teleop.errors import InfeasibleError, InputError
-from teleop.geometry import default_geometry
-from teleop.kinematics import (bending_angles, is_tensionable, length_jacobian, lengths2pose, pose2cables,
+from teleop.core.errors import InfeasibleError, InputError
+from teleop.core.geometry import default_geometry
+from teleop.core.kinematics import (bending_angles, is_tensionable, length_jacobian, lengths2pose, pose2cables,
                                pose2lengths, pose2lengths_checked, poses2lengths, rotation_zyx,
                                structure_matrix)
 
@@ -34,8 +34,8 @@ def test_lengths_no_pose_has_stop_at_the_least_squares_pose(x, y, z, beta, gamma
     """One length moved off its pose (as the loop's per-cable step limit leaves them): the Gauss-Newton stops
     once its step is below tol, at the least-squares pose (J^T r = 0), instead of halving round-off steps
     until max_iter (which moved the pose by ~1e-13 rad per call)."""
-    from teleop.kernels.geometry import forward_kinematics
-    from teleop.kinematics import FREE_AXIAL
+    from teleop.core.kernels.geometry import forward_kinematics
+    from teleop.core.kinematics import FREE_AXIAL
 
     q0 = pose_from(x, y, z, beta, gamma)
     L = pose2lengths(q0, GEOM).copy()

@@ -6,11 +6,11 @@ import json
 import numpy as np
 import pytest
 
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 from teleop.loop.params import LOOP_RENDER, LoopParams
 from teleop.loop.replay import params_from
-from teleop.mapping import MappingParams
-from teleop.rendering import RenderParams
+from teleop.core.mapping import MappingParams
+from teleop.core.rendering import RenderParams
 
 
 def test_older_keywords_set_the_render_settings_and_read_back():

@@ -11,9 +11,9 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "devices"))
 
 from _fakes import LinearEstimator, record_session  # noqa: E402
 
-from teleop.cli import main  # noqa: E402
+from teleop.apps.cli import main  # noqa: E402
 from teleop.loop.replay import replay_session  # noqa: E402
-from teleop.recording import read_session  # noqa: E402
+from teleop.io.recording import read_session  # noqa: E402
 
 
 def test_replay_reproduces_bit_exact_and_detects_differences(tmp_path):

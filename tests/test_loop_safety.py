@@ -18,7 +18,7 @@ from devices.base import TOUCH_SPEC  # noqa: E402
 from devices.simulated import OperatorParams, Script, SimulatedStylus  # noqa: E402
 from teleop.loop import LoopParams, State, Teleop  # noqa: E402
 from teleop.loop.params import LOOP_RENDER  # noqa: E402
-from teleop.rendering import RenderParams  # noqa: E402
+from teleop.core.rendering import RenderParams  # noqa: E402
 
 DT = 0.001
 PASSIVE = RenderParams().alpha_max  # passivity damper on (the loop's default is off)

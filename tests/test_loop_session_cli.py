@@ -6,11 +6,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from teleop.cli import main
-from teleop.estimation.reading import ReadingEstimator
-from teleop.geometry import default_geometry
-from teleop.recording import read_session
-from teleop.sensors import default_fsr_calibration_data, load_fsr_calibration, write_fsr_calibration_csv
+from teleop.apps.cli import main
+from teleop.core.estimation.reading import ReadingEstimator
+from teleop.core.geometry import default_geometry
+from teleop.io.recording import read_session
+from teleop.core.sensors import default_fsr_calibration_data, load_fsr_calibration, write_fsr_calibration_csv
 
 
 def test_calibration_with_a_missing_column_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys):

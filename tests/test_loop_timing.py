@@ -9,7 +9,7 @@ from teleop.loop.core import STAGES
 from teleop.loop.tap import session_layout
 from teleop.loop.timing import (LATE_NS, TimingLog, budget_verdict, format_histogram, period_histogram,
                                  run_paced, wait_until)
-from teleop.recording import SecondStats
+from teleop.io.recording import SecondStats
 
 
 def test_wait_until_never_returns_early():

@@ -1,4 +1,4 @@
-"""teleop.mapping: scale, registration, workspace clamp, length limits, the per-tick step limit, and the float
+"""teleop.core.mapping: scale, registration, workspace clamp, length limits, the per-tick step limit, and the float
 Follower the loop runs against the numpy functions."""
 
 import numpy as np
@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from teleop.errors import InputError
-from teleop.geometry import default_geometry
-from teleop.kinematics import pose2lengths, rotation_zyx
-from teleop.mapping import (Follower, MappingParams, is_aligned, limit_lengths, platform_offsets, position2lengths,
+from teleop.core.errors import InputError
+from teleop.core.geometry import default_geometry
+from teleop.core.kinematics import pose2lengths, rotation_zyx
+from teleop.core.mapping import (Follower, MappingParams, is_aligned, limit_lengths, platform_offsets, position2lengths,
                             stylus2target)
 
 G = default_geometry()

@@ -1,8 +1,8 @@
-"""Progress of long commands (teleop.progress): plain lines on a controlled clock, tqdm only on a terminal."""
+"""Progress of long commands (teleop.io.progress): plain lines on a controlled clock, tqdm only on a terminal."""
 
 import io
 
-from teleop.progress import PlainProgress, progress
+from teleop.io.progress import PlainProgress, progress
 
 
 class Clock:

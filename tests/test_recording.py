@@ -16,10 +16,10 @@ import numpy as np
 import orjson
 import pytest
 
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 from teleop.loop.tap import session_layout
-from teleop.recording import INT, Layout, Recorder, Ring, Signal, SessionWriter, parse_session, read_session
-from teleop.recording.ring import DROPS, FLUSHES, HEAD, TAIL, WRITTEN
+from teleop.io.recording import INT, Layout, Recorder, Ring, Signal, SessionWriter, parse_session, read_session
+from teleop.io.recording.ring import DROPS, FLUSHES, HEAD, TAIL, WRITTEN
 
 META = {"configuration": {"loop": {"rate_hz": 1000.0}}, "calibration": {"fsr": [1.5, 2.5]},
         "firmware_version": "cdpr-fw 1.2.3", "software_version": "cdpr-teleop test"}
@@ -336,7 +336,7 @@ def test_stalled_disk_drops_and_counts_then_recovers(tmp_path):
 def test_lossy_cursor_never_holds_the_producer_and_counts_what_it_missed():
     """The live view's reader: rows it was lapped on (or that may have been overwritten while copied) are
     skipped and counted; the rows it returns are exactly the ones pushed, in order."""
-    from teleop.recording import Cursor
+    from teleop.io.recording import Cursor
 
     ring = Ring(2, 8, gated=False)  # no recorder: the producer overwrites the oldest row
     cur = Cursor(ring, start=0)

@@ -14,8 +14,8 @@ import time
 import numpy as np
 
 from teleop.loop.tap import session_layout
-from teleop.recording import Recorder, read_session
-from teleop.recording.ring import DURABLE, HEAD, WRITTEN
+from teleop.io.recording import Recorder, read_session
+from teleop.io.recording.ring import DURABLE, HEAD, WRITTEN
 
 META = {"configuration": {}, "calibration": {}, "firmware_version": "test", "software_version": "test"}
 MAX_LOSS_S = 0.5

@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from devices.base import OMEGA_SPEC, TOUCH_SPEC
-from teleop.errors import InputError
-from teleop.rendering import ENGAGED, RAMPING, WAITING, Renderer, RenderParams, clamp_norm, frame_map
+from teleop.core.errors import InputError
+from teleop.core.rendering import ENGAGED, RAMPING, WAITING, Renderer, RenderParams, clamp_norm, frame_map
 
 wild = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.sampled_from([1e9, -1e9, 1e308, -1e308]))
 
@@ -105,7 +105,7 @@ def test_negative_z_is_zeroed_in_the_device_frame_with_the_loop_registration():
     """Seed 000 sec 5.2 zeroes -z of the Touch's frame (z toward the user): with the loop's default
     registration the pad's reaction on the tip (-z of {B}) reaches the hand as +z and is kept, while a force
     pulling the tip into the pad (+z of {B}, -z on the device: toward the pad) is removed."""
-    from teleop.mapping import MappingParams
+    from teleop.core.mapping import MappingParams
 
     R_dev_B = MappingParams().R_reg.T
     r = engaged(RenderParams(max_force=5.0, R_dev_B=R_dev_B, zero_negative_z=True, ramp_s=0.0, alpha_max=0.0))

@@ -1,7 +1,7 @@
 """The status byte defined once: the host messages use it, and a host STOP is named as such."""
 
 from devices.arduino import messages as msg
-from teleop.robot_status import RobotStatus, robot_status, stop_reason
+from teleop.core.robot_status import RobotStatus, robot_status, stop_reason
 
 
 def test_host_messages_use_the_one_definition():

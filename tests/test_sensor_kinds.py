@@ -1,5 +1,5 @@
 """Sensor kinds in the loop: the simulated robot's emulation (scenes.sim_sensors) -> the estimator's reading
-path (teleop.estimation.sensor_reading) recovers the cable tensions within each sensor's stated error."""
+path (teleop.core.estimation.sensor_reading) recovers the cable tensions within each sensor's stated error."""
 
 import numpy as np
 import pytest
@@ -7,12 +7,12 @@ import pytest
 from devices.base import open_device
 from scenes.sim_robot import SimRobot, SimRobotParams, home_pose
 from scenes.sim_sensors import FbgArray, FbgEmulation
-from teleop.errors import InputError
-from teleop.estimation.reading import ReadingEstimator
-from teleop.estimation.sensor_reading import FbgReadingEstimator, identify_one_sensor, make_estimator
-from teleop.kinematics import poses2lengths
-from teleop.protocols.palpation import fsr_tensions, line
-from teleop.sensors import FbgParams, fbg2force_uncompensated, fbg_tensions
+from teleop.core.errors import InputError
+from teleop.core.estimation.reading import ReadingEstimator
+from teleop.core.estimation.sensor_reading import FbgReadingEstimator, identify_one_sensor, make_estimator
+from teleop.core.kinematics import poses2lengths
+from teleop.apps.protocols.palpation import fsr_tensions, line
+from teleop.core.sensors import FbgParams, fbg2force_uncompensated, fbg_tensions
 
 SEED_FBG_ERROR_N = 0.37       # seed 001 sec. 3.1.1: the FBG sensor's measurement error
 SEED_MODEL_RMSE_N = 0.65      # seed 001 sec. 3.3.2: the sensor-model approach on the endoscopic robot
@@ -53,7 +53,7 @@ def test_fbg_hysteresis_matches_seed_figures():
 
 
 def default_geom():
-    from teleop.geometry import default_geometry
+    from teleop.core.geometry import default_geometry
 
     return default_geometry()
 
@@ -83,7 +83,7 @@ def _trace(kind: str, seed: int = 1):
         a = robot.run(lengths(fit))
         robot.set_pad_offset((0.0, 0.0))
         b = robot.run(lengths(poke))
-    from teleop.protocols.palpation import _concat
+    from teleop.apps.protocols.palpation import _concat
 
     return _concat([a, b]), len(a.t), dt
 
@@ -135,7 +135,7 @@ def test_one_kind_identifies_and_recovers_tip_tensions(traces):
 
 def test_one_estimator_loop_protocol():
     """update(reading) on the sim robot's per-reading path: finite tensions and wrench, state reset."""
-    from teleop.sensors import ProximalDistalModel
+    from teleop.core.sensors import ProximalDistalModel
 
     robot = open_device("sim://robot?sensor=one&cable=2")
     est = make_estimator(default_geom(), "one", "dynamic", model=ProximalDistalModel(0.85, 1.18), cable=2)
@@ -158,7 +158,7 @@ def test_bad_sensor_options(url, what):
 
 
 def test_fbg_estimator_needs_fbg_reading():
-    from teleop.sensors import ProximalDistalModel
+    from teleop.core.sensors import ProximalDistalModel
 
     with pytest.raises(InputError, match="needs the eq 7 model"):
         make_estimator(default_geom(), "one")
@@ -171,8 +171,8 @@ def test_fbg_estimator_needs_fbg_reading():
 def test_blind_rig_estimator_per_sensor_kind(kind):
     """`teleop blind-test --sensor K`: the rig's robot carries the kind and its estimator reads it (for one,
     with Kp < 1 < Kr identified on the simulated robot)."""
-    from teleop.estimation.sensor_reading import FbgReadingEstimator
-    from teleop.protocols.blind.rig import RigOptions, _Station
+    from teleop.core.estimation.sensor_reading import FbgReadingEstimator
+    from teleop.apps.protocols.blind.rig import RigOptions, _Station
     from scenes.pads import blind_test_pad
 
     st = _Station(blind_test_pad(), RigOptions(sensor=kind), (1, 2))
@@ -187,7 +187,7 @@ def test_palpate_with_sensor_one_short():
     estimator name reports the one tip-side estimate, and the error stays within the seed's model RMSE."""
     import dataclasses
 
-    from teleop.protocols.palpation import ESTIMATORS, PalpationParams, run_test
+    from teleop.apps.protocols.palpation import ESTIMATORS, PalpationParams, run_test
 
     res = run_test("z", "uniform", 1, dataclasses.replace(PalpationParams(), sensor="one", repeats_z=1), limit=2)
     js = res.to_json()
@@ -204,9 +204,9 @@ def test_palpate_with_sensor_one_short():
 def test_palpate_calibration_file_pairs(tmp_path):
     """`teleop palpate --calibration`: a `teleop calibrate` file fits the sensor kind or is refused naming
     the file; the loaded values are the file's."""
-    from teleop.calibration.calfile import write_calibration
-    from teleop.protocols.palpation_sensors import sensor_calibration
-    from teleop.sensors import ProximalDistalModel
+    from teleop.io.calfile import write_calibration
+    from teleop.apps.protocols.palpation_sensors import sensor_calibration
+    from teleop.core.sensors import ProximalDistalModel
 
     fbg = write_calibration(tmp_path / "fbg.toml", "fbg", "test", {"S_pm_N": 30.0, "r": 2.0, "kT1_pm_C": 10.0,
                                                                   "kT2_pm_C": 20.0, "noise_pm": 5.0}, {}, {})

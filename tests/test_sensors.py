@@ -5,10 +5,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from teleop.errors import InputError
-from teleop.geometry import default_geometry
-from teleop.physics.capstan import tip2motor_transitions
-from teleop.sensors import (LOADING, UNLOADING, FbgParams, FsrBranchLag, FsrConverter, default_fsr_calibration,
+from teleop.core.errors import InputError
+from teleop.core.geometry import default_geometry
+from teleop.core.physics.capstan import tip2motor_transitions
+from teleop.core.sensors import (LOADING, UNLOADING, FbgParams, FsrBranchLag, FsrConverter, default_fsr_calibration,
                             default_fsr_calibration_data, eq2_roots, fbg2force, fbg2force_uncompensated,
                             fit_fsr_calibration, fit_proximal_distal, load_fsr_calibration_csv, lowpass2,
                             synthesize_fbg, synthesize_fsr_counts, write_fsr_calibration_csv)
@@ -152,8 +152,8 @@ def test_fbg_temperature_compensation_over_a_24_degree_swing(tmp_path):
     # with r away from the sensitivity ratio the temperature leaks back in
     bad = fbg2force(dl1, dl2, FbgParams(r=1.5))
     assert np.abs(lowpass2(bad, fs, 0.1) - F).max() > 5.0
-    from teleop.outputs import save_figure
-    from teleop.sensors import plot_fbg_compensation
+    from teleop.io.outputs import save_figure
+    from teleop.core.sensors import plot_fbg_compensation
 
     png = save_figure(plot_fbg_compensation(t, F, dl1, dl2, dT, p), tmp_path / "fig4c.png")
     assert png.stat().st_size > 10_000
@@ -209,16 +209,16 @@ def test_converter_float_path_equals_the_array_calibration():
 
 
 def test_calibration_figure_is_written(tmp_path):
-    from teleop.outputs import save_figure
-    from teleop.sensors import plot_fsr_calibration
+    from teleop.io.outputs import save_figure
+    from teleop.core.sensors import plot_fsr_calibration
 
     path = save_figure(plot_fsr_calibration(default_fsr_calibration_data(), CAL), tmp_path / "fig7.png")
     assert path.stat().st_size > 10_000 and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_tension_noise_matches_the_kalman_noise_model_and_load_helper(tmp_path):
-    from teleop.estimation.kalman import KalmanNoise
-    from teleop.sensors import load_fsr_calibration, tension_noise
+    from teleop.core.estimation.kalman import KalmanNoise
+    from teleop.core.sensors import load_fsr_calibration, tension_noise
 
     assert tension_noise(CAL, 1.0, 2.85) == pytest.approx(KalmanNoise().sigma_t, rel=0.25)
     # simulated: the spread of tensions read back from noisy counts

@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from teleop.cli import main
-from teleop.recording import read_session
+from teleop.apps.cli import main
+from teleop.io.recording import read_session
 
 HAND_WRITTEN = {"format": "teleop-link-model/1", "source": "hand-written", "links": [
     {"kind": "position", "input": "motor_pos", "output": "tip_pos", "gain": 1.0, "offset": 0.0,

@@ -4,8 +4,8 @@ the flag's preconditions are one line and exit 2."""
 
 import pytest
 
-from teleop.cli import main
-from teleop.recording import TOPIC_ROBOT, read_session
+from teleop.apps.cli import main
+from teleop.io.recording import TOPIC_ROBOT, read_session
 
 
 def _rows(path):

@@ -5,10 +5,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from teleop.errors import InfeasibleError
-from teleop.geometry import default_geometry
-from teleop.kinematics import structure_matrix
-from teleop.tension import tensions2wrench, wrench2tensions
+from teleop.core.errors import InfeasibleError
+from teleop.core.geometry import default_geometry
+from teleop.core.kinematics import structure_matrix
+from teleop.core.tension import tensions2wrench, wrench2tensions
 
 GEOM = default_geometry()
 mm = 1e-3

@@ -19,7 +19,7 @@ from enum import IntEnum
 import numpy as np
 
 from devices.arduino.framing import CRC_SIZE
-from teleop.robot_status import RobotStatus
+from teleop.core.robot_status import RobotStatus
 
 PROTOCOL_VERSION = 1
 N_CHANNELS = 6
@@ -41,7 +41,7 @@ class MsgType(IntEnum):
     DIAG_REPLY = 10
 
 
-Status = RobotStatus  # bits of the firmware status byte: one definition in teleop.robot_status
+Status = RobotStatus  # bits of the firmware status byte: one definition in teleop.core.robot_status
 
 
 class MessageError(ValueError):

@@ -21,7 +21,7 @@ from devices.arduino import messages as msg
 from devices.arduino.framing import encode_frame
 from devices.arduino.transport import SerialTransport
 from devices.base import ContextDevice, DeviceError, RobotReading, RobotSpec
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 DEFAULT_BAUD = 1_000_000
 

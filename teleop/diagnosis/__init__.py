@@ -11,7 +11,7 @@ Modules, in the order the data flows:
   force tip load -> motor, contact indentation -> force) and the simulation of each: an affine map output =
   gain * input + offset (contact: gain * max(d, 0) + offset) with the baseline's effects (by default the
   project's simulation: capstan friction on force links; `diagnose(..., baseline=())` is lossless). Every
-  catalogue effect is an addition to it, run from the shared physics registry (teleop.physics).
+  catalogue effect is an addition to it, run from the shared physics registry (teleop.core.physics).
   docs/diagnosis.md tabulates which effect shows on which channel.
 - locate: residual conditions (after motion reversals, speed, load, holds, loading/unloading,
   temperature, time, position period, indentation rate/depth) with R^2 evidence and time windows.

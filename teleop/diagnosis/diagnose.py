@@ -19,9 +19,9 @@ from teleop.diagnosis.identify import (Fit, LinkResult, added, fit_chain, identi
 from teleop.diagnosis.links import LinkData, find_links, is_exact, link_data, predict
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
-from teleop.diagnosis.recording_io import Recording
-from teleop.errors import InputError
-from teleop.physics import get_effect
+from teleop.io.recording_io import Recording
+from teleop.core.errors import InputError
+from teleop.core.physics import get_effect
 
 HOLDOUT = 0.4           # last 40 % of each recording scores the models
 #: the project's simulation of a cable setup: the sheath's capstan friction on the force link (over the

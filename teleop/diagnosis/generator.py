@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 
 from teleop.diagnosis.links import smooth
-from teleop.diagnosis.recording_io import interchange_text
-from teleop.outputs import atomic_write
-from teleop.physics import get_effect
+from teleop.io.recording_io import interchange_text
+from teleop.io.outputs import atomic_write
+from teleop.core.physics import get_effect
 
 # the rig always has the sheath's capstan friction (the project's simulation of the setup, the
 # diagnosis' default baseline); these are concealed on top of it

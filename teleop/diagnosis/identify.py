@@ -27,7 +27,7 @@ from scipy.optimize import least_squares
 
 from teleop.diagnosis.links import (LinkData, LinkModel, effect_signals, fast_replace, fit_baseline,
                                    is_contact_law, moves, predict)
-from teleop.physics import REGISTRY, get_effect
+from teleop.core.physics import REGISTRY, get_effect
 
 ACCEPT = 1.20        # held-out RMSE must fall by >= 20 % for an effect to be named
 PARSIMONY = 0.08     # candidates within 8 % of the best held-out RMSE count as equally good (a

@@ -20,7 +20,7 @@ and units; offset c: sensor and encoder zeros) and the first `LinkModel.base` ef
 simulation the user already has: by default the sheath's capstan friction on force links). For the contact
 link the affine part is the linear contact law, F = g max(d, 0) + c.
 
-With effects, the link's model is a chain of registered physics effects (teleop.physics), run on the
+With effects, the link's model is a chain of registered physics effects (teleop.core.physics), run on the
 referred signals: position: z = g u + c -> E_1 -> E_2 ... = tip; force: L = g u -> E_1 ... + c -> sensor
 effects = motor force; contact: contact law (baseline or a catalogue contact effect) + c -> sensor effects.
 `direction` (+1/-1) orients the motor motion so that positive motion raises the output's friction side
@@ -33,10 +33,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from teleop.diagnosis.recording_io import Recording
-from teleop.errors import InputError
-from teleop.physics import Signals, get_effect
-from teleop.physics.base import REGISTRY
+from teleop.io.recording_io import Recording
+from teleop.core.errors import InputError
+from teleop.core.physics import Signals, get_effect
+from teleop.core.physics.base import REGISTRY
 
 # width [s] of the zero-phase moving average on the recorded inputs (drive position, load, indentation):
 # encoder quantisation and sensor noise on an input would otherwise reach the rate estimates (sign(v)
@@ -298,7 +298,7 @@ def clean_motion(x: np.ndarray, t: np.ndarray, backward: bool = False) -> tuple[
     (sign(0) = 0, as the catalogue's rate laws define it) and x held, so that no state model integrates
     the sensor noise of a motor at rest. Magnitudes are kept elsewhere. An exact drive (`is_exact`) is
     taken as it is, every reversal in it motion; its rate is the central difference (the catalogue's array
-    forms, teleop.physics Signals) or, with `backward`, the backward difference (the motion over the interval
+    forms, teleop.core.physics Signals) or, with `backward`, the backward difference (the motion over the interval
     that ends at the sample, as a per-sample simulation such as the simulated robot's steps applies it): at a
     reversal they differ by one sample, and an operator's tremor reverses a command hundreds of times."""
     if x.size > 1 and is_exact(x):

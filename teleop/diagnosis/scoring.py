@@ -10,7 +10,7 @@ import numpy as np
 
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.generator import CASE_EFFECTS, PRIMARY, Case
-from teleop.diagnosis.recording_io import read_interchange
+from teleop.io.recording_io import read_interchange
 
 PARAM_TOL = 0.2
 

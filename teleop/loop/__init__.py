@@ -1,4 +1,4 @@
-"""The master-slave loop: state machine, safety monitors, rendering through teleop.rendering, pacing and timing
+"""The master-slave loop: state machine, safety monitors, rendering through teleop.core.rendering, pacing and timing
 statistics."""
 
 from teleop.loop.core import STAGES, Event, Teleop, TickData

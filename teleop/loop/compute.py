@@ -1,6 +1,6 @@
-"""The estimator protocol the loop calls (the force path is teleop.rendering.Renderer).
+"""The estimator protocol the loop calls (the force path is teleop.core.rendering.Renderer).
 
-The default estimator is teleop.estimation.reading.ReadingEstimator ("dynamic": FSR branches, capstan and
+The default estimator is teleop.core.estimation.reading.ReadingEstimator ("dynamic": FSR branches, capstan and
 turn compensation, f = -A t, steady-state Kalman).
 """
 

@@ -1,6 +1,6 @@
 """The master-slave tick: READ -> MAP -> ROBOT I/O -> ESTIMATE -> RENDER -> WRITE -> RECORD.
 
-The compute of MAP, ESTIMATE and RENDER is teleop.estimation.tick.LoopTick's `map`, `estimate` and `render`
+The compute of MAP, ESTIMATE and RENDER is teleop.core.estimation.tick.LoopTick's `map`, `estimate` and `render`
 on plain floats: the code `teleop bench tick` times as one full tick (`LoopTick.compute`); this module adds
 the device I/O, the state machine, the safety monitors and the numpy arrays the devices and the recorder take.
 A robot's read() may return None while no telemetry frame has arrived yet (counted as missing telemetry).
@@ -17,17 +17,17 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from teleop.geometry import Geometry, default_geometry
-from teleop.kernels.safety import all_finite2
-from teleop.kernels.warm import warm_up
-from teleop.kinematics import lengths2pose
+from teleop.core.geometry import Geometry, default_geometry
+from teleop.core.kernels.safety import all_finite2
+from teleop.loop.warm import warm_up
+from teleop.core.kinematics import lengths2pose
 from teleop.loop.params import LoopParams
 from teleop.loop.safety import Freshness, StuckCable, TensionRange, is_finite_reading, is_finite_sample, \
     tension_monitors
 from teleop.loop.states import BEHAVIOURS, State
-from teleop.mapping import platform_offsets, position2lengths
-from teleop.rendering import Renderer, engage_count
-from teleop.robot_status import RobotStatus, stop_reason
+from teleop.core.mapping import platform_offsets, position2lengths
+from teleop.core.rendering import Renderer, engage_count
+from teleop.core.robot_status import RobotStatus, stop_reason
 
 STAGES = ("read", "map", "robot", "estimate", "render", "write", "record")
 HOMED, WATCHDOG_STOP, STOPPED = RobotStatus.HOMED, RobotStatus.WATCHDOG_STOP, RobotStatus.STOPPED
@@ -62,8 +62,8 @@ class Event:
 
 
 class Teleop:
-    """State of one teleoperation session; the math is delegated to teleop.mapping, the estimator and a
-    teleop.rendering.Renderer (frame map, scale, -z zeroing, ramp-in, passivity, clamp to the device's
+    """State of one teleoperation session; the math is delegated to teleop.core.mapping, the estimator and a
+    teleop.core.rendering.Renderer (frame map, scale, -z zeroing, ramp-in, passivity, clamp to the device's
     continuous limit). The state machine decides WHEN force may engage: the Renderer is enabled (engage_ticks
     0, it ramps in at once) on entering ENABLED and disabled on leaving it.
 
@@ -82,8 +82,8 @@ class Teleop:
         self.params = params or LoopParams()
         self.geom = geom or default_geometry()
         if estimator is None:
-            from teleop.estimation.kalman import KalmanNoise
-            from teleop.estimation.reading import ReadingEstimator
+            from teleop.core.estimation.kalman import KalmanNoise
+            from teleop.core.estimation.reading import ReadingEstimator
 
             # the Kalman gain is designed for the period the estimator runs at: one robot frame
             estimator = ReadingEstimator(self.geom, "dynamic", kalman=KalmanNoise.for_loop(self.params))
@@ -94,7 +94,7 @@ class Teleop:
         self.renderer = Renderer(replace(p.render, max_force=float(haptic.spec.max_force_continuous),
                                          engage_ticks=0))
         self.offsets = platform_offsets(self.geom, m.home[3:])
-        from teleop.estimation.tick import LoopTick
+        from teleop.core.estimation.tick import LoopTick
 
         # the compiled path (mapping, FSR counts -> tensions -> estimate with Kalman, render); estimators
         # without `update_arrays` (e.g. test fakes) go through their numpy `update`
@@ -180,7 +180,7 @@ class Teleop:
     def follow(self, x) -> np.ndarray:
         """ENABLED: stylus -> target -> lengths, step-limited to v_max dt and clipped to the length limits.
 
-        teleop.mapping.Follower.step_into (kernel mapping.follow_step): the math of teleop.mapping.stylus2target /
+        teleop.core.mapping.Follower.step_into (kernel mapping.follow_step): the math of teleop.core.mapping.stylus2target /
         position2lengths / limit_lengths, compiled (this runs every tick).
         """
         L = np.array(self.L_last, dtype=float)

@@ -7,9 +7,9 @@ from functools import cached_property
 
 import numpy as np
 
-from teleop.errors import InputError
-from teleop.mapping import MappingParams
-from teleop.rendering import RenderParams
+from teleop.core.errors import InputError
+from teleop.core.mapping import MappingParams
+from teleop.core.rendering import RenderParams
 
 # the loop's rendering defaults: CHAI3D engage (0.2 N for 3 ticks), 0.25 s ramp-in, passivity damper off (the
 # seed's force path; through the blind-test rig the observer damps ~40 % of a poke's ticks and lowers the
@@ -29,7 +29,7 @@ class LoopParams:
     Attributes:
         rate_hz: haptic loop rate [Hz] (1 kHz default, OpenHaptics' servo rate).
         robot_rate_hz: robot link rate [Hz] (command + read every rate_hz / robot_rate_hz ticks); None: every tick.
-        render: the force rendering (teleop.rendering.RenderParams), the one home of force scale, -z zeroing
+        render: the force rendering (teleop.core.rendering.RenderParams), the one home of force scale, -z zeroing
             (device frame, seed 000 blind test), ramp-in time, passivity damping and the engage test (ALIGNING
             waits until the mapped force stays below engage_N for engage_ticks ticks). Its R_dev_B is always
             mapping.R_reg^T (one registration for motion and force) and the loop clamps to the device's

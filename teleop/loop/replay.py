@@ -9,13 +9,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from devices.replay import ReplayRobot, ReplayStylus
-from teleop.errors import InputError
-from teleop.geometry import Geometry, default_geometry
+from teleop.core.errors import InputError
+from teleop.core.geometry import Geometry, default_geometry
 from teleop.loop.core import Teleop
 from teleop.loop.params import LoopParams
-from teleop.mapping import MappingParams
-from teleop.recording import read_session
-from teleop.recording import TOPIC_FORCE, TOPIC_SETPOINT
+from teleop.core.mapping import MappingParams
+from teleop.io.recording import read_session
+from teleop.io.recording import TOPIC_FORCE, TOPIC_SETPOINT
 
 
 @dataclass
@@ -62,7 +62,7 @@ def geometry_from(conf: dict | None) -> Geometry:
 
 def estimator_from(desc: dict, geom: Geometry):
     """Rebuild the recorded estimator (by its describe() name)."""
-    from teleop.estimation.reading import ReadingEstimator
+    from teleop.core.estimation.reading import ReadingEstimator
 
     name = desc.get("estimator")
     if name == "ReadingEstimator":

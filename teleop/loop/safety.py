@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from teleop.kernels import safety as KS
+from teleop.core.kernels import safety as KS
 
 
 class Freshness:

@@ -37,7 +37,7 @@ class SessionResult:
     alarm: str = ""
     record: str | None = None
     scheduling: str = ""
-    live: dict = field(default_factory=dict)  # the live view's counters (teleop.live.LiveView.stats), if served
+    live: dict = field(default_factory=dict)  # the live view's counters (teleop.loop.live.LiveView.stats), if served
     interrupted: str = ""  # "SIGINT" (Ctrl-C) or "SIGTERM" when a signal ended the run before `seconds`
 
 
@@ -102,15 +102,15 @@ def pad_scene(robot) -> list:
 
 def _start_live(tp, layout, extras, recorder, live: tuple, scene: dict | None):
     """Start the live view on the recorder's ring (or a ring of its own, overwritten when no one records)."""
-    from teleop.live import LiveView
-    from teleop.recording import Ring
+    from teleop.loop.live import LiveView
+    from teleop.io.recording import Ring
 
     if recorder is not None:
         ring = recorder.ring
     else:
         ring = Ring(layout.width, 4096, gated=False)
         tp.tap = RowTap(layout, ring.push, extras)
-    from teleop.kinematics import pose2lengths
+    from teleop.core.kinematics import pose2lengths
 
     g = tp.geom
     # home lengths and steps per metre turn the motors' steps into the lengths they measure
@@ -149,9 +149,9 @@ def frame_period(params: LoopParams, robot_process_hz: float | None) -> float:
 
 def default_estimator(frame_dt: float, cal=None):
     """The session's estimator: "dynamic" with its Kalman gain designed for `frame_dt` [s]."""
-    from teleop.estimation.kalman import KalmanNoise
-    from teleop.estimation.reading import ReadingEstimator
-    from teleop.geometry import default_geometry
+    from teleop.core.estimation.kalman import KalmanNoise
+    from teleop.core.estimation.reading import ReadingEstimator
+    from teleop.core.geometry import default_geometry
 
     return ReadingEstimator(default_geometry(), "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt))
 
@@ -174,7 +174,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     robot's I/O inline in the tick (at LoopParams.robot_rate_hz). With `realtime` the loop runs under
     SCHED_FIFO 50 when the OS allows it; the robot process (SCHED_FIFO `robot_rt_priority` if given, else nice -10)
     and the recorder (nice -10) stay behind it. `live` = (host, port) serves the session to Foxglove from
-    another process reading the same ring (teleop.live; port 0 picks a free one, printed on stdout);
+    another process reading the same ring (teleop.loop.live; port 0 picks a free one, printed on stdout);
     `live_scene` adds pads to its 3D scene. `robot_wrapper(robot, clock)` wraps the robot the loop talks to (on the
     loop's side of the robot process), e.g. the backlash feed-forward devices.wrappers.BacklashCompensatedRobot.
     `sim_clock` ticks on a simulated clock instead (timing.run_stepped: tick k at k periods, no waiting; the
@@ -217,7 +217,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             extras = numeric_extras(first)
             layout = session_layout(extras)
             if record:
-                from teleop.recording import Recorder
+                from teleop.io.recording import Recorder
 
                 meta = session_metadata(tp, haptic_url, robot_url, seconds, seed)
                 recorder = Recorder(record, layout, meta, flush_interval=flush_interval,

@@ -8,7 +8,7 @@ force / transition, no global run flags.
     any --fault--> FAULT (latched: only operator_reset() leaves it, to DISABLED)
 
 `command` returns the cable lengths to send this tick (or None: no motion command). Only ENABLED moves the
-robot or pushes on the operator: the loop enables its teleop.rendering.Renderer when entering ENABLED (the
+robot or pushes on the operator: the loop enables its teleop.core.rendering.Renderer when entering ENABLED (the
 force ramps in) and disables it when leaving (zero force), so the states decide WHEN and the Renderer HOW.
 """
 
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-from teleop.mapping import is_aligned
+from teleop.core.mapping import is_aligned
 
 
 class State(IntEnum):

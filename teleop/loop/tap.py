@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from teleop.kernels import tap as KT
+from teleop.core.kernels import tap as KT
 from teleop.loop.core import STAGES
-from teleop.recording import INT, TOPIC_FORCE, TOPIC_ROBOT, TOPIC_SETPOINT, Layout, Signal
+from teleop.io.recording import INT, TOPIC_FORCE, TOPIC_ROBOT, TOPIC_SETPOINT, Layout, Signal
 
 
 def numeric_extras(reading) -> dict:
@@ -49,7 +49,7 @@ def session_layout(extras: dict | None = None) -> Layout:
     return Layout(tuple(sig), {TOPIC_ROBOT: "new"})
 
 
-# the columns the tap kernel fills, in the order of its indices (teleop.kernels.tap); "read_us" stands for the
+# the columns the tap kernel fills, in the order of its indices (teleop.core.kernels.tap); "read_us" stands for the
 # stage block (read_us .. record_us)
 COLUMNS = ("tick", "t", "state", "lateness_us", "tick_us", "read_us", "t_device", "measured_cp", "measured_cv",
            "orientation", "buttons", "operator_present", "commanded", "setpoint_cp", "servo_jp", "new", "t_robot",
@@ -62,7 +62,7 @@ def _arr(a) -> np.ndarray:
 
 
 class RowTap:
-    """Callable given to Teleop.tap: fills the row (one kernel call, teleop.kernels.tap.tap_row; the backend's
+    """Callable given to Teleop.tap: fills the row (one kernel call, teleop.core.kernels.tap.tap_row; the backend's
     extras per key) and pushes it (`push(row)` -> bool)."""
 
     def __init__(self, layout: Layout, push, extras: dict | None = None):

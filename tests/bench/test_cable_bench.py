@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from teleop.bench import cable
-from teleop.cli import main
+from teleop.apps.bench import cable
+from teleop.apps.cli import main
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@ summary's rates are those of its rows, whichever source they come from."""
 
 import json
 
-from teleop.bench.diagnose_rig import COMPOUNDS, SUBSETS, rates, rig_plan
-from teleop.cli import main
+from teleop.apps.bench.diagnose_rig import COMPOUNDS, SUBSETS, rates, rig_plan
+from teleop.apps.cli import main
 
 
 def test_rig_plan_is_reproducible_and_varied():

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from teleop.cli import main
+from teleop.apps.cli import main
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@ short run (the budget itself needs --seconds 60: a benchmark, never asserted her
 
 import json
 
-from teleop.cli import main
-from teleop.recording import TOPIC_TIMING, read_session
+from teleop.apps.cli import main
+from teleop.io.recording import TOPIC_TIMING, read_session
 
 DESIGN_KEYS = {"rate_hz", "ticks", "tick_us", "lateness_us", "deadline_misses", "stages_us"}
 

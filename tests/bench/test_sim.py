@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from teleop.bench.sim import BUDGET_FACTOR, STAGES, _Meter, bench_sim
-from teleop.cli import main
+from teleop.apps.bench.sim import BUDGET_FACTOR, STAGES, _Meter, bench_sim
+from teleop.apps.cli import main
 
 KEYS = ["seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wall_s", "cpu_s", "realtime_factor",
         "realtime_factor_cpu", "budget_factor", "pass", "ticks", "readings", "physics_steps", "stages_timed",
@@ -87,7 +87,7 @@ def test_meter_counts_nested_calls_once():
     (["--period-s", "-2"], "--period-s"), (["--seed", "-1"], "--seed"), (["--seconds", "x"], "--seconds"),
 ])
 def test_bad_flags_exit_2(argv, flag, tmp_path, capsys):
-    """Our own checks return 2 through teleop.cli (InputError); argparse's type errors exit 2 (SystemExit)."""
+    """Our own checks return 2 through teleop.apps.cli (InputError); argparse's type errors exit 2 (SystemExit)."""
     path = tmp_path / "sim.json"
     try:
         code = main(["bench", "sim", *argv, "--json", str(path)])

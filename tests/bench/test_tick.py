@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from teleop.bench.tick import _trajectory, bench_tick, make_ticks
-from teleop.cli import main
-from teleop.estimation.estimators import ESTIMATOR_NAMES
-from teleop.mapping import MappingParams
+from teleop.apps.bench.tick import _trajectory, bench_tick, make_ticks
+from teleop.apps.cli import main
+from teleop.core.estimation.estimators import ESTIMATOR_NAMES
+from teleop.core.mapping import MappingParams
 
 
 def test_bench_tick_json_keys():
@@ -74,7 +74,7 @@ def test_full_tick_equals_the_reference_through_every_branch(name):
 def test_loop_runs_the_benchmarked_parts():
     """Teleop's MAP / ESTIMATE / RENDER stages go through one LoopTick holding the loop's own estimator and
     renderer (so `teleop bench tick` times the code the loop runs)."""
-    from teleop.estimation.tick import LoopTick
+    from teleop.core.estimation.tick import LoopTick
     from teleop.loop.core import Teleop
     from tests.devices._fakes import FakeRobot
 

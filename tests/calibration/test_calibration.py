@@ -1,4 +1,4 @@
-"""teleop.calibration: each fit recovers the parameters a physics-made recording was generated with (within
+"""teleop.core.calibration: each fit recovers the parameters a physics-made recording was generated with (within
 5 %), the calibration file round-trips, bad CSVs give one line naming file, line and column."""
 
 from __future__ import annotations
@@ -9,13 +9,14 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from teleop.calibration import calfile, generate
-from teleop.calibration.fbg import fit_fbg, read_fbg_steps
-from teleop.calibration.fsr import fit_fsr, read_fsr_steps
-from teleop.calibration.one_sensor import fit_one_sensor, read_one_sensor, transition_width
-from teleop.cli import main
-from teleop.errors import InputError
-from teleop.sensors import LOADING, UNLOADING, FbgParams, FsrCalibration, ProximalDistalModel, default_fsr_calibration
+from teleop.core.calibration import generate
+from teleop.io import calfile
+from teleop.core.calibration.fbg import fit_fbg, read_fbg_steps
+from teleop.core.calibration.fsr import fit_fsr, read_fsr_steps
+from teleop.core.calibration.one_sensor import fit_one_sensor, read_one_sensor, transition_width
+from teleop.apps.cli import main
+from teleop.core.errors import InputError
+from teleop.core.sensors import LOADING, UNLOADING, FbgParams, FsrCalibration, ProximalDistalModel, default_fsr_calibration
 
 from tests._data import EXAMPLE_MRDLAB
 
@@ -144,7 +145,7 @@ def test_one_sensor_on_real_mrdlab_run(tmp_path, capsys):
 def test_session_loads_the_fsr_calibration_file(tmp_path, capsys):
     """`teleop calibrate fsr` output is what `teleop session --fsr-calibration FILE.toml` records; an FBG file
     is refused in one line."""
-    from teleop.recording import read_session
+    from teleop.io.recording import read_session
 
     csv = _write(tmp_path, "fsr.csv", generate.fsr_step_protocol(default_fsr_calibration(), noise_uS=0.0))
     cal_file = tmp_path / "fsr.toml"

@@ -10,8 +10,8 @@ import signal
 
 
 def dask_setup(worker):  # noqa: ARG001 - the preload protocol passes the worker
-    from teleop.campaign import blind
-    from teleop.campaign.identity import Task
+    from teleop.apps.campaign import blind
+    from teleop.apps.campaign.identity import Task
 
     marked, mark = os.environ["TELEOP_TEST_DIE_ONCE_TASK"], os.environ["TELEOP_TEST_DIE_ONCE_MARK"]
     real = blind.execute

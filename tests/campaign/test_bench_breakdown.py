@@ -2,9 +2,9 @@
 
 import pytest
 
-from teleop.bench.campaign import run_breakdown
-from teleop.campaign.runner import RunReport
-from teleop.campaign.scheduler import Outcome
+from teleop.apps.bench.campaign import run_breakdown
+from teleop.apps.campaign.runner import RunReport
+from teleop.apps.campaign.scheduler import Outcome
 
 
 def outcome(worker, started, ended, cpu, thread):

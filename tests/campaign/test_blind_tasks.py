@@ -3,9 +3,9 @@ how participants are cut into tasks changes nothing, and a stored record reads b
 
 import dataclasses
 
-from teleop.campaign.blind import BlindStudy, execute, record_from_json, record_to_json, tasks
-from teleop.campaign.runner import run_campaign
-from teleop.campaign.spec import load_campaign
+from teleop.apps.campaign.blind import BlindStudy, execute, record_from_json, record_to_json, tasks
+from teleop.apps.campaign.runner import run_campaign
+from teleop.apps.campaign.spec import load_campaign
 
 CAMPAIGN = """
 [campaign]

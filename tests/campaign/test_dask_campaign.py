@@ -14,9 +14,9 @@ import dask
 import psutil
 import pytest
 
-from teleop.campaign.runner import run_campaign
-from teleop.campaign.spec import load_campaign
-from teleop.campaign.store import ResultStore
+from teleop.apps.campaign.runner import run_campaign
+from teleop.apps.campaign.spec import load_campaign
+from teleop.apps.campaign.store import ResultStore
 
 # 2 grid points x 4 participants, one participant per task: the force = 4 N point asks 40 N of the robot's
 # tip and every press faults it (max_aborts = 0: the participant gives up at once), so its 4 tasks fail
@@ -78,7 +78,7 @@ def test_local_cluster_is_byte_identical_and_a_failing_task_is_reported(referenc
 def test_sigkill_mid_campaign_loses_nothing_and_repeats_nothing(reference, tmp_path):
     path, campaign, ref, ref_dir = reference
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "teleop.cli", "campaign", "run", str(path), "--out", str(out),
+    proc = subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "campaign", "run", str(path), "--out", str(out),
                              "--scheduler", "local:2"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
     try:
@@ -139,6 +139,6 @@ def test_a_worker_killed_under_a_task_loses_nothing_and_writes_each_result_once(
 
 
 def kind_tasks(campaign):
-    from teleop.campaign.spec import kind_module
+    from teleop.apps.campaign.spec import kind_module
 
     return kind_module(campaign.kind).tasks(campaign)

@@ -12,7 +12,7 @@ def test_two_recordings_on_a_local_cluster_give_the_in_process_report(tmp_path):
     b = make_case(1016, "coulomb_friction", "rig", seed=11).write(tmp_path / "b.csv")
     out = {}
     for sched in ("none", "local:2"):
-        r = subprocess.run([sys.executable, "-m", "teleop.cli", "diagnose", "a.csv", "b.csv", "--seed", "3",
+        r = subprocess.run([sys.executable, "-m", "teleop.apps.cli", "diagnose", "a.csv", "b.csv", "--seed", "3",
                             "--json", f"{sched[:5]}.json", "--scheduler", sched], cwd=tmp_path,
                            capture_output=True, text=True, timeout=600)
         assert r.returncode == 0, r.stderr

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from teleop.campaign.identity import Task, canonical_json, seeds, stream
+from teleop.apps.campaign.identity import Task, canonical_json, seeds, stream
 
 
 def test_stream_is_the_spawned_child_at_that_position():

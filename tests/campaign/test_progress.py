@@ -1,9 +1,9 @@
-"""Campaign progress without a terminal: teleop.progress's plain lines on a controlled clock, also while a
+"""Campaign progress without a terminal: teleop.io.progress's plain lines on a controlled clock, also while a
 long task runs (the ticker), failures noted as they happen; a tqdm bar on a terminal."""
 
 import io
 
-from teleop.campaign.progress import Progress
+from teleop.apps.campaign.progress import Progress
 
 
 class Clock:

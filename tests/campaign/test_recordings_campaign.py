@@ -4,14 +4,14 @@ effect x recording (CSV, heat map), a malformed recording reported with its path
 import csv
 import json
 
-from teleop.campaign.recordings import tasks
-from teleop.campaign.runner import run_campaign
-from teleop.campaign.spec import load_campaign
-from teleop.campaign.store import ResultStore
+from teleop.apps.campaign.recordings import tasks
+from teleop.apps.campaign.runner import run_campaign
+from teleop.apps.campaign.spec import load_campaign
+from teleop.apps.campaign.store import ResultStore
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.generator import make_case
-from teleop.diagnosis.recording_io import read_recording
-from teleop.outputs import dumps_json
+from teleop.io.recording_io import read_recording
+from teleop.io.outputs import dumps_json
 
 
 def test_findings_table_heat_map_and_a_bad_recording(tmp_path):

@@ -6,9 +6,9 @@ import sys
 
 import pytest
 
-from teleop.campaign.blind import point_tasks, tasks
-from teleop.campaign.spec import load_campaign
-from teleop.errors import InputError
+from teleop.apps.campaign.blind import point_tasks, tasks
+from teleop.apps.campaign.spec import load_campaign
+from teleop.core.errors import InputError
 
 GOOD = """
 [campaign]
@@ -95,7 +95,7 @@ def test_recordings_campaign_paths_maps_and_errors(tmp_path):
 
 
 def run_cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "teleop.cli", *args], capture_output=True, text=True, cwd=cwd,
+    return subprocess.run([sys.executable, "-m", "teleop.apps.cli", *args], capture_output=True, text=True, cwd=cwd,
                           timeout=120)
 
 

@@ -3,9 +3,9 @@ per directory."""
 
 import pytest
 
-from teleop.campaign.identity import Task
-from teleop.campaign.store import ResultStore
-from teleop.errors import InputError
+from teleop.apps.campaign.identity import Task
+from teleop.apps.campaign.store import ResultStore
+from teleop.core.errors import InputError
 
 
 def test_save_load_failure_and_stale_temp_files(tmp_path):

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 
 from devices.base import ContextDevice, DeviceError, RobotReading, RobotSpec
-from teleop.geometry import default_geometry
-from teleop.kinematics import length_jacobian, pose2lengths, structure_matrix
-from teleop.tension import wrench2tensions
+from teleop.core.geometry import default_geometry
+from teleop.core.kinematics import length_jacobian, pose2lengths, structure_matrix
+from teleop.core.tension import wrench2tensions
 
 N_PER_COUNT = 0.01
 
@@ -120,7 +120,7 @@ def record_session(path, ticks: int = 400, robot=None, script=None, params=None)
     from devices.simulated import OperatorParams, Script, SimulatedStylus
     from teleop.loop import Teleop
     from teleop.loop.tap import RowTap, numeric_extras, session_layout
-    from teleop.recording import SessionWriter
+    from teleop.io.recording import SessionWriter
 
     class Clock:
         t = 0.0

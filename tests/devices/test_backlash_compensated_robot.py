@@ -5,7 +5,7 @@ import pytest
 
 from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
 from scenes.sim_robot import SimRobot, SimRobotParams
-from teleop.kinematics import poses2lengths
+from teleop.core.kinematics import poses2lengths
 
 W = 0.5e-3
 DT = 1e-3
@@ -82,8 +82,8 @@ def test_a_bad_command_still_reaches_the_robot_check():
 def test_readings_carry_lengths_the_loop_can_anchor_on():
     """After a FAULT reset the loop anchors on the reading's commanded lengths (Teleop.anchor, lengths2pose):
     through the compensation those are the loop's own, a pose's; the motor's (half the play apart) are none."""
-    from teleop.errors import InfeasibleError
-    from teleop.kinematics import lengths2pose
+    from teleop.core.errors import InfeasibleError
+    from teleop.core.kinematics import lengths2pose
 
     q = _sine_poses(400)
     inner = SimRobot(params=SimRobotParams(backlash=W))

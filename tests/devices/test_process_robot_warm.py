@@ -6,9 +6,9 @@ import time
 
 from devices.wrappers import ProcessRobot
 from scenes.sim_robot import home_pose
-from teleop.geometry import default_geometry
-from teleop.kernels import warm
-from teleop.kinematics import poses2lengths
+from teleop.core.geometry import default_geometry
+from teleop.loop import warm
+from teleop.core.kinematics import poses2lengths
 
 
 def test_kernels_are_warmed_before_the_fork():

@@ -5,7 +5,7 @@ import pytest
 
 from devices.base import open_device
 from devices.simulated import OperatorParams, Script, SimulatedStylus
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 
 class Clock:

@@ -7,7 +7,7 @@ import pytest
 from _fake_sdks import install_omega, install_touch
 
 from devices.base import DeviceError, DeviceUnavailable, open_device
-from teleop.cli import main
+from teleop.apps.cli import main
 
 
 def test_touch_missing_sdk_is_one_clear_line(monkeypatch, capsys):
@@ -85,7 +85,7 @@ def test_omega_reads_and_forces_and_errors(monkeypatch):
 
 
 def test_bad_options_are_input_errors():
-    from teleop.errors import InputError
+    from teleop.core.errors import InputError
 
     for url in ("touch://?speed=2", "omega://?id=x", "omega://?foo=1"):
         with pytest.raises(InputError):

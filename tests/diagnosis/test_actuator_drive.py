@@ -7,8 +7,8 @@ import numpy as np
 
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.links import find_links
-from teleop.diagnosis.recording_io import read_interchange, write_interchange
-from teleop.physics import backlash, dahl
+from teleop.io.recording_io import read_interchange, write_interchange
+from teleop.core.physics import backlash, dahl
 
 
 def _recording(tmp_path, with_actuator: bool):

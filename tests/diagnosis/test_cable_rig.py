@@ -7,7 +7,7 @@ import pytest
 
 from scenes.cable_rig import observable, simulate
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.recording_io import read_interchange
+from teleop.io.recording_io import read_interchange
 
 SPRING_NO_TIP = ("motor_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "temperature_C")
 ALL = ("motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "temperature_C")

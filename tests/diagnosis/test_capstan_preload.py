@@ -12,8 +12,8 @@ import pytest
 
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.identify import robust_rms, rms
-from teleop.diagnosis.recording_io import read_recording
-from teleop.physics import Signals, get_effect
+from teleop.io.recording_io import read_recording
+from teleop.core.physics import Signals, get_effect
 from tests._data import MRDLAB, needs_mrdlab
 from tests._signals import force_link_recording, multisine
 

@@ -8,8 +8,8 @@ import pytest
 
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.links import is_exact, noise_sigma
-from teleop.diagnosis.recording_io import read_interchange, write_interchange
-from teleop.physics import coulomb
+from teleop.io.recording_io import read_interchange, write_interchange
+from teleop.core.physics import coulomb
 
 
 def _drive(t):

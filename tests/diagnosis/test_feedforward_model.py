@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.feedforward import backlash_inverse, precompensate
+from teleop.core.control.feedforward import backlash_inverse, precompensate
 from teleop.diagnosis.generator import make_case
 from teleop.diagnosis.links import Link, LinkModel
-from teleop.diagnosis.model_io import load_model, save_model
-from teleop.diagnosis.recording_io import read_interchange
-from teleop.physics import Signals, get_effect
+from teleop.io.model_io import load_model, save_model
+from teleop.io.recording_io import read_interchange
+from teleop.core.physics import Signals, get_effect
 
 
 def _simulated_tip(motor, gain, offset, width):

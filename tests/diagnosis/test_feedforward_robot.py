@@ -1,13 +1,13 @@
-"""The backlash feed-forward of the robot's command path (teleop.diagnosis.feedforward.BacklashFeedforward)."""
+"""The backlash feed-forward of the robot's command path (teleop.core.control.feedforward.BacklashFeedforward)."""
 
 import numpy as np
 import pytest
 
-from teleop.diagnosis.feedforward import BacklashFeedforward, model_backlash_width
+from teleop.core.control.feedforward import BacklashFeedforward, model_backlash_width
 from teleop.diagnosis.links import Link, LinkModel
-from teleop.diagnosis.model_io import IdentifiedModel
-from teleop.errors import InputError
-from teleop.physics.backlash import backlash
+from teleop.io.model_io import IdentifiedModel
+from teleop.core.errors import InputError
+from teleop.core.physics.backlash import backlash
 
 W = 0.5e-3       # play width [m]
 DT = 1e-3        # command period [s]

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.recording_io import read_interchange, read_recording, write_interchange
-from teleop.physics import Signals, get_effect
-from teleop.physics.backlash import backlash
+from teleop.io.recording_io import read_interchange, read_recording, write_interchange
+from teleop.core.physics import Signals, get_effect
+from teleop.core.physics.backlash import backlash
 from tests._data import MRDLAB, needs_mrdlab
 from tests._signals import multisine
 

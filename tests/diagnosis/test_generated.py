@@ -25,7 +25,7 @@ def test_capstan_is_baseline_by_default_and_a_finding_beyond_a_lossless_one(tmp_
     """The generated rig's sheath always has capstan friction: the project's simulation has it too, so by
     default it is no finding; a user whose simulation is lossless is told it is missing."""
     from teleop.diagnosis.diagnose import diagnose
-    from teleop.diagnosis.recording_io import read_interchange
+    from teleop.io.recording_io import read_interchange
 
     case = make_case(7, "none", "rig", seed=3)
     rec = read_interchange(case.write(tmp_path / "c.csv"))
@@ -40,8 +40,8 @@ def test_capstan_is_baseline_by_default_and_a_finding_beyond_a_lossless_one(tmp_
 
 def test_report_is_reproducible_byte_for_byte(tmp_path):
     from teleop.diagnosis.diagnose import diagnose
-    from teleop.diagnosis.recording_io import read_interchange
-    from teleop.outputs import dumps_json
+    from teleop.io.recording_io import read_interchange
+    from teleop.io.outputs import dumps_json
 
     case = make_case(3, "stribeck_friction", "rig", seed=5)
     path = case.write(tmp_path / "c.csv")

@@ -7,8 +7,8 @@ import pytest
 from scenes.cable_rig import simulate
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.links import find_links, known_params, link_data
-from teleop.diagnosis.recording_io import read_interchange
-from teleop.errors import InputError
+from teleop.io.recording_io import read_interchange
+from teleop.core.errors import InputError
 
 COLUMNS = ("motor_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg")
 

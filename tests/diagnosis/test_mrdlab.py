@@ -10,7 +10,7 @@ import pytest
 
 from teleop.diagnosis.crossfile import cross_file
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.recording_io import read_recording
+from teleop.io.recording_io import read_recording
 
 from tests._data import MRDLAB, needs_mrdlab
 

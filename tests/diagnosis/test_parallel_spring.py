@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.recording_io import read_interchange, read_recording
-from teleop.physics import Signals, get_effect
+from teleop.io.recording_io import read_interchange, read_recording
+from teleop.core.physics import Signals, get_effect
 from tests._data import MRDLAB, needs_mrdlab
 from tests._signals import force_link_recording, multisine
 
@@ -133,7 +133,7 @@ def test_a_pulley_eccentricity_is_not_a_spring(tmp_path):
     # catalogue) is as much a function of position as a spring: a spring took x1.6 of it (bench seed 1,
     # case 13) until it had to beat a sinusoid in position fitted on the same chain; now it is unexplained
     from scenes.cable_rig import simulate
-    from teleop.bench.diagnose_rig import SUBSETS
+    from teleop.apps.bench.diagnose_rig import SUBSETS
 
     rig = simulate([1, 13, 7], ("eccentric_pulley",), SUBSETS["no temperature"], "external")
     rig.write(tmp_path / "rig.csv")

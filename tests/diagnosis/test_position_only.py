@@ -9,8 +9,8 @@ import pytest
 from scipy.optimize import least_squares
 
 from teleop.diagnosis.diagnose import diagnose, split
-from teleop.diagnosis.recording_io import read_interchange, read_recording, write_interchange
-from teleop.physics.backlash import backlash
+from teleop.io.recording_io import read_interchange, read_recording, write_interchange
+from teleop.core.physics.backlash import backlash
 from tests._data import EXAMPLE_MRDLAB, MRDLAB, needs_mrdlab
 
 

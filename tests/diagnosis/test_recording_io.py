@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from teleop.cli import main
-from teleop.diagnosis.recording_io import (builtin_map, load_column_map, read_interchange, read_recording,
+from teleop.apps.cli import main
+from teleop.io.recording_io import (builtin_map, load_column_map, read_interchange, read_recording,
                                            write_interchange)
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 from tests._data import MRDLAB, needs_mrdlab
 

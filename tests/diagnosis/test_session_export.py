@@ -1,11 +1,11 @@
-"""A session recording (MCAP, teleop.recording) exported to the interchange CSV and read back."""
+"""A session recording (MCAP, teleop.io.recording) exported to the interchange CSV and read back."""
 
 import numpy as np
 import pytest
 
-from teleop.diagnosis.recording_io import read_interchange
-from teleop.diagnosis.session_export import cable_columns, export_session
-from teleop.recording import INT, Layout, SessionWriter, Signal
+from teleop.io.recording_io import read_interchange
+from teleop.io.session_export import cable_columns, export_session
+from teleop.io.recording import INT, Layout, SessionWriter, Signal
 
 
 def test_session_export_round_trip(tmp_path):

@@ -6,8 +6,8 @@ replays the session's commands with a residual several times smaller than the pl
 
 import pytest
 
-from teleop.bench.session_diagnosis import bench_session_diagnosis, parse_effect
-from teleop.errors import InputError
+from teleop.apps.bench.session_diagnosis import bench_session_diagnosis, parse_effect
+from teleop.core.errors import InputError
 
 
 def test_coulomb_found_in_a_session_and_handed_back(tmp_path):

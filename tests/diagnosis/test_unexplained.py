@@ -4,8 +4,8 @@ correlate, and no wrong name is forced; a spring-loaded rig without a tip force 
 import numpy as np
 
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.recording_io import read_interchange, write_interchange
-from teleop.physics import Signals, get_effect
+from teleop.io.recording_io import read_interchange, write_interchange
+from teleop.core.physics import Signals, get_effect
 
 UNITS = {"motor_pos": "m", "motor_force": "N", "tip_force": "N", "tip_pos": "m"}
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from teleop.kernels import jit
+from teleop.core.kernels import jit
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -21,7 +21,7 @@ def _run(code: str, **env) -> subprocess.CompletedProcess:
 
 TICKS = """
 import json, numpy as np
-from teleop.bench.tick import make_ticks, _trajectory
+from teleop.apps.bench.tick import make_ticks, _trajectory
 out = {}
 for name in ("single", "double", "dynamic"):
     fast, _ = make_ticks(name)
@@ -41,8 +41,8 @@ def test_without_numba_the_same_source_gives_the_same_ticks():
 def test_the_loop_and_the_sim_robot_compile_nothing_after_the_warm_up():
     code = """
 import json
-from teleop.kernels.warm import kernels, warm_up
-from teleop.bench.sim import bench_sim
+from teleop.loop.warm import kernels, warm_up
+from teleop.apps.bench.sim import bench_sim
 warm_up()
 before = {k.__name__: len(k.signatures) for k in kernels()}
 bench_sim(seconds=0.3, batch=False, stages=False)
@@ -64,8 +64,8 @@ def test_no_writable_cache_anywhere_compiles_in_memory_with_one_warning(tmp_path
 import numba.core.caching as C
 C.InTreeCacheLocator.from_function = classmethod(lambda cls, f, p: None)
 import numpy as np
-from teleop.estimation.tick import TickComputer
-from teleop.geometry import default_geometry
+from teleop.core.estimation.tick import TickComputer
+from teleop.core.geometry import default_geometry
 print(TickComputer(default_geometry(), "dynamic").estimate(np.zeros(6), np.full(6, 2.0), 1e-3)[1][2])
 """
     r = _run(code, NUMBA_CACHE_DIR=str(blocker / "c"), HOME=str(blocker), XDG_CACHE_HOME=str(blocker / "x"))
@@ -75,7 +75,7 @@ print(TickComputer(default_geometry(), "dynamic").estimate(np.zeros(6), np.full(
 
 
 def test_a_writable_numba_cache_dir_keeps_the_compiled_kernels(tmp_path):
-    code = "from teleop.kernels.friction import dahl_step; print(dahl_step(0.0, 1e-3, 1e4, 0.1))"
+    code = "from teleop.core.kernels.friction import dahl_step; print(dahl_step(0.0, 1e-3, 1e4, 0.1))"
     first = _run(code, NUMBA_CACHE_DIR=str(tmp_path))
     assert first.returncode == 0, first.stderr
     assert any(p.suffix == ".nbi" for p in tmp_path.rglob("*")), "no cache index written"
@@ -85,7 +85,7 @@ def test_a_writable_numba_cache_dir_keeps_the_compiled_kernels(tmp_path):
 
 @pytest.mark.parametrize("fn", ["dahl_step", "capstan_play_step", "direction_step"])
 def test_py_func_is_the_kernel_source(fn):
-    from teleop.kernels import friction
+    from teleop.core.kernels import friction
 
     k = getattr(friction, fn)
     assert k.py_func.__code__.co_filename.endswith("friction.py")
@@ -95,7 +95,7 @@ def test_py_func_is_the_kernel_source(fn):
 def test_kernel_caches_are_stamped_with_every_kernel_source(tmp_path):
     """A kernel's cached code holds its callees compiled in: its cache must go stale when any kernel source
     changes, not only its own file (numba's default, which kept old linalg code under the forward kinematics)."""
-    from teleop.kernels import geometry, linalg
+    from teleop.core.kernels import geometry, linalg
 
     for k in (geometry.forward_kinematics, linalg.solve_into):
         assert k._cache._cache_file._source_stamp == jit._kernels_stamp()

@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from teleop.geometry import default_geometry
-from teleop.kernels.linalg import horner, interp1, lu_complete, lu_null_vector, lu_particular, solve_into
-from teleop.kinematics import structure_matrix
+from teleop.core.geometry import default_geometry
+from teleop.core.kernels.linalg import horner, interp1, lu_complete, lu_null_vector, lu_particular, solve_into
+from teleop.core.kinematics import structure_matrix
 
 G = default_geometry()
 

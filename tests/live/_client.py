@@ -17,7 +17,7 @@ SUBPROTOCOL = "foxglove.websocket.v1"
 
 def start_session(tmp_path, seconds: float, *extra) -> tuple[subprocess.Popen, int]:
     """`teleop session --live 0` in a subprocess; returns (process, port) once it serves."""
-    proc = subprocess.Popen([sys.executable, "-m", "teleop.cli", "session", "--live", "0", "--seconds", str(seconds),
+    proc = subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "session", "--live", "0", "--seconds", str(seconds),
                              "--json", str(tmp_path / "session.json"), *extra],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     for line in proc.stdout:

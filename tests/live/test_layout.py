@@ -4,7 +4,7 @@ import json
 import re
 from pathlib import Path
 
-from teleop.live import channels as lc
+from teleop.loop.live import channels as lc
 
 LAYOUT = Path(__file__).resolve().parents[2] / "examples" / "foxglove-layout.json"
 

@@ -7,14 +7,14 @@ import re
 import subprocess
 import sys
 
-from teleop.live import study
+from teleop.loop.live import study
 from tests.live._client import receive_until_closed, subscribe_all
 
 P1 = ["h", "s", "h", "r", "h", "s", "h", "10 7 4 2"]  # the answers of tests/protocols/test_blind_human.py's P1
 
 
 def test_experimenter_screen(tmp_path):
-    proc = subprocess.Popen([sys.executable, "-m", "teleop.cli", "blind-test", "--operator", "human", "--haptic",
+    proc = subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "blind-test", "--operator", "human", "--haptic",
                              "none", "--participants", "1", "--seed", "7", "--state", str(tmp_path / "s.json"),
                              "--live", "0"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)

@@ -8,8 +8,8 @@ import json
 
 import numpy as np
 
-from teleop.live import channels as lc
-from teleop.recording import read_session
+from teleop.loop.live import channels as lc
+from teleop.io.recording import read_session
 from tests.live._client import receive_until_closed, start_session, subscribe_all
 
 
@@ -84,7 +84,7 @@ def test_a_port_in_use_is_one_line_exit_2(tmp_path):
         s.listen()
         port = s.getsockname()[1]
         for cmd in (["session", "--seconds", "1"], ["bench", "loop", "--seconds", "1"]):
-            r = subprocess.run([sys.executable, "-m", "teleop.cli", *cmd, "--live", str(port), "--record",
+            r = subprocess.run([sys.executable, "-m", "teleop.apps.cli", *cmd, "--live", str(port), "--record",
                                 str(tmp_path / "x.mcap")], capture_output=True, text=True, timeout=60)
             assert r.returncode == 2 and r.stderr.count("\n") == 1 and f"--live {port}" in r.stderr, r.stderr
             assert not (tmp_path / "x.mcap").exists()  # nothing started, nothing written

@@ -1,8 +1,8 @@
-"""teleop.live.server without a session: a viewer's bounded outbox drops its oldest frames and counts them."""
+"""teleop.loop.live.server without a session: a viewer's bounded outbox drops its oldest frames and counts them."""
 
 import asyncio
 
-from teleop.live.server import ChannelInfo, FoxgloveServer, Viewer
+from teleop.loop.live.server import ChannelInfo, FoxgloveServer, Viewer
 
 
 def test_outbox_drops_oldest_and_counts():

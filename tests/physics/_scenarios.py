@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from teleop.physics import Signals, linear_force
+from teleop.core.physics import Signals, linear_force
 
 from ._signals import sum_of_sines, time_axis, triangle
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from teleop.physics import Signals
+from teleop.core.physics import Signals
 
 
 def time_axis(seconds: float = 8.0, rate_hz: float = 1000.0) -> np.ndarray:

@@ -1,7 +1,7 @@
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from teleop.physics import Signals, backlash, fit, get_effect
+from teleop.core.physics import Signals, backlash, fit, get_effect
 
 from ._signals import assert_params_close, noisy, step_matches_apply, sum_of_sines, time_axis, triangle
 

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from teleop.physics import (CapstanCompensator, Signals, capstan_in, capstan_out, fit, get_effect, motor2tip,
+from teleop.core.physics import (CapstanCompensator, Signals, capstan_in, capstan_out, fit, get_effect, motor2tip,
                             motor2tip_transitions, tip2motor, tip2motor_transitions)
 
 from ._signals import assert_params_close, noisy, step_matches_apply, time_axis, triangle

@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pytest
 
-from teleop.errors import InputError
-from teleop.physics import REGISTRY, Signals, chain, fit, get_effect
-from teleop.physics.base import ParamSpec
+from teleop.core.errors import InputError
+from teleop.core.physics import REGISTRY, Signals, chain, fit, get_effect
+from teleop.core.physics.base import ParamSpec
 
 from ._scenarios import scenario
 from ._signals import assert_params_close, noisy, step_matches_apply

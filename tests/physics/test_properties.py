@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from teleop.physics import (CapstanCompensator, Signals, cable_stretch, chain, dahl, get_effect, hysteresis_offset,
+from teleop.core.physics import (CapstanCompensator, Signals, cable_stretch, chain, dahl, get_effect, hysteresis_offset,
                             linear_force, motor2tip_transitions, sls_force, stribeck)
-from teleop.physics.scan import affine_scan, clamp_scan
+from teleop.core.physics.scan import affine_scan, clamp_scan
 
 SETTINGS = settings(derandomize=True, max_examples=40, deadline=None)
 walk = st.lists(st.floats(-1e-3, 1e-3), min_size=2, max_size=120)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from teleop.physics import (Pulley, PulleyChain, Signals, capstan_band, get_effect, pulley_band,
+from teleop.core.physics import (Pulley, PulleyChain, Signals, capstan_band, get_effect, pulley_band,
                             pulley_elongation, pulley_motor_force, tip2motor_transitions)
-from teleop.physics.pulley import segment_tensions
+from teleop.core.physics.pulley import segment_tensions
 
 SETTINGS = settings(derandomize=True, max_examples=40, deadline=None)
 pulleys = st.lists(st.tuples(st.floats(0.0, math.pi), st.floats(2e-3, 0.05), st.floats(0.0, 0.4),

@@ -7,7 +7,7 @@ Contains data from the MRDLab mis-tool-characterization dataset, ODbL 1.0.
 import numpy as np
 import pytest
 
-from teleop.physics import Signals, fit
+from teleop.core.physics import Signals, fit
 
 from tests._data import MRDLAB as DATA, needs_mrdlab
 

@@ -18,7 +18,7 @@ PROMPT_ENDS = ("poke both again] ", "decreasing: ")
 
 
 def command(state, out_json, *extra):
-    return [sys.executable, "-m", "teleop.cli", "blind-test", "--operator", "human", "--haptic", "none",
+    return [sys.executable, "-m", "teleop.apps.cli", "blind-test", "--operator", "human", "--haptic", "none",
             "--participants", "2", "--seed", "7", "--state", str(state), "--json", str(out_json), *extra]
 
 
@@ -144,9 +144,9 @@ def test_killed_while_saving_the_state_file_is_whole(tmp_path, reference_state, 
 
 
 def test_rehearsal_on_the_simulated_stylus_pokes_through_the_chain(tmp_path):
-    from teleop.protocols.blind.human import Coordinator, run_human_study
-    from teleop.protocols.blind.participants import ParticipantParams
-    from teleop.protocols.blind.rig import RehearsalStation, RigOptions
+    from teleop.apps.protocols.blind.human import Coordinator, run_human_study
+    from teleop.apps.protocols.blind.participants import ParticipantParams
+    from teleop.apps.protocols.blind.rig import RehearsalStation, RigOptions
 
     answers = iter(["h", "h", "h", "h", "h", "h", "10 7 4 2"])
     out = []

@@ -4,11 +4,11 @@ the chain is tested through the real loop in test_blind_rig.py)."""
 import numpy as np
 import pytest
 
-from teleop.errors import InputError
-from teleop.protocols.blind.participants import ParticipantParams, SimulatedParticipant, weber_sigma
-from teleop.protocols.blind.probe import Poke
-from teleop.protocols.blind.protocol import HARDER, SOFTER, UNSURE, Compare, check_ratings
-from teleop.protocols.blind.study import Area, run_simulated_study
+from teleop.core.errors import InputError
+from teleop.apps.protocols.blind.participants import ParticipantParams, SimulatedParticipant, weber_sigma
+from teleop.apps.protocols.blind.probe import Poke
+from teleop.apps.protocols.blind.protocol import HARDER, SOFTER, UNSURE, Compare, check_ratings
+from teleop.apps.protocols.blind.study import Area, run_simulated_study
 
 AREAS = (Area("pla", "rigid PLA", 1.0e5), Area("dragon_skin_30", "Dragon Skin 30", 6671.0),
          Area("ecoflex_00_50", "Ecoflex 00-50", 827.0), Area("ecoflex_00_20", "Ecoflex 00-20", 393.0))
@@ -119,7 +119,7 @@ def test_larger_jnd_lowers_accuracy_on_close_stiffnesses():
 
 
 def test_jnd_curve_shares_pushes_across_jnds_and_accuracy_falls_with_jnd():
-    from teleop.bench.blind_jnd import jnd_curve, parse_jnds, wilson
+    from teleop.apps.bench.blind_jnd import jnd_curve, parse_jnds, wilson
 
     assert parse_jnds("0.4, 23%,0.1") == [0.1, 0.23, 0.4]
     lo, hi = wilson(50, 100)
@@ -138,8 +138,8 @@ def test_jnd_curve_shares_pushes_across_jnds_and_accuracy_falls_with_jnd():
 
 
 def test_a_press_the_rig_stops_is_repeated_more_gently_then_given_up():
-    from teleop.protocols.blind.participants import GENTLER
-    from teleop.protocols.blind.probe import PressAborted
+    from teleop.apps.protocols.blind.participants import GENTLER
+    from teleop.apps.protocols.blind.probe import PressAborted
 
     asked = []
 

@@ -5,10 +5,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from teleop.errors import InputError
-from teleop.protocols.blind.protocol import (HARDER, SOFTER, UNSURE, Compare, Rate, check_ratings, next_step,
+from teleop.core.errors import InputError
+from teleop.apps.protocols.blind.protocol import (HARDER, SOFTER, UNSURE, Compare, Rate, check_ratings, next_step,
                                              ranking_from_answers, ratings_from_positions)
-from teleop.protocols.blind.stats import SEED_TABLE3, average_ranks, kendall_tau, kendall_w, loading_slope, mean_std
+from teleop.apps.protocols.blind.stats import SEED_TABLE3, average_ranks, kendall_tau, kendall_w, loading_slope, mean_std
 
 
 def truthful(hardness):

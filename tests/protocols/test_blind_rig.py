@@ -9,11 +9,11 @@ import sys
 import numpy as np
 import pytest
 
-from teleop.protocols.blind.participants import ParticipantParams
-from teleop.protocols.blind.probe import PokeRequest
-from teleop.protocols.blind.rig import RigOptions, SimRig
-from teleop.protocols.blind.stats import kendall_tau, loading_slope
-from teleop.protocols.blind.study import coordinator_draws, run_participant
+from teleop.apps.protocols.blind.participants import ParticipantParams
+from teleop.apps.protocols.blind.probe import PokeRequest
+from teleop.apps.protocols.blind.rig import RigOptions, SimRig
+from teleop.apps.protocols.blind.stats import kendall_tau, loading_slope
+from teleop.apps.protocols.blind.study import coordinator_draws, run_participant
 
 LAYOUT = ("ecoflex_00_50", "pla", "ecoflex_00_20", "dragon_skin_30")  # slot -> area
 PUSH = PokeRequest(depth=0.008, speed=0.02, force=0.2)  # press to 0.2 N on the stylus or 8 mm, as participants do
@@ -92,7 +92,7 @@ def test_cli_json_is_reproducible_byte_for_byte(tmp_path):
     for name in ("a", "b"):
         out = tmp_path / f"{name}.json"
         extra = ["--plot", str(tmp_path / "a.png")] if name == "a" else []
-        r = subprocess.run([sys.executable, "-m", "teleop.cli", "blind-test", "--participants", "1", "--seed", "3",
+        r = subprocess.run([sys.executable, "-m", "teleop.apps.cli", "blind-test", "--participants", "1", "--seed", "3",
                             "--speed-mm-s", "40", "--json", str(out), *extra], capture_output=True, text=True,
                            timeout=300)
         assert r.returncode == 0, r.stderr
@@ -112,7 +112,7 @@ def test_a_depth_push_into_rigid_faults_the_loop_a_press_does_not():
     # the default robot (1e4 N/m): an 8 mm stylus push into rigid PLA asks ~30 N of the tip, beyond what
     # cable tensions in [0.2, 5.5] N hold; a press to a comfortable stylus force stops near it, and travels
     # far less than the depth
-    from teleop.protocols.blind.probe import PressAborted
+    from teleop.apps.protocols.blind.probe import PressAborted
 
     rigid = LAYOUT.index("pla")
     with SimRig(RigOptions()) as rig:
@@ -131,7 +131,7 @@ def test_a_depth_push_into_rigid_faults_the_loop_a_press_does_not():
 def test_transparency_the_contact_mechanics_match_the_transparent_chain():
     # the robot's ground-truth contact force against the stylus displacement (x force scale) is what a
     # transparent chain would render: what the stylus shows beyond that comes from estimation and filtering
-    from teleop.protocols.blind.rig import transparency
+    from teleop.apps.protocols.blind.rig import transparency
 
     rows = transparency(RigOptions(), [0.02], repeats=1)
     assert [r["area"] for r in rows] == ["pla", "dragon_skin_30", "ecoflex_00_50", "ecoflex_00_20"]

@@ -6,8 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from teleop.cli import main
-from teleop.protocols.palpation import (ESTIMATORS, PalpationParams, Poke, line, load_depth, plan_pokes, reach_scale,
+from teleop.apps.cli import main
+from teleop.apps.protocols.palpation import (ESTIMATORS, PalpationParams, Poke, line, load_depth, plan_pokes, reach_scale,
                                         run_test, sessions_for, stiffness_extras, stroke, summarise, load_response, SEED_TABLE1)
 
 # short runs: 2 mm/s pokes and a 3 mm turn-compensation run (the CLI defaults are the seed's 0.5 mm/s)
@@ -93,7 +93,7 @@ def test_short_stiffness_run_is_physical_and_deterministic():
 
 
 def test_cli_writes_json_and_plot(tmp_path, capsys, monkeypatch):
-    import teleop.protocols.palpation as palpation
+    import teleop.apps.protocols.palpation as palpation
 
     monkeypatch.setattr(palpation, "PalpationParams", lambda: dataclasses.replace(QUICK, fit_dynamic=True))
     out, png = tmp_path / "r.json", tmp_path / "r.png"

@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from teleop.cli import main
-from teleop.estimation.turn import AxisTurnFit, TurnCompensation, TurnCompensator
-from teleop.protocols.palpation import ESTIMATORS, PalpationParams, run_test
+from teleop.apps.cli import main
+from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation, TurnCompensator
+from teleop.apps.protocols.palpation import ESTIMATORS, PalpationParams, run_test
 
 QUICK = dataclasses.replace(PalpationParams(), fit_dynamic=False, speed=2e-3, fit_cycles=2, fit_travel=0.003)
 
@@ -55,7 +55,7 @@ def test_cli_plant_option(capsys):
 
 
 def test_turn_fit_level_before_the_next_turn_ignores_a_mid_stroke_transition():
-    from teleop.estimation.turn import fit_turn_compensation
+    from teleop.core.estimation.turn import fit_turn_compensation
 
     dt, half = 0.01, 20.0                                   # 20 s half cycles along y, four of them
     t = np.arange(0.0, 4 * half, dt)

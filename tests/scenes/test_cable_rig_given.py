@@ -6,7 +6,7 @@ import io
 import numpy as np
 
 from scenes.cable_rig import simulate
-from teleop.physics import tip2motor_transitions
+from teleop.core.physics import tip2motor_transitions
 
 
 def _cols(rec):

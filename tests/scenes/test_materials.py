@@ -5,7 +5,7 @@ import pytest
 
 from scenes.materials import (DATASHEET_100PCT_PSI, PAD_THICKNESS, catalogue, contact_stiffness, data_dir,
                               get_material, layer_factor, read_tensile, small_strain_modulus)
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 
 def test_catalogue_has_every_seed_material_with_source_and_mode():

@@ -7,7 +7,7 @@ from scenes.calibration import indent, slope
 from scenes.pads import (BLIND_MATERIALS, all_pads, blind_area_centres, blind_test_order, blind_test_pad, hole_pad,
                          letter_mask, scan_grid, three_region_pad, z_test_pad)
 from scenes.world import PadWorld, WorldParams
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 PARAMS = WorldParams()
 

@@ -10,9 +10,9 @@ import pytest
 
 from scenes.rich_plant import EFFECTS, RichPlantParams, draw_cables, plant_params, with_plant
 from scenes.sim_robot import SimRobot, SimRobotParams, home_pose
-from teleop.errors import InputError
-from teleop.kinematics import poses2lengths
-from teleop.physics import dahl, get_effect, stribeck
+from teleop.core.errors import InputError
+from teleop.core.kinematics import poses2lengths
+from teleop.core.physics import dahl, get_effect, stribeck
 
 
 def _lengths(n=300, amp=1e-3, cycles=2):

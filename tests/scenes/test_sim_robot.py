@@ -8,11 +8,11 @@ from scenes.pads import three_region_pad, z_test_pad
 from scenes.sim_robot import (SimRobot, SimRobotParams, capstan_angles_batch, lengths2poses, structure_matrices,
                               wrenches2tensions)
 from scenes.world import WorldParams
-from teleop.errors import InfeasibleError, InputError
-from teleop.geometry import default_geometry
-from teleop.kinematics import (bending_angles, lengths2pose, pose2cables, poses2lengths, structure_matrix)
-from teleop.robot_status import RobotStatus
-from teleop.tension import wrench2tensions
+from teleop.core.errors import InfeasibleError, InputError
+from teleop.core.geometry import default_geometry
+from teleop.core.kinematics import (bending_angles, lengths2pose, pose2cables, poses2lengths, structure_matrix)
+from teleop.core.robot_status import RobotStatus
+from teleop.core.tension import wrench2tensions
 
 GEOM = default_geometry()
 PARAMS = SimRobotParams(substeps=2, world=WorldParams(surface_z=0.0235, dt=2e-3))
@@ -120,7 +120,7 @@ def test_batched_helpers_match_core_math():
 
 def test_fsr_conductance_is_the_loading_branch_of_the_equivalent_tension():
     from scenes.sim_robot import fsr_conductance
-    from teleop.sensors import LOADING, default_fsr_calibration
+    from teleop.core.sensors import LOADING, default_fsr_calibration
 
     cal = default_fsr_calibration()
     u = np.linspace(0.0, 5.5, 12)
@@ -139,7 +139,7 @@ def test_from_url():
 def test_forward_kinematics_recovers_the_commanded_poses():
     from scenes.pose_follow import PoseFollower, pose_terms
     from scenes.sim_robot import capstan_angles_batch, lengths2poses, structure_matrices
-    from teleop.kinematics import rotation_zyx
+    from teleop.core.kinematics import rotation_zyx
 
     rng = np.random.default_rng(3)
     q = np.zeros(6)
@@ -167,7 +167,7 @@ def test_forward_kinematics_recovers_the_commanded_poses():
                                         ("short", InputError)])
 def test_bad_commands_raise_and_change_nothing(bad, error):
     """The lengths are checked in the forward kinematics' kernel call: a bad command raises as
-    teleop.kinematics.check_lengths and leaves the pose, the commanded lengths and the pose terms as they were."""
+    teleop.core.kinematics.check_lengths and leaves the pose, the commanded lengths and the pose terms as they were."""
     with SimRobot(z_test_pad(), PARAMS, seed=1) as r:
         r.command_lengths(_poke()[3])
         pose, L, target = r.pose.copy(), r.L_cmd.copy(), r._pose_terms()[1].copy()

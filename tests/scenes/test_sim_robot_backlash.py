@@ -5,9 +5,9 @@ import pytest
 
 from devices.base import open_device
 from scenes.sim_robot import SimRobot, SimRobotParams
-from teleop.errors import InputError
-from teleop.kinematics import pose2lengths, poses2lengths
-from teleop.physics.backlash import backlash
+from teleop.core.errors import InputError
+from teleop.core.kinematics import pose2lengths, poses2lengths
+from teleop.core.physics.backlash import backlash
 
 W = 0.5e-3
 

@@ -8,9 +8,9 @@ import pytest
 
 from devices.base import open_device
 from teleop.diagnosis.links import Link, LinkModel
-from teleop.diagnosis.model_io import load_model, save_model
-from teleop.errors import InputError
-from teleop.physics import Signals, get_effect
+from teleop.io.model_io import load_model, save_model
+from teleop.core.errors import InputError
+from teleop.core.physics import Signals, get_effect
 
 FORCE = Link("force", "motor_force", "tip_force", "motor_pos")
 
@@ -31,8 +31,8 @@ def test_force_findings_act_on_the_fsr_tension(tmp_path):
     save_model(path, [LinkModel(FORCE, 1.0, 0.0, 1.0, 1.0, (capstan, coulomb), 1)], "test")
     assert load_model(path).links["force"].base == 1
     from scenes.sim_robot import home_pose
-    from teleop.geometry import default_geometry
-    from teleop.kinematics import poses2lengths
+    from teleop.core.geometry import default_geometry
+    from teleop.core.kinematics import poses2lengths
     geom = default_geometry()
     p0 = home_pose()
     poses = np.repeat(p0[None, :], 60, axis=0)

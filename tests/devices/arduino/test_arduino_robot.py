@@ -9,7 +9,7 @@ import pytest
 from devices.arduino import messages as msg
 from devices.arduino.robot import ArduinoRobot, from_url
 from devices.base import BACKENDS, DeviceError, open_device
-from teleop.errors import InputError
+from teleop.core.errors import InputError
 
 from .conftest import HOME_LENGTHS
 from .robot_conformance import check_robot

@@ -1,0 +1,120 @@
+"""argparse types for the command line: each rejects a bad value with what was expected, which
+teleop.apps.cli turns into one line on stderr and exit code 2."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+
+def _number(text: str, kind):
+    try:
+        v = kind(text)
+    except ValueError:
+        what = "a whole number" if kind is int else "a number"
+        raise argparse.ArgumentTypeError(f"expected {what}, got '{text}'") from None
+    if kind is float and not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got '{text}'")
+    return v
+
+
+def positive_int(text: str) -> int:
+    """A whole number >= 1 (counts: participants, trials, round trips)."""
+    v = _number(text, int)
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {v}")
+    return v
+
+
+def seed_int(text: str) -> int:
+    """A whole number >= 0 (what numpy's random generators accept)."""
+    v = _number(text, int)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0 (a random generator seed), got {v}")
+    return v
+
+
+def finite_float(text: str) -> float:
+    """A finite number (no nan or inf)."""
+    return _number(text, float)
+
+
+def positive_float(text: str) -> float:
+    """A finite number > 0 (durations [s], rates [Hz])."""
+    v = _number(text, float)
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text}")
+    return v
+
+
+def float_in(lo: float, hi: float, unit: str = ""):
+    """An argparse type: a finite number in [lo, hi] (`unit` is shown in the message)."""
+    def check(text: str) -> float:
+        v = _number(text, float)
+        if not lo <= v <= hi:
+            raise argparse.ArgumentTypeError(f"expected a number from {lo:g} to {hi:g}{unit}, got {text}")
+        return v
+
+    check.__name__ = f"float_in_{lo:g}_{hi:g}"
+    return check
+
+
+# The loop and robot-link rates the estimator's Kalman filter is designed for (a steady-state gain
+# exists for frame periods of 0.1 to 20 ms) and a haptic loop can keep.
+LOOP_RATE_HZ = float_in(100.0, 10_000.0, " Hz")
+ROBOT_RATE_HZ = float_in(50.0, 10_000.0, " Hz")
+# A session's length: the timing log holds 80 bytes per tick (4 h at 1 kHz: 1.2 GB).
+SESSION_SECONDS = float_in(0.001, 4 * 3600.0, " s")
+
+
+def nonnegative_float(text: str) -> float:
+    """A finite number >= 0."""
+    v = _number(text, float)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text}")
+    return v
+
+
+def rt_priority(text: str) -> int:
+    """A SCHED_FIFO priority 1-99, or 0 for time-sharing."""
+    v = _number(text, int)
+    if not 0 <= v <= 99:
+        raise argparse.ArgumentTypeError(f"expected 0 (time-sharing) or a SCHED_FIFO priority 1-99, got {v}")
+    return v
+
+
+def input_file(text: str) -> str:
+    """A path to an existing, readable file (not a directory)."""
+    from teleop.core.config import input_problem
+
+    problem = input_problem(text)
+    if problem:
+        raise argparse.ArgumentTypeError(f"'{text}': {problem}")
+    return text
+
+
+def output_file(text: str) -> str:
+    """A path a result file can be written to (checked before any work starts; nothing is created yet)."""
+    from teleop.io.outputs import output_problem
+
+    problem = output_problem(text)
+    if problem:
+        raise argparse.ArgumentTypeError(f"'{text}' {problem}")
+    return text
+
+
+def output_dir(text: str) -> str:
+    """A path that is, or can be made, a writable directory."""
+    from teleop.io.outputs import output_problem
+
+    problem = output_problem(text, directory=True)
+    if problem:
+        raise argparse.ArgumentTypeError(f"'{text}' {problem}")
+    return text
+
+
+# Options that name a result file or directory: every parser of the `teleop` command checks them with
+# these types when declared without one (teleop.apps.cli.TeleopArgumentParser), so each output is checked
+# before the work starts.
+OUTPUT_OPTIONS = {"--json": output_file, "--plot": output_file, "--csv": output_file, "--save-model": output_file,
+                  "--record": output_file, "--state": output_file, "--build-dir": output_dir}

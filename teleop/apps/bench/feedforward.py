@@ -1,0 +1,310 @@
+"""`teleop bench feedforward`: tip tracking error of closed-loop sessions on the robot with backlash, without
+and with the backlash feed-forward, in one run.
+
+    teleop bench feedforward --backlash-mm 0.5 --seconds 10 --seed 0 --json ff.json --plot ff.png
+    teleop bench feedforward --compensation MODEL.json      # the width from a link model (teleop diagnose)
+    teleop bench feedforward --recordings PLAIN.mcap COMP.mcap   # the same error in recorded paced sessions
+
+Three sessions run on a manual clock (simulated time, as `teleop bench sim`), each the whole chain: the
+simulated operator (devices.simulated, `sine` script: the stylus moved back and forth along --axis, with its
+tremor; the rendered force acts on the hand) -> the loop (teleop.loop.Teleop at 1 kHz, the robot link at
+500 Hz as `teleop session`'s default) -> the pybullet slave (scenes.sim_robot) with each cable's play of
+--backlash-mm between its motor and its cable (SimRobotParams.backlash):
+
+  plain        the plant with play, commanded as if it had none;
+  compensated  the same plant behind devices.wrappers.BacklashCompensatedRobot (the width of --compensation
+               MODEL, else the plant's own width);
+  no_play      the plant without play (the floor: the loop's and the tip spring's own lag).
+
+Tip tracking error, per robot reading while ENABLED, after --settle-s: |commanded tip - actual tip| [mm];
+commanded tip = the loop's setpoint pose's tool tip (position + R tip, the pose the loop computes the cable
+lengths of), actual tip = the pybullet contact tip (RobotReading extras["tip"]). The stylus stays in free
+space (the sine is centred on the home pose, 5 mm above the pad; --axis z would reach the pad at large
+amplitudes). Seeds: the robot's ADC noise and the operator's tremor from one SeedSequence(--seed), the same
+in all three sessions.
+
+JSON: {"seed", "seconds", "settle_s", "backlash_mm", "compensation": {"source", "width_mm"}, "stylus":
+{"axis", "amp_mm", "period_s"}, "rate_hz", "robot_rate_hz", "sessions": {name: {"tip_error_mm": {"rms",
+"p95", "max"}, "readings", "final_state", "fault_reason", "max_command_step_mm"}}, "v_max_step_mm",
+"ratio_rms" (plain / compensated), "pass" (ratio_rms >= 2 and no session faulted)}.
+
+With --recordings the same error is read from recorded `teleop session --record` files instead (simulated
+robot: its `x_tip` beside the loop's `/teleop/setpoint`, one value per robot frame after --settle-s; paced
+sessions, the robot in its own process) and nothing is simulated: JSON {"settle_s", "recordings": {path:
+{"tip_error_mm", "readings", "compensation"}}, "ratio_rms" (first / second file, with two)}.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from teleop.apps.argtypes import input_file
+from teleop.core.errors import InputError
+
+RATE_HZ = 1000.0      # loop rate [Hz]
+ROBOT_RATE_HZ = 500.0  # robot link rate [Hz] (teleop session's default)
+SUBSTEPS = 2           # 1 ms physics steps per robot reading at 500 Hz
+TARGET_RATIO = 2.0     # issue 16: the feed-forward lowers the tip tracking error >= 2x
+SESSIONS = ("plain", "compensated", "no_play")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("feedforward",
+                              help="tip tracking error on the robot with backlash, without and with the feed-forward")
+    p.add_argument("--backlash-mm", type=float, default=0.5, help="each cable's play width [mm] (default 0.5)")
+    p.add_argument("--compensation", metavar="MODEL",
+                   help="link model (JSON) whose backlash width the feed-forward uses (teleop diagnose --save-model, "
+                        "or hand-written: docs/feedforward.md); default: the plant's own width")
+    p.add_argument("--seconds", type=float, default=10.0, help="simulated session length [s] (default 10)")
+    p.add_argument("--settle-s", type=float, default=1.0,
+                   help="error counted from this time on [s] (engagement, first reversal; default 1)")
+    p.add_argument("--axis", choices=("x", "y", "z"), default="x", help="stylus motion axis (default x)")
+    p.add_argument("--amp-mm", type=float, default=12.0,
+                   help="stylus amplitude [mm] (x motion scale 0.25 at the robot; default 12)")
+    p.add_argument("--period-s", type=float, default=2.0, help="stylus period [s] (default 2)")
+    p.add_argument("--seed", type=int, default=0, help="seeds the operator's tremor and the ADC noise (default 0)")
+    p.add_argument("--recordings", nargs="+", metavar="MCAP", type=input_file,
+                   help="measure recorded sessions of the simulated robot instead (e.g. without, then with "
+                        "--compensation); the ratio is first / second")
+    p.add_argument("--json", metavar="F", help="write the result JSON here")
+    p.add_argument("--plot", metavar="F", help="write the tip error over time (PNG)")
+    p.set_defaults(func=run)
+
+
+def _seeds(seed: int) -> tuple[int, int]:
+    """(robot seed, stylus seed) from one SeedSequence."""
+    a, b = (int(s) for s in np.random.SeedSequence(seed).generate_state(2) % (2 ** 31))
+    return a, b
+
+
+def run_session(backlash: float, width: float | None, seconds: float, seed: int, axis: str = "x",
+                amp: float = 12e-3, period: float = 2.0) -> dict:
+    """One closed-loop session on the manual clock; the plant's play `backlash` [m], the feed-forward's
+    `width` [m] (None: off). Returns arrays per robot reading: "t" [s], "err" [m] (tip error), "enabled",
+    and "final_state", "fault_reason", "max_command_step" [m]."""
+    import gc
+
+    from devices.simulated import OperatorParams, Script, SimulatedStylus
+    from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
+    from scenes.sim_robot import SimRobot, SimRobotParams
+    from teleop.core.kinematics import rotation_zyx
+    from teleop.loop import LoopParams, State, Teleop
+    from teleop.loop.session import default_estimator, frame_period
+    from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
+
+    robot_seed, stylus_seed = _seeds(seed)
+    params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=ROBOT_RATE_HZ,
+                        mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
+    sim = SimRobot(params=SimRobotParams(substeps=SUBSTEPS, backlash=backlash), seed=robot_seed)
+    logged = LoggedDevice(sim)  # what reaches the robot: the speed check
+    clock_t = [0.0]
+    robot = logged if width is None else BacklashCompensatedRobot(logged, width, params.dt * params.robot_every,
+                                                                  clock=lambda: clock_t[0])
+    ax = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}[axis]
+    stylus = SimulatedStylus(Script(kind="sine", axis=ax, amplitude=amp, period=period), OperatorParams(),
+                             seed=stylus_seed, clock=lambda: clock_t[0])
+    n = int(round(seconds * RATE_HZ))
+    t_log, err, on = [], [], []
+    with robot, stylus:
+        tp = Teleop(stylus, robot, params, estimator=default_estimator(frame_period(params, None)))
+        tp.start(0.0)
+        tool = np.asarray(tp.geom.tip, dtype=float)
+        gc.collect()
+        gc.disable()
+        try:
+            for k in range(n):
+                clock_t[0] = (k + 1) * params.dt
+                x = tp.tick(clock_t[0])
+                r = x.reading
+                if r is None:
+                    continue
+                q = tp.pose  # the setpoint pose the loop commanded (home orientation)
+                wanted = q[:3] + rotation_zyx(*q[3:]) @ tool
+                t_log.append(clock_t[0])
+                err.append(float(np.linalg.norm(np.asarray(r.extras["tip"], dtype=float) - wanted)))
+                on.append(tp.state == State.ENABLED)
+        finally:
+            gc.enable()
+        final_state, fault_reason = tp.state.name, tp.fault_reason
+    sent = np.array([a for name, a in logged.log if name == "command_lengths"])
+    step = float(np.abs(np.diff(sent, axis=0)).max()) if len(sent) > 1 else 0.0
+    return {"t": np.array(t_log), "err": np.array(err), "enabled": np.array(on, dtype=bool),
+            "final_state": final_state, "fault_reason": fault_reason, "max_command_step": step,
+            "v_max_step": float(sim.spec.v_max) * params.dt * params.robot_every}
+
+
+def recorded_tip_errors(path: str, settle: float = 1.0) -> tuple[np.ndarray, dict | None]:
+    """(tip errors (n,) [m] per robot frame at or after `settle` [s], the session's compensation metadata)
+    of a `teleop session` recording on the simulated robot: |setpoint_cp + R(home) tip - x_tip|."""
+    from teleop.core.kinematics import rotation_zyx
+    from teleop.loop.replay import geometry_from
+    from teleop.io.recording import TOPIC_ROBOT, TOPIC_SETPOINT, read_session
+
+    s = read_session(path)
+    conf = s.metadata.get("session", {}).get("configuration")
+    if conf is None:
+        raise InputError(f"{path}: no session metadata (is this a teleop session recording?)")
+    geom = geometry_from(conf.get("geometry"))
+    home = np.asarray(((conf.get("loop") or {}).get("mapping") or {}).get("home", [0.0] * 6), dtype=float)
+    tool = rotation_zyx(*home[3:]) @ np.asarray(geom.tip, dtype=float)
+    sp = {m["tick"]: m["setpoint_cp"] for m in s.messages(TOPIC_SETPOINT)}
+    err, last = [], None
+    for m in s.messages(TOPIC_ROBOT):
+        if m["seq"] == last or m["tick"] not in sp or "x_tip" not in m:
+            continue  # one value per robot frame (the loop sees a frame on several ticks)
+        last = m["seq"]
+        if m["t"] >= settle:
+            err.append(float(np.linalg.norm(np.asarray(m["x_tip"], dtype=float) - (np.asarray(sp[m["tick"]]) + tool))))
+    if not err:
+        raise InputError(f"{path}: no robot frames with the simulator's tip (x_tip) after {settle:g} s")
+    return np.array(err), conf.get("compensation")
+
+
+def bench_recordings(paths: list, settle: float = 1.0) -> dict:
+    """The result dict for recorded sessions (module docstring)."""
+    rec = {}
+    for path in paths:
+        e, comp = recorded_tip_errors(str(path), settle)
+        rec[str(path)] = {"tip_error_mm": _stats_mm(e), "readings": int(e.size), "compensation": comp}
+    rms = [v["tip_error_mm"]["rms"] for v in rec.values()]
+    return {"settle_s": settle, "recordings": rec,
+            "ratio_rms": round(rms[0] / rms[1], 4) if len(rms) == 2 and rms[1] else None}
+
+
+def _stats_mm(e: np.ndarray) -> dict:
+    if e.size == 0:
+        return {"rms": None, "p95": None, "max": None}
+    return {"rms": round(float(np.sqrt(np.mean(e ** 2))) * 1e3, 6),
+            "p95": round(float(np.percentile(e, 95)) * 1e3, 6), "max": round(float(e.max()) * 1e3, 6)}
+
+
+def bench_feedforward(backlash: float = 0.5e-3, width: float | None = None, source: str = "the plant's own width",
+                      seconds: float = 10.0, settle: float = 1.0, seed: int = 0, axis: str = "x",
+                      amp: float = 12e-3, period: float = 2.0, progress=None) -> tuple[dict, dict]:
+    """(result dict of the module docstring, raw traces by session). width: the feed-forward's play [m]
+    (None: `backlash`); progress(name) is called as each session starts."""
+    width = backlash if width is None else width
+    runs, sessions = {}, {}
+    for name, plant, w in (("plain", backlash, None), ("compensated", backlash, width), ("no_play", 0.0, None)):
+        if progress is not None:
+            progress(name)
+        tr = run_session(plant, w, seconds, seed, axis, amp, period)
+        runs[name] = tr
+        keep = tr["enabled"] & (tr["t"] >= settle)
+        sessions[name] = {"tip_error_mm": _stats_mm(tr["err"][keep]), "readings": int(keep.sum()),
+                          "final_state": tr["final_state"], "fault_reason": tr["fault_reason"],
+                          "max_command_step_mm": round(tr["max_command_step"] * 1e3, 6)}
+    plain, comp = sessions["plain"]["tip_error_mm"]["rms"], sessions["compensated"]["tip_error_mm"]["rms"]
+    ratio = round(plain / comp, 4) if plain and comp else None
+    faulted = any(s["final_state"] == "FAULT" for s in sessions.values())
+    out = {"seed": int(seed), "seconds": seconds, "settle_s": settle, "backlash_mm": backlash * 1e3,
+           "compensation": {"source": source, "width_mm": width * 1e3},
+           "stylus": {"axis": axis, "amp_mm": amp * 1e3, "period_s": period},
+           "rate_hz": RATE_HZ, "robot_rate_hz": ROBOT_RATE_HZ, "sessions": sessions,
+           "v_max_step_mm": round(runs["plain"]["v_max_step"] * 1e3, 6), "ratio_rms": ratio,
+           "pass": bool(ratio is not None and ratio >= TARGET_RATIO and not faulted)}
+    return out, runs
+
+
+def format_report(out: dict) -> str:
+    c = out["compensation"]
+    lines = [f"closed-loop sessions of {out['seconds']:g} s (seed {out['seed']}), stylus sine {out['stylus']['amp_mm']:g} mm "
+             f"along {out['stylus']['axis']} every {out['stylus']['period_s']:g} s, plant play {out['backlash_mm']:g} mm "
+             f"per cable; feed-forward width {c['width_mm']:.4g} mm ({c['source']})",
+             f"tip tracking error after {out['settle_s']:g} s [mm]:",
+             f"  {'session':12s} {'rms':>9s} {'p95':>9s} {'max':>9s} {'readings':>9s} {'max step':>9s}  state"]
+    for name, s in out["sessions"].items():
+        e = s["tip_error_mm"]
+        f = (lambda v: f"{v:9.4f}" if v is not None else f"{'-':>9s}")
+        lines.append(f"  {name:12s} {f(e['rms'])} {f(e['p95'])} {f(e['max'])} {s['readings']:9d} "
+                     f"{s['max_command_step_mm']:9.4f}  {s['final_state']}" + (f" ({s['fault_reason']})" if s["fault_reason"] else ""))
+    lines.append(f"command step limit v_max * period: {out['v_max_step_mm']:.4f} mm")
+    r = out["ratio_rms"]
+    lines.append(f"ratio plain / compensated (rms): {r:.2f}x, target >= {TARGET_RATIO:g}x: {'PASS' if out['pass'] else 'FAIL'}"
+                 if r is not None else "ratio: n/a (no enabled readings)")
+    return "\n".join(lines)
+
+
+def figure(out: dict, runs: dict):
+    """Tip tracking error [mm] over time [s], one line per session."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 4))
+    labels = {"plain": f"with play {out['backlash_mm']:g} mm, no compensation",
+              "compensated": f"with play, feed-forward {out['compensation']['width_mm']:.3g} mm",
+              "no_play": "no play (floor)"}
+    for name in SESSIONS:
+        tr = runs[name]
+        rms = out["sessions"][name]["tip_error_mm"]["rms"]
+        ax.plot(tr["t"], tr["err"] * 1e3, lw=0.8, label=f"{labels[name]} (rms {rms:.3g} mm)" if rms is not None
+                else labels[name])
+    ax.axvline(out["settle_s"], color="0.5", ls=":", lw=0.8, label="error counted from here")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("tip tracking error |commanded - actual| [mm]")
+    r = out["ratio_rms"]
+    ax.set_title(f"backlash feed-forward: plain / compensated {r:.2f}x (rms, seed {out['seed']})" if r else
+                 "backlash feed-forward")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def _check(args) -> None:
+    def bad(flag, what, v):
+        raise InputError(f"{flag}: expected {what}, got {v}")
+    if not (math.isfinite(args.backlash_mm) and 0 < args.backlash_mm <= 5):
+        bad("--backlash-mm", "a play width in (0, 5] mm", args.backlash_mm)
+    if not (math.isfinite(args.seconds) and 0 < args.seconds <= 3600):
+        bad("--seconds", "simulated seconds in (0, 3600]", args.seconds)
+    if not (math.isfinite(args.settle_s) and 0 <= args.settle_s < args.seconds):
+        bad("--settle-s", "seconds in [0, --seconds)", args.settle_s)
+    if not (math.isfinite(args.amp_mm) and 0 < args.amp_mm <= 20):
+        bad("--amp-mm", "a stylus amplitude in (0, 20] mm (the robot's workspace is +-5 mm at motion scale 0.25)",
+            args.amp_mm)
+    if not (math.isfinite(args.period_s) and 0.2 <= args.period_s <= 60):
+        bad("--period-s", "a period in [0.2, 60] s", args.period_s)
+    if not 0 <= args.seed < 2 ** 63:
+        bad("--seed", "a non-negative integer", args.seed)
+
+
+def run(args) -> int:
+    import sys
+
+    from teleop.io.outputs import save_figure, write_json
+
+    _check(args)
+    if args.recordings:
+        out = bench_recordings(args.recordings, args.settle_s)
+        print(f"tip tracking error of recorded sessions after {args.settle_s:g} s [mm]:")
+        for path, v in out["recordings"].items():
+            e, c = v["tip_error_mm"], v["compensation"]
+            print(f"  rms {e['rms']:.4f}  p95 {e['p95']:.4f}  max {e['max']:.4f}  ({v['readings']} frames) {path}"
+                  + (f"  [feed-forward {c['width_mm'][0]:.4g} mm]" if c else ""))
+        if out["ratio_rms"] is not None:
+            print(f"ratio first / second (rms): {out['ratio_rms']:.2f}x")
+        if args.json:
+            write_json(args.json, out)
+        return 0
+    width, source = None, "the plant's own width"
+    if args.compensation:
+        from teleop.core.control.feedforward import model_backlash_width
+        from teleop.io.model_io import load_model
+
+        width = model_backlash_width(load_model(args.compensation), f"--compensation {args.compensation}")
+        source = str(args.compensation)
+    out, runs = bench_feedforward(args.backlash_mm * 1e-3, width, source, args.seconds, args.settle_s, args.seed,
+                                  args.axis, args.amp_mm * 1e-3, args.period_s,
+                                  progress=lambda name: print(f"feedforward: session {name} ...", file=sys.stderr,
+                                                              flush=True))
+    print(format_report(out))
+    if args.json:
+        write_json(args.json, out)
+    if args.plot:
+        save_figure(figure(out, runs), args.plot)
+    return 0

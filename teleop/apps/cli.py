@@ -1,0 +1,157 @@
+"""The `teleop` command. Subcommands live one per module in `teleop.apps.commands` (discovered, not listed),
+each exposing ``register(subparsers)`` that adds its parser and sets ``func(args) -> int``.
+
+Bad input anywhere (an InputError, or an argument argparse rejects in any subcommand) ends with one line
+on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import re
+import sys
+
+from teleop import __version__
+from teleop.apps.argtypes import OUTPUT_OPTIONS, seed_int
+from teleop.core.errors import InputError
+
+
+_TYPE_NAMES = {"int": "an integer", "float": "a number"}
+
+
+def _expected_form(action: argparse.Action) -> str:
+    """How `action` is written on the command line, e.g. ``--test {stiffness,z}`` or ``REC``."""
+    if action.metavar is not None:
+        metavar = action.metavar if isinstance(action.metavar, str) else " ".join(action.metavar)
+    elif action.choices is not None:
+        metavar = "{" + ",".join(str(c) for c in action.choices) + "}"
+    else:
+        metavar = action.dest.upper()
+    if not action.option_strings:
+        return metavar
+    if action.nargs == 0:
+        return action.option_strings[0]
+    return f"{action.option_strings[0]} {metavar}"
+
+
+class TeleopArgumentParser(argparse.ArgumentParser):
+    """An ArgumentParser whose every error is one line on stderr and exit code 2:
+    ``<prog>: error: <what was wrong; what was expected> (see <prog> --help)``.
+
+    `add_subparsers` hands its class to the subcommands' parsers (argparse's default ``parser_class``
+    is ``type(self)``), so every parser under `build_parser` (``teleop bench tick`` too) behaves so.
+    An argument no parser knows is reported by the deepest subcommand that received it. A ``--seed``
+    declared with ``type=int`` is checked as `seed_int` (numpy rejects negative seeds with a traceback);
+    an output option (``--json``, ``--plot``, ... see `teleop.apps.argtypes.OUTPUT_OPTIONS`) declared without a
+    type is checked as a writable path while the arguments are parsed, before any work starts.
+    """
+
+    def add_argument(self, *args, **kwargs):
+        if "--seed" in args and kwargs.get("type") is int:
+            kwargs["type"] = seed_int
+        for name in args:
+            if name in OUTPUT_OPTIONS and kwargs.get("type") is None and kwargs.get("action") in (None, "store"):
+                kwargs["type"] = OUTPUT_OPTIONS[name]
+        return super().add_argument(*args, **kwargs)
+
+    def parse_known_args(self, args=None, namespace=None):
+        """Parse like argparse, but leftovers are an error of this parser (not a list returned):
+        a subcommand's parser runs first on its arguments, so the message names ``teleop <sub>``."""
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:
+            self.error(f"unrecognized argument{'s' if len(extras) > 1 else ''}: {' '.join(extras)}; "
+                       f"expected only the arguments of {self.prog}")
+        return namespace, extras
+
+    def error(self, message: str):
+        """Print ``<prog>: error: <message> (see <prog> --help)`` on one line and exit 2."""
+        self.exit(2, f"{self.prog}: error: {self._explain(message)} (see {self.prog} --help)\n")
+
+    def _explain(self, message: str) -> str:
+        """argparse's message with what was expected added where argparse leaves it out; one line."""
+        message = " ".join(str(message).split())
+        bad_type = re.fullmatch(r"argument (\S+): invalid (\w+) value: (.*)", message)
+        if bad_type:
+            name, type_name, value = bad_type.groups()
+            expected = _TYPE_NAMES.get(type_name, f"a valid {type_name} value")
+            return f"argument {name}: expected {expected}, got {value}"
+        missing = re.fullmatch(r"the following arguments are required: (.*)", message)
+        if missing:
+            names = {n.strip() for n in missing.group(1).split(",")}
+            forms = [_expected_form(a) for a in self._actions
+                     if argparse._get_action_name(a) in names]
+            if forms:
+                return f"missing required argument{'s' if len(forms) > 1 else ''}: {missing.group(1)}; " \
+                       f"expected {' '.join(forms)}"
+        return message
+
+
+def discover(package: str, subparsers) -> None:
+    """Import every module of `package` and let it register its subcommand(s)."""
+    pkg = importlib.import_module(package)
+    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        module = importlib.import_module(f"{package}.{info.name}")
+        register = getattr(module, "register", None)
+        if register is not None:
+            register(subparsers)
+
+
+def build_parser() -> TeleopArgumentParser:
+    parser = TeleopArgumentParser(
+        prog="teleop", description="Teleoperation and haptic rendering for a cable-driven surgical robot.")
+    parser.add_argument("--version", action="version", version=f"cdpr-teleop {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    discover("teleop.apps.commands", sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the `teleop` command on `argv` (default: sys.argv[1:]); return the exit code.
+
+    0 on success (also for --help and --version), 2 on bad input (one line on stderr), 130 on Ctrl-C.
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, or an argument error already printed as one line
+        return exc.code if isinstance(exc.code, int) else 2
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except InputError as exc:
+        print(f"teleop: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("teleop: interrupted", file=sys.stderr)
+        return 130
+    except OSError as exc:
+        if exc.filename is None:
+            raise
+        # a file the command was given (or its directory) failed under it: name it, no traceback
+        names = " -> ".join(str(f) for f in (exc.filename, exc.filename2) if f is not None)
+        print(f"teleop: error: {names}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except Exception as exc:
+        message = _device_error(exc)
+        if message is None:
+            raise
+        print(f"teleop: error: {message}", file=sys.stderr)
+        return 2
+
+
+def _device_error(exc: Exception) -> str | None:
+    """One line for a device that failed (devices.base.DeviceError: a port that will not open, a lost
+    link, an SDK error), or None for any other exception (a bug, shown with its traceback)."""
+    from devices.base import DeviceError
+
+    return " ".join(str(exc).split()) if isinstance(exc, DeviceError) else None
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,109 @@
+"""`teleop diagnose REC...`: where simulation and recording differ, which physics is missing, and the fit
+once it is modelled (JSON keys of DESIGN.md)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from teleop.apps.argtypes import input_file
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "diagnose", help="locate sim-vs-real mismatch in recordings, name the missing physics, show the fit")
+    p.add_argument("recordings", nargs="+", type=input_file, metavar="REC",
+                   help="interchange CSV (or any layout with --map)")
+    p.add_argument("--map", metavar="MAP", help="column map: a .toml path or a shipped name (e.g. mrdlab)")
+    p.add_argument("--holdout", type=float, default=0.4, help="fraction at the end scoring the models (0.4)")
+    p.add_argument("--json", metavar="PATH", help="write the report as JSON")
+    p.add_argument("--plot", metavar="PATH", help="write the figure as PNG (one per recording: _<name>)")
+    p.add_argument("--save-model", metavar="PATH", help="write the identified link models (JSON)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the fits' extra starts (0)")
+    p.add_argument("--baseline", metavar="EFFECTS", default="default",
+                   help="what your simulation already contains: 'default' (the project's simulation: capstan "
+                        "friction over the bend, the spring load), 'lossless' (ideal links), or a comma list "
+                        "of catalogue effects; findings are what lies beyond it")
+    p.add_argument("--sindy", action="store_true",
+                   help="also fit the PySINDy peer (polynomial + Fourier library, STLSQ; static and free-run "
+                        "forms) on the same held-out split")
+    from teleop.apps.commands.campaign import add_scheduler_option
+
+    add_scheduler_option(p)  # several files: each diagnosed where the scheduler runs tasks (teleop.apps.campaign)
+    p.set_defaults(func=run)
+
+
+def _summary(doc: dict) -> str:
+    lines = [f"{doc['recording']}", f"  baseline: {doc['baseline']['model']}"]
+    for ch, rm in doc["baseline"]["rmse"].items():
+        info = doc["channels"][ch]
+        peer = doc["peer"][ch]
+        sindy = f", PySINDy peer {peer['sindy_rmse']:.4g}" if "sindy_rmse" in peer else ""
+        lines.append(f"  {ch} ({info['link']} link): baseline rmse {rm:.4g} -> model {info['rmse_model']:.4g} "
+                     f"[ARX peer {peer['arx_rmse']:.4g}{sindy}] {doc['channels'][ch]['unit']}")
+    if not doc["findings"]:
+        lines.append("  findings: none")
+    for f in doc["findings"]:
+        ps = ", ".join(f"{k}={v['value']:.4g}±{(v['stderr'] or 0):.2g} {v['unit']}" for k, v in f["params"].items())
+        lines.append(f"  {f['effect']} on {f['channel']}: {f['rmse_before']:.4g} -> {f['rmse_after']:.4g} "
+                     f"(x{f['improvement']:.2f}) where {f['where']['condition']}; {ps}")
+    for u in doc["unexplained"]:
+        lines.append(f"  unexplained on {u['channel']}: rmse {u['rmse']:.3g} (noise {u['noise_rmse']:.2g}), "
+                     f"best correlate: {u['correlate']} (R2 {u['r2']:.2f})")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    import sys
+
+    from teleop.io.progress import progress
+
+    from teleop.diagnosis.diagnose import baseline_effects, diagnose
+    from teleop.diagnosis.identify import applicable
+    from teleop.diagnosis.links import find_links, link_data
+    from teleop.io.model_io import save_model
+    from teleop.diagnosis.plot import figure
+    from teleop.io.recording_io import read_recording
+    from teleop.io.outputs import save_figure, write_json
+
+    baseline = baseline_effects(args.baseline)
+    recs = [read_recording(p, args.map) for p in args.recordings]
+    docs, diags = [], []
+    if args.scheduler != "none":  # each file read again and diagnosed on the scheduler's workers
+        from teleop.apps.campaign.recordings import diagnose_files
+
+        diags = diagnose_files(args.recordings, args.map, args.holdout, args.scheduler, seed=args.seed,
+                               baseline=baseline, sindy=args.sindy)
+        docs, recs = [d.as_dict() for d in diags], []  # nothing left for the in-process loop below
+    total = sum(3 * len(applicable(link_data(r, L))) for r in recs for L in find_links(r))
+    with progress(total, "diagnose", unit="fits", leave=False) as bar:
+        for rec in recs:
+            diag = diagnose(rec, args.holdout, progress=bar.update, seed=args.seed, baseline=baseline,
+                            sindy=args.sindy)
+            diags.append(diag)
+            docs.append(diag.as_dict())
+    for doc in docs:
+        print(_summary(doc))
+    result = docs[0]
+    if len(docs) > 1:
+        from teleop.diagnosis.crossfile import cross_file
+        cross = cross_file(diags)
+        result = {"recordings": docs, "cross_file": cross}
+        for ch, s in cross["summary"].items():
+            chains = ", ".join(f"{c} (min x{m:.2f})" for c, m in s["by_chain"].items())
+            print(f"across files, {ch}: effects fitted on one file, scored on another: improvement "
+                  f"x{s['improvement_geomean']:.2f} (geometric mean of {s['pairs']} pairs), min "
+                  f"x{s['improvement_min']:.2f}; by chain: {chains}")
+    if args.json:
+        write_json(args.json, result)
+    if args.plot:
+        for diag in diags:
+            path = Path(args.plot)
+            if len(diags) > 1:
+                path = path.with_name(f"{path.stem}_{Path(diag.rec.path).stem}{path.suffix or '.png'}")
+            save_figure(figure(diag), path)
+    if args.save_model:
+        models = [res.final.model for res in diags[0].links]
+        if len(diags) > 1:
+            print("teleop: note: --save-model writes the model of the first recording", file=sys.stderr)
+        save_model(args.save_model, models, diags[0].rec.path)
+    return 0

@@ -1,0 +1,193 @@
+"""FBG force sensor calibration (seed 001 sec. 2.1.3-2.1.4, 3.1) from load steps at two or more temperatures.
+
+The recording: a reference force (load cell) stepped up and down, the sensor's temperature, and the Bragg
+shifts of FBG1 (strain-free, temperature only) and FBG2 (force and temperature), one row per sample or per
+hold. Columns `force_N`, `temperature_C`, `dl1_pm`, `dl2_pm`, optionally `branch` (loading|unloading).
+
+Model (linear in its parameters, solved by ordinary least squares; seed 001 eq 2-3):
+
+    dl1 = kT1 (T - Tm) + c1
+    dl2 = S F + H s + kT2 (T - Tm) + c2        s in [-1, 1]: +1 after the force rose, -1 after it fell
+
+Tm is the mean temperature, c1 and c2 the shifts' zeros. Reported: the sensitivity S [pm/N], the
+temperature sensitivities kT1, kT2 [pm/degC] and their ratio r = kT2 / kT1 (eq 3), the hysteresis as the
+seed states it (loading - unloading gap 2H over the full-scale output S F_max [%], and 2H / S [N]), the
+RMSE of dl2 [pm], that of the compensated shift dl2 - r dl1 [pm] and the force error it means, / S [N]
+(seed: 12.59 pm, 0.37 N). Standard errors
+from cov = s^2 (X^T X)^-1 per equation; r's by the delta method. Samples of a hold are not independent
+draws of everything (the load cell's own error is shared), so the errors are a floor, not a bound.
+
+The loading state s is the catalogue's sensor-hysteresis switch (teleop.core.physics.hysteresis_offset with
+h = 1) applied to the reference force, its half-width five times the force noise (so noise does not flip
+it); a `branch` column, when given, is used instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from teleop.io.table import read_table
+from teleop.core.errors import InputError
+from teleop.core.physics import hysteresis_offset
+from teleop.core.sensors import FbgParams
+
+BRANCH_WORDS = {"loading": 1.0, "unloading": -1.0, "+1": 1.0, "1": 1.0, "-1": -1.0}
+
+
+@dataclass(frozen=True)
+class FbgData:
+    """force (n,) [N] reference, temperature (n,) [degC], dl1, dl2 (n,) [pm], s (n,) loading state, source."""
+
+    force: np.ndarray
+    temperature: np.ndarray
+    dl1: np.ndarray
+    dl2: np.ndarray
+    s: np.ndarray
+    source: str = ""
+
+
+def loading_state(force: np.ndarray, width: float | None = None) -> np.ndarray:
+    """(n,) loading state -1, 0 or +1 of a stepped force [N]: the sign of hysteresis_offset(F, 1, width).
+
+    width [N]: the switch's half-width, default five times the force noise (1.4826 median |dF| / sqrt 2,
+    most samples being holds), at least 1e-6 of the force range."""
+    F = np.asarray(force, dtype=float)
+    if width is None:
+        noise = 1.4826 * float(np.median(np.abs(np.diff(F)))) / np.sqrt(2.0)
+        width = max(5.0 * noise, 1e-6 * float(np.ptp(F)) + 1e-12)
+    s = hysteresis_offset(F, 1.0, width)
+    # the switch's value drifts inside [-1, 1] as noise nudges the play during a hold; its sign does not
+    # (noise < 2 width): +/-1 once the force has first moved a full width, 0 (neutral) before
+    moved = np.maximum.accumulate(np.abs(s) >= 1.0 - 1e-9)
+    return np.where(moved, np.sign(s), 0.0)
+
+
+def read_fbg_steps(path: str | Path) -> FbgData:
+    """The load-step CSV at `path` (module docstring)."""
+    cols, meta = read_table(path, ("force_N", "temperature_C", "dl1_pm", "dl2_pm"), ("branch",),
+                            {"branch": BRANCH_WORDS}, min_rows=8)
+    s = cols["branch"] if "branch" in cols else loading_state(cols["force_N"])
+    return FbgData(cols["force_N"], cols["temperature_C"], cols["dl1_pm"], cols["dl2_pm"], s,
+                   source=meta.get("source", str(path)))
+
+
+@dataclass(frozen=True)
+class FbgFit:
+    """Result of `fit_fbg`: values and standard errors by name (units in the names), the fitted shifts
+    (dl1, dl2) [pm] and the temperature levels found."""
+
+    data: FbgData
+    values: dict
+    stderr: dict
+    dl1_fit: np.ndarray
+    dl2_fit: np.ndarray
+    Tm: float
+
+    @property
+    def params(self) -> FbgParams:
+        """The fitted sensor as the loop's FbgParams."""
+        v = self.values
+        return FbgParams(S_pm_N=v["S_pm_N"], r=v["r"], kT1_pm_C=v["kT1_pm_C"], kT2_pm_C=v["kT2_pm_C"],
+                         noise_pm=v["rmse_compensated_pm"])
+
+    def summary(self) -> dict:
+        return {"kind": "fbg", "source": self.data.source, "values": self.values, "stderr": self.stderr,
+                "samples": int(self.data.force.size)}
+
+
+def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(beta, cov, residual) of y ~ X beta."""
+    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ beta
+    dof = max(X.shape[0] - X.shape[1], 1)
+    cov = float(r @ r) / dof * np.linalg.pinv(X.T @ X)
+    return beta, cov, r
+
+
+def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
+    """Sensitivity, hysteresis and temperature ratio of one dual-FBG sensor (module docstring)."""
+    F, T = data.force, data.temperature
+    where = data.source or "fbg calibration"
+    if float(np.ptp(T)) < min_temperature_span_C:
+        raise InputError(f"{where}: column 'temperature_C' spans {float(np.ptp(T)):.2f} degC; the temperature "
+                         f"ratio r needs load steps at two or more temperatures (>= {min_temperature_span_C} degC apart)")
+    if float(np.ptp(F)) <= 0:
+        raise InputError(f"{where}: column 'force_N' is constant; the sensitivity needs load steps")
+    Tm = float(np.mean(T))
+    one = np.ones_like(F)
+    b1, cov1, r1 = _ols(np.column_stack([T - Tm, one]), data.dl1)
+    has_h = bool(np.any(np.abs(data.s) > 0.5))
+    cols2 = [F, T - Tm, one] + ([data.s] if has_h else [])
+    b2, cov2, r2 = _ols(np.column_stack(cols2), data.dl2)
+    S, kT2, kT1 = float(b2[0]), float(b2[1]), float(b1[0])
+    se_S, se_kT2, se_kT1 = (float(np.sqrt(max(c, 0.0))) for c in (cov2[0, 0], cov2[1, 1], cov1[0, 0]))
+    if abs(kT1) < 1e-12 or S <= 0:
+        raise InputError(f"{where}: FBG1 shows no temperature sensitivity or FBG2 no force sensitivity "
+                         f"(kT1 = {kT1:.3g} pm/degC, S = {S:.3g} pm/N)")
+    r = kT2 / kT1
+    se_r = abs(r) * float(np.hypot(se_kT2 / kT2 if kT2 else 0.0, se_kT1 / kT1))
+    H = float(b2[3]) if has_h else 0.0
+    se_H = float(np.sqrt(max(cov2[3, 3], 0.0))) if has_h else 0.0
+    Fmax = float(np.max(np.abs(F)))
+    rmse = float(np.sqrt(np.mean(r2 ** 2)))
+    # the temperature-compensated shift dl2 - r dl1 (eq 3) carries both gratings' errors
+    rmse_comp = float(np.sqrt(np.mean((r2 - r * r1) ** 2)))
+    values = {"S_pm_N": S, "kT1_pm_C": kT1, "kT2_pm_C": kT2, "r": r, "hysteresis_pm": abs(H),
+              "hysteresis_N": 2 * abs(H) / S, "hysteresis_percent": 100 * 2 * abs(H) / (S * Fmax),
+              "rmse_pm": rmse, "rmse_compensated_pm": rmse_comp, "force_error_N": rmse_comp / S, "rmse_dl1_pm": float(np.sqrt(np.mean(r1 ** 2))),
+              "full_scale_N": Fmax}
+    stderr = {"S_pm_N": se_S, "kT1_pm_C": se_kT1, "kT2_pm_C": se_kT2, "r": se_r, "hysteresis_pm": se_H,
+              "hysteresis_N": 2 * se_H / S, "hysteresis_percent": 100 * 2 * se_H / (S * Fmax)}
+    return FbgFit(data, values, stderr, data.dl1 - r1, data.dl2 - r2, Tm)
+
+
+def plot_fbg_fit(fit: FbgFit):
+    """Three panels like seed 001 Fig 4a/4b: FBG2's temperature-free shift against force (loading and
+    unloading), both shifts against temperature at zero force, and the residuals against force."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    d, v = fit.data, fit.values
+    fig, (ax, axT, axr) = plt.subplots(1, 3, figsize=(13, 4.2))
+    temp_part = v["kT2_pm_C"] * (d.temperature - fit.Tm)
+    y = d.dl2 - temp_part
+    up, down = d.s >= 0, d.s < 0
+    ax.plot(d.force[up], y[up], ".", ms=3, color="tab:red", label="loading")
+    ax.plot(d.force[down], y[down], ".", ms=3, color="tab:blue", label="unloading")
+    Fg = np.linspace(float(d.force.min()), float(d.force.max()), 50)
+    base = fit.dl2_fit - temp_part - v["S_pm_N"] * d.force
+    c0 = float(np.median(base[np.abs(d.s) < 0.5])) if np.any(np.abs(d.s) < 0.5) else float(np.mean(base))
+    ax.plot(Fg, v["S_pm_N"] * Fg + c0, "k-", lw=1,
+            label=f"S = {v['S_pm_N']:.2f} +/- {fit.stderr['S_pm_N']:.2f} pm/N, "
+                  f"hysteresis {v['hysteresis_percent']:.2f} %")
+    ax.set_xlabel("reference force [N]")
+    ax.set_ylabel("FBG2 shift minus kT2 (T - Tm) [pm]")
+    ax.legend(fontsize=7)
+    ax.set_title("force calibration (seed 001 Fig 4a)", fontsize=9)
+    # each shift minus its fitted non-temperature part (zero, force, hysteresis): k (T - Tm) + residual
+    rest1 = fit.dl1_fit - v["kT1_pm_C"] * (d.temperature - fit.Tm)
+    rest2 = fit.dl2_fit - v["kT2_pm_C"] * (d.temperature - fit.Tm)
+    axT.plot(d.temperature, d.dl1 - rest1, ".", ms=3, color="tab:green",
+             label=f"FBG1 minus its zero, kT1 = {v['kT1_pm_C']:.2f} pm/degC")
+    axT.plot(d.temperature, d.dl2 - rest2, ".", ms=3, color="tab:orange",
+             label=f"FBG2 minus zero, force and hysteresis, kT2 = {v['kT2_pm_C']:.2f} pm/degC")
+    axT.set_xlabel("temperature [degC]")
+    axT.set_ylabel("Bragg shift about the mean temperature [pm]")
+    axT.set_title(f"temperature: r = kT2/kT1 = {v['r']:.3f} +/- {fit.stderr['r']:.3f} (seed 001 Fig 4b)", fontsize=9)
+    axT.legend(fontsize=7, loc="lower right")
+    axr.plot(d.force, d.dl2 - fit.dl2_fit, ".", ms=3, color="tab:blue", label="FBG2 residual")
+    axr.plot(d.force, d.dl1 - fit.dl1_fit, ".", ms=3, color="tab:green", alpha=0.6, label="FBG1 residual")
+    axr.axhline(0, color="k", lw=0.6)
+    axr.set_xlabel("reference force [N]")
+    axr.set_ylabel("residual [pm]")
+    axr.set_title(f"RMSE FBG2 {v['rmse_pm']:.2f} pm; compensated {v['rmse_compensated_pm']:.2f} pm "
+                  f"= {v['force_error_N']:.3f} N", fontsize=9)
+    axr.legend(fontsize=7)
+    fig.suptitle(f"FBG calibration ({Path(d.source).name})", fontsize=10)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,1 @@
+"""Control: command-path compensation (feed-forward) built on the effect models."""

@@ -1,0 +1,182 @@
+"""The compute of one loop tick: pose -> cable lengths -> wrench -> stylus force.
+
+    tc = TickComputer(geom, "dynamic", renderer=Renderer(RenderParams.for_device(spec)))
+    lengths, wrench, force = tc.compute(pose, tensions, dt, velocity)
+
+pose (6,) [x, y, z, alpha, beta, gamma] (m, rad, Z-Y-X Euler) of the end effector target; tensions (6,)
+calibrated FSR tensions [N]; dt [s]; velocity (3,) stylus velocity [m/s] in the device frame (passivity).
+Returns lengths: list of 6 cable lengths [m] (inverse kinematics, eq 4-5: command these to the robot);
+wrench: list of 6 filtered wrench values [N, N m] in {B}; force: tuple (3,) stylus force [N] (device frame).
+
+The estimate is one compiled kernel call per tick (teleop.core.kernels.estimate: one kernel per estimator, built
+from the shared kernels of the geometry, the friction models, the turn correction and the Kalman update);
+this class holds its arrays. The rotated platform anchors R r_i are cached per orientation (the loop holds
+the orientation, so R is built once). A non-finite input propagates to a renderer fault (zero force); call
+`reset()` after a fault.
+
+`LoopTick` is the whole device-excluded tick the loop runs: stylus position -> mapping -> lengths -> FSR
+counts -> tensions -> this estimate -> rendered force (`teleop bench tick` times `LoopTick.compute`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from teleop.core.errors import InputError
+from teleop.core.estimation.kalman import KalmanNoise, SteadyWrenchKalman, wrench_kalman_params
+from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
+from teleop.core.estimation.turn import TurnCompensation, turn_arrays
+from teleop.core.geometry import Geometry
+from teleop.core.kernels import estimate as K
+from teleop.core.mapping import Follower
+from teleop.core.rendering import Renderer
+
+# the compensation step of each estimator (everything else is shared: teleop.core.kernels.estimate)
+ESTIMATE_KERNELS = {"non_compensated": K.estimate_non_compensated, "single": K.estimate_capstan,
+                    "double": K.estimate_capstan, "dynamic": K.estimate_dynamic}
+# the loop's estimator behind teleop.core.kernels.estimate.fsr_tensions in one call (ReadingEstimator.update_arrays;
+# the others make the two calls)
+COUNTS_KERNELS = {"dynamic": K.counts_dynamic}
+
+
+class TickComputer:
+    """One tick's compute for the loop (see module docstring). `name` is the estimator's DESIGN.md name:
+    non_compensated, single, double (needs `turn`) or dynamic (`dynamic` parameters)."""
+
+    def __init__(self, geom: Geometry, estimator: str = "dynamic", *, turn: TurnCompensation | None = None,
+                 dynamic: DynamicParams = DynamicParams(), kalman: KalmanNoise | None = KalmanNoise(),
+                 renderer: Renderer | None = None, length_deadband: float = 0.0):
+        if estimator not in ESTIMATOR_NAMES:
+            raise InputError(f"unknown estimator '{estimator}' (expected one of: {', '.join(ESTIMATOR_NAMES)})")
+        if estimator == "double" and turn is None:
+            raise InputError("estimator 'double' needs a fitted turn compensation (fit_turn_compensation)")
+        self.name = estimator
+        self.geom = geom
+        self.dyn = dynamic
+        self.kernel = ESTIMATE_KERNELS[estimator]
+        self.counts_kernel = COUNTS_KERNELS.get(estimator)
+        n = len(geom.B)
+        self.cab = np.zeros((n, 12))
+        self.cab[:, 0:3], self.cab[:, 3:6] = geom.r, geom.B
+        self.c = np.array([*map(float, geom.v), geom.mu, geom.theta0, length_deadband, dynamic.b, dynamic.dahl_Fc,
+                           dynamic.dahl_sigma, dynamic.v_smooth, dynamic.capstan_k], dtype=float)
+        self.turn, self.coefs = turn_arrays(turn if estimator == "double" else None)
+        self.kalman = SteadyWrenchKalman(wrench_kalman_params(geom, kalman)) if kalman is not None else None
+        self.kf = self.kalman.kf if self.kalman is not None else np.zeros((5, 0))
+        self.out = np.zeros((3, max(n, 6)))
+        self._pose = np.zeros(6)
+        self._t = np.zeros(n)
+        self.renderer = renderer if renderer is not None else Renderer()
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every state (directions, friction states, turns, Kalman, renderer fault and ramp)."""
+        self.st = np.zeros((7, self.cab.shape[0]))
+        self.st[K.EXT] = math.nan
+        self.st[K.L_PREV] = math.nan
+        self.turn[:, 3], self.turn[:, 4], self.turn[:, 5] = 0.0, math.nan, math.inf  # direction, extreme, tau
+        if self.kalman is not None:
+            self.kalman.reset()
+        self.renderer.reset()
+
+    def compute(self, pose, tensions, dt: float, velocity=(0.0, 0.0, 0.0)):
+        """(lengths [6], wrench [6], force (3,)) for one tick; see the module docstring."""
+        lengths, w = self.estimate(pose, tensions, dt)
+        return lengths, w, self.renderer.render_xyz(w[0], w[1], w[2], dt, *velocity)
+
+    def estimate_into(self, pose: np.ndarray, tensions: np.ndarray, dt: float) -> np.ndarray:
+        """The tick without the renderer on float64 arrays: `out` (3, n) rows: lengths [m], wrench [N, N m]
+        (first 6), compensated tip-side tensions [N]."""
+        self.kernel(pose, tensions, dt, self.cab, self.c, self.st, self.kf, self.turn, self.coefs, self.out)
+        return self.out
+
+    def estimate(self, pose, tensions, dt: float):
+        """(lengths [6], wrench [6]) as lists: the tick without the renderer (pose, tensions: any sequence)."""
+        self._pose[:] = pose
+        self._t[:] = tensions
+        out = self.estimate_into(self._pose, self._t, float(dt))
+        n = self.cab.shape[0]
+        return out[0, :n].tolist(), out[1, :6].tolist()
+
+
+class LoopTick:
+    """The whole device-excluded tick the loop runs, on plain floats: stylus position -> mapping (motion
+    scale, workspace clip, v_max step limit; teleop.core.mapping.Follower) -> cable lengths (inverse kinematics)
+    -> FSR counts -> tensions -> estimation with the Kalman filter (ReadingEstimator.update_floats) ->
+    rendered stylus force (Renderer.render_xyz).
+
+    teleop.loop.core.Teleop calls `map`, `estimate` and `render` at its MAP, ESTIMATE and RENDER stages
+    (the robot I/O sits between them); `compute` runs the three back to back for `teleop bench tick`, so the
+    benchmark times the code the loop runs.
+
+        lt = LoopTick(geom, MappingParams(), ReadingEstimator(geom, "dynamic"), Renderer(rp), cmd_dt=1e-3)
+        lt.engage(p_stylus)                                  # anchors (the loop's ENABLED entry)
+        L, t, w, F = lt.compute(p_stylus, v_stylus, counts, dt)
+
+    Inputs are what the devices give: stylus position (3,) [m] and velocity (3,) [m/s] in the device frame,
+    raw FSR counts (6,), as numpy arrays. Outputs: commanded lengths L [m] (the robot command; the loop makes
+    the device's array), tensions [N] and wrench [N, N m] in {B} as lists of 6 floats, force (3,) tuple [N]
+    in the device frame.
+    """
+
+    def __init__(self, geom: Geometry, mapping, estimator, renderer: Renderer | None = None, cmd_dt: float = 1e-3):
+        self.follower = Follower(mapping, geom, cmd_dt)
+        self.home = [float(v) for v in mapping.home]
+        self.estimator = estimator
+        self.renderer = renderer if renderer is not None else Renderer()
+        self._home_mapping()  # the estimator and renderer keep their state (the loop may hand in its own)
+
+    def _home_mapping(self) -> None:
+        # compute()'s own mapping state; the loop keeps its own (Teleop.pose, L_last, anchors) and calls map()
+        self._anchor = np.zeros(6)  # stylus anchor (3,), robot anchor (3,) [m]
+        self._anchor[3:] = self.home[:3]
+        self._pos = np.array(self.home[:3], dtype=float)
+        self._L = np.zeros(len(self.estimator.geom.B))
+        self._pose = np.array(self.home, dtype=float)
+        self._engaged_L = False
+
+    pos = property(lambda self: self._pos.tolist(), doc="compute()'s robot target [m] (3 floats)")
+    L_last = property(lambda self: self._L.tolist() if self._engaged_L else None,
+                      doc="compute()'s last commanded lengths [m] (None before the first engagement)")
+
+    def reset(self) -> None:
+        """Back at home, not engaged; estimator and renderer reset."""
+        self._home_mapping()
+        self.estimator.reset()
+        self.renderer.reset()
+
+    def engage(self, p_stylus) -> None:
+        """Anchor the incremental mapping at the stylus position (3,) [m] and the current robot target."""
+        self._anchor[:3] = p_stylus
+        self._anchor[3:] = self._pos
+        if not self._engaged_L:
+            self._L[:] = self.follower.lengths(*self._pos)
+            self._engaged_L = True
+
+    def map(self, p_stylus, anchor_stylus, anchor_robot, pos, L_prev) -> tuple[list, list]:
+        """(target position [3] [m], lengths [6] [m]): `Follower.step` (all arguments lists of floats)."""
+        return self.follower.step(p_stylus, anchor_stylus, anchor_robot, pos, L_prev)
+
+    def estimate(self, counts: list, pose: list, dt: float) -> tuple[list, list]:
+        """(tensions [6] [N], wrench [6] [N, N m]) from raw FSR counts at the commanded pose [6] (lists)."""
+        return self.estimator.update_floats(counts, pose, dt)
+
+    def render(self, fx: float, fy: float, fz: float, dt: float, vx: float, vy: float, vz: float) -> tuple:
+        """Stylus force (3,) [N] from the force part of the wrench and the stylus velocity (Renderer.render_xyz)."""
+        return self.renderer.render_xyz(fx, fy, fz, dt, vx, vy, vz)
+
+    def compute(self, p_stylus, v_stylus, counts, dt: float):
+        """One full tick (see the class docstring): (L [6], tensions [6], wrench [6], force (3,)); p_stylus,
+        v_stylus (3,) and counts (6,) float64 arrays. The same kernels as map, estimate and render, on this
+        object's arrays."""
+        self.follower.step_into(p_stylus, self._anchor, self._pos, self._L)
+        pose = self._pose
+        pose[:3] = self._pos
+        est = self.estimator
+        t = est.tensions_into(counts)
+        w = est.tick.estimate_into(pose, t, dt)[1]
+        vx, vy, vz = v_stylus.tolist()
+        F = self.renderer.render_xyz(w[0], w[1], w[2], dt, vx, vy, vz)
+        return self._L.tolist(), t.tolist(), w[:6].tolist(), F

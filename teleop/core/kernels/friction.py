@@ -1,0 +1,229 @@
+"""Kernels of the sheath friction and the direction rule, per sample on floats: the one definition of each.
+
+Conventions of teleop.core.physics: x increasing = the motor hauls its cable in (pulling); a motor travel dx > 0
+pulls. Each returns the new state; the callers (the physics Steps and array forms, the estimators, the
+simulated robot, the loop's tick) keep the state.
+
+- `direction_step`: the Schmitt trigger on reversals (estimation.direction): direction d (+1 rising, -1
+  falling, 0 not yet moved) flips only once the value has come back more than the dead band from the
+  extreme reached since the last flip.
+- `dahl_step`: Dahl pre-sliding friction, exact over a monotone step: F = s Fc + (F - s Fc) e^(-sigma |dx| / Fc).
+- `capstan_play_step`: the capstan with stick transitions, motor side (physics capstan_friction): the motor
+  force follows the cable stretch, F <- clamp(F + k dx, F_t e^-mu Theta, F_t e^+mu Theta).
+- `capstan_band`: (lo, hi) = (F e^-mu Theta, F e^+mu Theta) sorted.
+- `capstan_hold`: the seed's compensation (seed 000 eq 7, physics.capstan.motor2tip): t e^-mu Theta while
+  pulling (shortening or unmoved), t e^+mu Theta while paying out.
+- `play_inverse_step`: the inverse of the play operator (backlash feed-forward, seed 002): the command
+  x = y_d + r s leads the wanted output y_d by up to the half-width r on the side s of its motion,
+  rate-limited and kept within limits.
+- `play_mix_step`: the general play (backlash) of a tendon in a sheath: an elastic part, a main play and a
+  wide play, the lag scaling with the position (physics.backlash).
+- `capstan_state_step`: the friction state phi in [-1, 1] of the `dynamic` estimator: the sensor tension
+  t e^(phi mu Theta) moves by k dx while the cable sticks, d phi = k dx / (mu Theta t_sensor), clipped at
+  +-1 where it slips (a slack cable, t <= 1e-6 N, slips at once).
+"""
+
+from __future__ import annotations
+
+import math
+
+from teleop.core.kernels.jit import njit
+
+
+@njit
+def sgn(v):
+    """sign(v) as a float, sign(0) = 0."""
+    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+
+
+@njit
+def clamp(y, lo, hi):
+    """min(max(y, lo), hi) (the play operator's step; needs lo <= hi)."""
+    return hi if y > hi else (lo if y < lo else y)
+
+
+@njit
+def direction_step(d, e, v, deadband):
+    """(d, e, flipped): direction and extreme after value v; e NaN = no value yet (v becomes the reference)."""
+    if e != e:
+        e = v
+    if d <= 0.0 and v > e + deadband:      # rising past the dead band
+        return 1.0, v, d < 0.0
+    if d >= 0.0 and v < e - deadband:      # falling past the dead band
+        return -1.0, v, d > 0.0
+    if d > 0.0 and v > e:                  # the extreme follows the motion
+        e = v
+    elif d < 0.0 and v < e:
+        e = v
+    return d, e, False
+
+
+@njit
+def dahl_step(F, dx, sigma, Fc):
+    """Dahl force [N] after a motor travel dx [m] from force F; sigma [N/m], Fc [N] > 0."""
+    a = math.exp(-sigma * abs(dx) / Fc)
+    return a * F + sgn(dx) * Fc * (1.0 - a)
+
+
+@njit
+def play_inverse_step(y_d, r, s, max_step, lo, hi, x_prev):
+    """The command x [m] making a play of half-width r [m] output y_d [m]: x = y_d + r s, s in [-1, 1] the
+    side of the play to drive on (+1 while y_d rises), its change from x_prev limited to +-max_step (x_prev
+    NaN: none yet) and x clamped into [lo, hi]. Since x - r <= y_d <= x + r, a y_d that holds still keeps
+    the output still whatever s does."""
+    x = y_d + r * s
+    if x_prev == x_prev:
+        x = clamp(x, x_prev - max_step, x_prev + max_step)
+    return clamp(x, lo, hi)
+
+
+@njit
+def capstan_band(F, mu_theta):
+    """(lo, hi): F e^-mu Theta and F e^+mu Theta, ordered (F may be negative)."""
+    e = math.exp(mu_theta)
+    a, b = F / e, F * e
+    return (a, b) if a <= b else (b, a)
+
+
+@njit
+def capstan_play_step(F, dx, F_tip, mu_theta, k):
+    """Motor force [N] after a motor travel dx [m]: clamp(F + k dx) into the band of the tip force F_tip."""
+    lo, hi = capstan_band(F_tip, mu_theta)
+    return clamp(F + k * dx, lo, hi)
+
+
+@njit
+def capstan_hold(t, pulling, mu_theta):
+    """Tip tension [N] from the sensor tension t [N]: t e^-mu Theta while pulling, t e^+mu Theta releasing."""
+    return t * math.exp(-mu_theta) if pulling else t * math.exp(mu_theta)
+
+
+@njit
+def capstan_state_step(phi, dx, t_sensor, mu_theta, k):
+    """Friction state phi in [-1, 1] after a motor travel dx [m] at sensor tension t_sensor [N]."""
+    den = mu_theta * (t_sensor if t_sensor > 1e-6 else 1e-6)
+    return clamp(phi + k * dx / (den if den > 1e-12 else 1e-12), -1.0, 1.0)
+
+
+@njit
+def coulomb_force(v, Fc):
+    """Coulomb friction [N]: Fc sign(v)."""
+    return Fc * sgn(v)
+
+
+@njit
+def viscous_force(v, b):
+    """Viscous friction [N]: b v, b [N s/m]."""
+    return b * v
+
+
+@njit
+def stribeck_force(v, Fc, Fs, vs):
+    """Stribeck friction [N]: (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v); vs [m/s] the Stribeck velocity."""
+    return (Fc + (Fs - Fc) * math.exp(-(v / vs) ** 2)) * sgn(v)
+
+
+@njit
+def capstan_tip_step(F_tip, F_motor, mu_theta):
+    """Tip force [N] estimated from the motor force with flat transitions: the tip force holds while it
+    stays inside the band of the motor force, clamp(F_tip, F_m e^-mu Theta, F_m e^+mu Theta)."""
+    lo, hi = capstan_band(F_motor, mu_theta)
+    return clamp(F_tip, lo, hi)
+
+
+@njit
+def play_mix_step(z1, z2, x, r1, r2, w1, w2, grow):
+    """One sample of the general play at position x: plays of half-widths r1 and r2 (states z1, z2, clamped
+    into [x - r, x + r]) lag x by (z - x); the output is x + e^(grow x) (w1 (z1 - x) + w2 (z2 - x)), weights w
+    of the two plays (1 - w1 - w2: the elastic part that follows x at once). Returns (z1, z2, y)."""
+    z1 = clamp(z1, x - r1, x + r1)
+    z2 = clamp(z2, x - r2, x + r2)
+    return z1, z2, x + math.exp(grow * x) * (w1 * (z1 - x) + w2 * (z2 - x))
+
+
+# ------------------------------------------------------------------ array forms: loops over the steps above
+@njit
+def clamp_run(y0, lo, hi, out):
+    """out (n,): y_k = clamp(y_k-1, lo_k, hi_k) from y_-1 = y0 (the play operator's recursion; lo <= hi)."""
+    y = y0
+    for k in range(lo.shape[0]):
+        y = clamp(y, lo[k], hi[k])
+        out[k] = y
+    return out
+
+
+@njit
+def dahl_run(x, sigma, Fc, F0, out):
+    """out (n,): Dahl force [N] along the positions x (n,) [m], from F0 at the first sample."""
+    F = F0
+    for k in range(x.shape[0]):
+        if k > 0:
+            F = dahl_step(F, x[k] - x[k - 1], sigma, Fc)
+        out[k] = F
+    return out
+
+
+@njit
+def play_mix_start(x0, r1, r2, start):
+    """(z1, z2): the general play's states at the first position x0, start in [-1, 1] (where in its band each
+    play was when the record began)."""
+    return x0 + start * r1, x0 + start * r2
+
+
+@njit
+def play_mix_run(x, r1, r2, w1, w2, grow, start, out):
+    """out (n,): play_mix_step along the positions x (n,), from play_mix_start at x[0]."""
+    z1, z2 = play_mix_start(x[0], r1, r2, start)
+    for k in range(x.shape[0]):
+        z1, z2, out[k] = play_mix_step(z1, z2, x[k], r1, r2, w1, w2, grow)
+    return out
+
+
+@njit
+def capstan_play_run(x, F_tip, mu_theta, k, F0, x0, out):
+    """out (n,): motor force [N] with stick transitions for motor positions x (n,) [m], tip forces F_tip
+    (n,) [N] and wraps mu_theta (n,), continuing from motor force F0 at position x0 (x0 = x[0]: F0 clamped
+    into the first band)."""
+    F = F0
+    for j in range(x.shape[0]):
+        F = capstan_play_step(F, x[j] - (x0 if j == 0 else x[j - 1]), F_tip[j], mu_theta[j], k)
+        out[j] = F
+    return out
+
+
+@njit
+def play_inverse_into(y_d, r, v0, alpha, dt, max_step, lo, hi, state, out):
+    """out (n,): play_inverse_step on n channels (cables) at one command, the side s = clip(v / v0, -1, 1)
+    from the low-passed rate v of y_d (v += alpha ((y_d - y_prev) / dt - v), dt [s] between commands, v0
+    [m/s]); y_d, r, lo, hi (n,) [m]; state (3, n): previous y_d (NaN: none), v [m/s], previous command x
+    (NaN: none), updated in place."""
+    for i in range(y_d.shape[0]):
+        y_prev = state[0, i]
+        if y_prev == y_prev:
+            state[1, i] += alpha * ((y_d[i] - y_prev) / dt - state[1, i])
+        x = play_inverse_step(y_d[i], r[i], clamp(state[1, i] / v0, -1.0, 1.0), max_step, lo[i], hi[i], state[2, i])
+        state[0, i], state[2, i] = y_d[i], x
+        out[i] = x
+    return out
+
+
+@njit
+def play_inverse_run(y_d, r, max_step, out):
+    """out (n,): play_inverse_step along the samples y_d (n,) [m] of one channel from rest, on the side of
+    y_d's held direction (direction_step without dead band: the exact inverse of the play operator)."""
+    d, e, x = 0.0, math.nan, math.nan
+    for k in range(y_d.shape[0]):
+        d, e, _ = direction_step(d, e, y_d[k], 0.0)
+        x = play_inverse_step(y_d[k], r, d, max_step, -math.inf, math.inf, x)
+        out[k] = x
+    return out
+
+
+@njit
+def capstan_tip_run(F_motor, mu_theta, F0, out):
+    """out (n,): tip force [N] from motor forces F_motor (n,) [N] with flat transitions, from F0."""
+    F = F0
+    for j in range(F_motor.shape[0]):
+        F = capstan_tip_step(F, F_motor[j], mu_theta[j])
+        out[j] = F
+    return out

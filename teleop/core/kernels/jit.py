@@ -1,0 +1,109 @@
+"""The one decorator of the compiled kernels: numba's `njit(cache=True)`, or the plain function without numba.
+
+A kernel is written once, in the subset of Python numba compiles (floats, ints, tuples, numpy arrays, `math`);
+with numba installed it runs compiled (machine code cached on disk, see `teleop.loop.warm`), without it
+the same source runs as Python (`kernel.py_func` is that source in both cases). There is no second copy.
+
+Cache location: `NUMBA_CACHE_DIR` if set and writable, else next to the sources (`__pycache__`), else a
+per-user directory (~/.cache/numba). With none writable the kernels compile in memory at each start (one
+warning line; numba itself would refuse to import them).
+
+Cache freshness: a kernel's cached machine code holds the kernels it calls, compiled in, but numba checks
+only the kernel's own file (its time stamp and size). A change in a callee's module (linalg.py under
+geometry.py's forward kinematics) left the old code running from the cache (measured: a fresh compile gave
+contact forces 5e-13 N apart). So every kernel's cache is stamped with a hash of all the kernel sources
+(`_kernels_stamp`): any change to any of them recompiles all, once.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+
+try:  # numba is a dependency (pyproject.toml); TELEOP_NO_JIT=1 runs the same sources as Python
+    if os.environ.get("TELEOP_NO_JIT"):
+        raise ImportError("TELEOP_NO_JIT set")
+    import numba as _numba
+except ImportError:  # pragma: no cover - exercised with TELEOP_NO_JIT=1
+    _numba = None
+
+COMPILED = _numba is not None
+_KERNEL_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def _kernels_stamp() -> str:
+    """sha256 of every kernel source file (this directory's *.py, by name and content)."""
+    h = hashlib.sha256()
+    for name in sorted(os.listdir(_KERNEL_DIR)):
+        if name.endswith(".py"):
+            with open(os.path.join(_KERNEL_DIR, name), "rb") as f:
+                h.update(name.encode() + b"\0" + f.read())
+    return h.hexdigest()
+
+
+def _stamp_caches() -> None:
+    """Put locators in front of numba's own that stamp the kernels' caches with `_kernels_stamp` (same cache
+    places: NUMBA_CACHE_DIR, __pycache__, the per-user directory). Leaves numba's default (per-file stamps)
+    if its caching internals are not the expected ones."""
+    try:
+        from numba.core import caching
+
+        bases = (caching.UserProvidedCacheLocator, caching.InTreeCacheLocator, caching.UserWideCacheLocator)
+        classes = caching.CacheImpl._locator_classes
+    except (ImportError, AttributeError):  # pragma: no cover - another numba layout
+        return
+    stamp = _kernels_stamp()
+
+    class _Stamped:
+        def get_source_stamp(self):
+            return stamp
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if os.path.dirname(os.path.abspath(py_file)) != _KERNEL_DIR:
+                return None
+            return super().from_function(py_func, py_file)
+
+    classes[:0] = [type(f"Kernels{b.__name__}", (_Stamped, b), {}) for b in bases]
+
+
+if _numba is not None:
+    _stamp_caches()
+
+
+_warned = []
+
+
+def njit(fn):
+    """Compile `fn` with numba (nopython, cached on disk, no GIL held); without numba return it as is.
+
+    With no writable cache location at all (read-only package, unwritable NUMBA_CACHE_DIR and home) numba
+    refuses `cache=True`; the kernel then compiles in memory at its first call (one warning line)."""
+    if _numba is None:
+        fn.py_func = fn
+        return fn
+    try:
+        return _numba.njit(cache=True, nogil=True)(fn)
+    except RuntimeError as exc:  # "cannot cache function ...: no locator available"
+        if not _warned:
+            import sys
+
+            print(f"teleop: warning: numba cache unavailable ({exc}); set NUMBA_CACHE_DIR to a writable "
+                  "directory to keep compiled kernels between runs", file=sys.stderr)
+            _warned.append(True)
+        return _numba.njit(nogil=True)(fn)
+
+
+
+def broadcast_call(loop, *args):
+    """Array form of a scalar kernel: `loop(a1, ..., ak, out)` is a compiled loop applying the kernel to
+    1-D float arrays element by element; the arguments are broadcast against each other (numpy rules) and
+    the result has their broadcast shape (a 0-d result comes back as a float)."""
+    import numpy as np
+
+    arrs = np.broadcast_arrays(*[np.asarray(a, dtype=float) for a in args])
+    shape = arrs[0].shape
+    flat = [np.ascontiguousarray(a).reshape(-1) for a in arrs]
+    out = np.empty(flat[0].shape[0])
+    loop(*flat, out)
+    return out.reshape(shape) if shape else float(out[0])

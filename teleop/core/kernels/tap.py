@@ -1,0 +1,113 @@
+"""Kernel of the recorder's tap (teleop.loop.tap.RowTap): one tick's numbers copied into the preallocated row
+in one compiled call (a numpy store per signal cost ~10 us a tick, a third of a 4 kHz tick's budget).
+`sim_log_row` does the same for `teleop bench sim`'s trajectory log (its seven numpy row stores cost ~3 us a
+tick, 5 % of the simulation's wall time).
+
+`o` holds the first column of each signal (indices below, from the session layout); blocks whose source is
+absent this tick (no stylus sample, no command, no reading) keep their previous values, as before.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from teleop.core.kernels.jit import njit
+
+# the signals' order in `o` (teleop.loop.tap.COLUMNS names them)
+(TICK, T, STATE, LATENESS, TICK_US, STAGES, T_DEVICE, CP, CV, ORIENT, BUTTONS, PRESENT, COMMANDED, SETPOINT, JP, NEW,
+ T_ROBOT, SEQ, FSR, STEPS, LENGTHS, STATUS, BOOT, WRENCH, TENSIONS, CF, FORCE_RAW, RAMP, SERVO_CF) = range(29)
+
+
+@njit
+def _put(row, o, w, c, a):
+    """row[o[c]:o[c] + w[c]] = a; False (nothing written) when a is not w[c] long."""
+    if a.shape[0] != w[c]:
+        return False
+    for i in range(a.shape[0]):
+        row[o[c] + i] = a[i]
+    return True
+
+
+@njit
+def tap_row(row, o, w, k, t, state, lateness_ns, tick_ns, stage_ns, has_sample, t_device, cp, cv, R, buttons, present,
+            commanded, pose, L, has_reading, t_robot, seq, counts, steps, lengths, status, boot_id, has_wrench,
+            wrench_truth, tensions, wrench, fx, fy, fz, ramp, F):
+    """Fill `row` (times in [us] from [ns]; booleans as 0/1; the wrench truth NaN when the reading has none);
+    w holds each signal's width. Returns -1, or the index of the first signal whose array has another length
+    (the signals after it are not written)."""
+    if stage_ns.shape[0] != w[STAGES]:
+        return STAGES
+    if R.shape[0] * R.shape[1] != w[ORIENT]:
+        return ORIENT
+    if pose.shape[0] < w[SETPOINT]:
+        return SETPOINT
+    row[o[TICK]] = k
+    row[o[T]] = t
+    row[o[STATE]] = state
+    row[o[LATENESS]] = lateness_ns * 1e-3
+    row[o[TICK_US]] = tick_ns * 1e-3
+    for i in range(stage_ns.shape[0]):
+        row[o[STAGES] + i] = stage_ns[i] * 1e-3
+    if has_sample:
+        row[o[T_DEVICE]] = t_device
+        if not _put(row, o, w, CP, cp):
+            return CP
+        if not _put(row, o, w, CV, cv):
+            return CV
+        for i in range(R.shape[0]):
+            for j in range(R.shape[1]):
+                row[o[ORIENT] + i * R.shape[1] + j] = R[i, j]
+        row[o[BUTTONS]] = buttons
+        row[o[PRESENT]] = 1.0 if present else 0.0
+    row[o[COMMANDED]] = 1.0 if commanded else 0.0
+    for i in range(w[SETPOINT]):
+        row[o[SETPOINT] + i] = pose[i]
+    if commanded:
+        if not _put(row, o, w, JP, L):
+            return JP
+    row[o[NEW]] = 1.0 if has_reading else 0.0
+    if has_reading:
+        row[o[T_ROBOT]] = t_robot
+        row[o[SEQ]] = seq
+        if not _put(row, o, w, FSR, counts):
+            return FSR
+        if not _put(row, o, w, STEPS, steps):
+            return STEPS
+        if not _put(row, o, w, LENGTHS, lengths):
+            return LENGTHS
+        row[o[STATUS]] = status
+        row[o[BOOT]] = boot_id
+        if has_wrench:
+            if not _put(row, o, w, WRENCH, wrench_truth):
+                return WRENCH
+        else:
+            for i in range(w[WRENCH]):
+                row[o[WRENCH] + i] = np.nan
+    if not _put(row, o, w, TENSIONS, tensions):
+        return TENSIONS
+    if not _put(row, o, w, CF, wrench):
+        return CF
+    row[o[FORCE_RAW]], row[o[FORCE_RAW] + 1], row[o[FORCE_RAW] + 2] = fx, fy, fz
+    row[o[RAMP]] = ramp
+    if not _put(row, o, w, SERVO_CF, F):
+        return SERVO_CF
+    return -1
+
+
+@njit
+def sim_log_row(k, stage_ns, stage_log, sub0, sub1, sub2, sub3, sub_log, p, p_log, F, F_log, j, L, L_log, counts,
+                counts_log, wrench, f_truth):
+    """teleop bench sim's log of tick k: stage_log[k] = stage_ns, sub_log[k] = (sub0, sub1, sub2, sub3) (the
+    robot's cumulative timers [ns]), p_log[k] = p, F_log[k] = F; when j >= 0 (a reading this tick, its row j):
+    L_log[j] = L, counts_log[j] = counts, f_truth[j] = -wrench[2] (the contact force along -z [N])."""
+    for i in range(stage_ns.shape[0]):
+        stage_log[k, i] = stage_ns[i]
+    sub_log[k, 0], sub_log[k, 1], sub_log[k, 2], sub_log[k, 3] = sub0, sub1, sub2, sub3
+    for i in range(3):
+        p_log[k, i] = p[i]
+        F_log[k, i] = F[i]
+    if j >= 0:
+        for i in range(L.shape[0]):
+            L_log[j, i] = L[i]
+            counts_log[j, i] = counts[i]
+        f_truth[j] = -wrench[2]

@@ -1,0 +1,69 @@
+"""teleop/core/physics: transmission, sensor and contact effects, one small model each (DESIGN.md catalogue).
+
+Every effect is registered under its canonical name and used three ways:
+
+    from teleop.core.physics import Signals, chain, fit, get_effect
+    eff = get_effect("backlash")
+    sig = Signals(t=t, x=motor_pos)                      # SI arrays (n,); v derived from x
+    tip = eff.apply(sig, {"width": 1e-3})                # (a) whole signal -> output channel (n,)
+    st = eff.make_step({"width": 1e-3})                  # (b) real time: st.step(x=x_k) per sample,
+    tip_k = st.step(x=0.002)                             #     same math, state kept in st; st.reset()
+    res = fit(eff, sig, measured_tip)                    # (c) identify: res.params, res.stderr, res.rmse
+    res = fit("capstan_friction", Signals(t=t, x=x, load=F_tip), F_motor,
+              fixed={"theta": 2.44}, mask=train)        # fixed parameters, residual on `train` only
+    pad = chain("hertz_contact", "viscoelasticity", "contact_damping")   # one effect, params "hertz_contact.k", ...
+
+Conventions: x increasing = the motor hauls its cable in (pulling phase); force-link effects turn the
+tip load into the motor-side force (their `output` is "load": the load seen by the next element towards
+the motor); sensor effects turn the true force into the reading; contact effects give the pad force,
+zero out of contact (d <= 0) and never negative.
+
+Inputs are `Signals` channels (t, x, v, load, force, temperature, theta, d, d_dot; see base.CHANNELS).
+`Effect.inputs` names the channels an effect needs (`Effect.optional` those it uses when present), and
+the same names are the keywords of its `Step.step`. `Effect.output` is the channel its result stands
+for; `chain(...)` feeds one effect's output to the next. Parameters are {name: float} dicts in SI units;
+`Effect.params` holds their `ParamSpec` (unit, fit bounds, default, meaning).
+
+Catalogue (registry key: inputs -> output, parameters):
+- position link, motor -> tip position:
+  backlash (x -> x; width), cable_compliance (x, load -> x; k)
+- force link, tip load -> motor force (x increasing = pulling):
+  capstan_friction (x, load [, theta] -> load; mu, theta, k; general form: preload), coulomb_friction (v, load; Fc),
+  viscous_friction (v, load; b), stribeck_friction (v, load; Fc, Fs, vs), dahl_hysteresis (x, load; sigma, Fc),
+  pulley_friction (x, load -> load; mu, wrap, bend, k: seed 002's cable-pulley chain, lumped),
+  parallel_spring (x, load -> load; k, x_ref; general form: g): a spring beside the transmission
+- position link over pulleys: pulley_elongation (x, load -> x; c, mu, wrap, bend, k)
+- sensor, true force -> reading:
+  sensor_hysteresis (force; h, delta), thermal_drift (force, temperature; c, T0),
+  thermal_drift_time (t, force; offset, rate)
+- contact, indentation -> pad force:
+  linear_contact (d; k), hertz_contact (d; k), viscoelasticity (t, force, d; g, tau),
+  contact_damping (force, d, d_dot; c)
+
+The pure math lives in module-level functions (capstan_out/capstan_in, tip2motor/motor2tip and their
+`_transitions` forms, backlash, cable_stretch, coulomb, viscous, stribeck, dahl, hysteresis_offset,
+thermal_offset, linear_force, hertz_force, sls_force, damped_force). Stateful models are solved over whole
+signals by vectorised prefix scans (`scan.py`), not Python loops.
+"""
+
+from teleop.core.physics.base import (CHANNELS, REGISTRY, Effect, ParamSpec, Signals, Step, chain, get_effect,
+                                 register)
+from teleop.core.physics.capstan import (CapstanCompensator, capstan_band, capstan_in, capstan_out, motor2tip,
+                                    motor2tip_transitions, tip2motor, tip2motor_transitions)
+from teleop.core.physics.backlash import backlash
+from teleop.core.physics.compliance import cable_stretch
+from teleop.core.physics.spring import spring_force
+from teleop.core.physics.pulley import Pulley, PulleyChain, pulley_band, pulley_elongation, pulley_motor_force
+from teleop.core.physics.friction import coulomb, dahl, stribeck, viscous
+from teleop.core.physics.sensor_effects import hysteresis_offset, thermal_offset
+from teleop.core.physics.contact import damped_force, hertz_force, linear_force, sls_force
+from teleop.core.physics.fit import FitResult, fit, rmse
+
+__all__ = [
+    "CHANNELS", "REGISTRY", "Effect", "ParamSpec", "Signals", "Step", "chain", "get_effect", "register",
+    "CapstanCompensator", "capstan_band", "capstan_in", "capstan_out", "motor2tip", "motor2tip_transitions",
+    "tip2motor", "tip2motor_transitions", "backlash", "cable_stretch", "spring_force", "coulomb", "dahl", "stribeck",
+    "viscous", "hysteresis_offset", "thermal_offset", "damped_force", "hertz_force", "linear_force",
+    "sls_force", "FitResult", "fit", "rmse", "Pulley", "PulleyChain", "pulley_band", "pulley_elongation",
+    "pulley_motor_force",
+]

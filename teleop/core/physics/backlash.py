@@ -1,0 +1,120 @@
+"""Backlash (play, dead band) between the motor and the tip: the play operator, and its general form.
+
+Plain form (width only): the tip position y follows the motor position x only once the play of total width
+w is taken up: y_k = clamp(y_k-1, x_k - w/2, x_k + w/2), starting centred (y_0 = x_0). While x moves inside
+the dead band y stays put; while x drives, y = x -/+ w/2 (lagging behind the motion).
+
+General form (a tendon in a sheath, measured on a surgical instrument's jaw): the dead band is not all dead
+and not all of one width. A part of the motion (`elastic`) reaches the tip at once (the preloaded cable's
+stretch unloads first); of the rest, a fraction `tail` is taken up only over a band TAIL_RATIO times wider
+(sheath friction slipping progressively along the tendon: a slow creep after the main take-up); and the lag
+scales as e^(grow (x - x_ref)) with the tip's position x (the tendon's tension, and so the friction's
+stretch, changes along the stroke; the scale is 1 at x_ref, where `elastic` is the part that follows at
+once; a fit holds x_ref at the record's mean tip position). `start` in [-1, 1] is where in its band each play was
+when the record began (0: centred). This is a Prandtl-Ishlinskii operator with three play widths (0, w,
+TAIL_RATIO w) and a position-dependent output scale; with elastic = tail = grow = start = 0 it is the plain
+play, computed by the same prefix scan as before. Per sample: kernels.friction.play_mix_step.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from teleop.core.kernels.friction import play_mix_run, play_mix_start, play_mix_step
+from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.scan import clamp_step, play
+
+TAIL_RATIO = 4.0   # the wide play's width over the main play's
+
+
+def backlash(x: np.ndarray, width: float, y0: float | None = None) -> np.ndarray:
+    """(n,) tip position [m or rad] from motor position x (n,) with play of total width [same unit]."""
+    x = np.asarray(x, dtype=float)
+    return play(float(x[0]) if y0 is None else float(y0), x, 0.5 * width)
+
+
+def mix_layout(p: Mapping[str, float]) -> tuple[float, float, float, float]:
+    """(r1, r2, w1, w2): half-widths and weights of the main and the wide play of the general form."""
+    main = 0.5 * p["width"]
+    rest = 1.0 - p["elastic"]
+    return main, TAIL_RATIO * main, rest * (1.0 - p["tail"]), rest * p["tail"]
+
+
+def is_plain(p: Mapping[str, float]) -> bool:
+    """True when the general form's parameters are all at the plain play's values."""
+    return p["elastic"] == 0.0 and p["tail"] == 0.0 and p["grow"] == 0.0 and p["start"] == 0.0
+
+
+def general_backlash(x: np.ndarray, p: Mapping[str, float]) -> np.ndarray:
+    """(n,) tip position [m or rad] of the general form (module docstring) from motor positions x (n,)."""
+    x = np.ascontiguousarray(x, dtype=float)
+    r1, r2, w1, w2 = mix_layout(p)
+    out = play_mix_run(x - p["x_ref"], r1, r2, w1, w2, float(p["grow"]), float(p["start"]), np.empty_like(x))
+    return out + p["x_ref"]
+
+
+def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
+    if is_plain(p):
+        return backlash(signals.x, p["width"])
+    return general_backlash(signals.x, p)
+
+
+def _guess(signals: Signals, y: np.ndarray) -> dict:
+    # while driving, x - y = +/- w/2: the spread of x - y is the full width
+    e = signals.x - y
+    return {"width": float(np.percentile(e, 98) - np.percentile(e, 2))}
+
+
+PARAMS = (ParamSpec("width", "m", 1e-8, 100.0, 5e-4, "total play (dead band) width; rad for a rotary joint (a tendon-sheath joint can lose radians)",
+                    log=True),
+          ParamSpec("elastic", "1", 0.0, 0.95, 0.0, "fraction of the motion that reaches the tip at once "
+                    "(general form)", shape=True),
+          ParamSpec("tail", "1", 0.0, 0.95, 0.0, f"fraction of the play taken up over a {TAIL_RATIO:g}x wider "
+                    "band (general form)", shape=True),
+          ParamSpec("grow", "1/m", -50.0, 50.0, 0.0, "the lag scales as exp(grow (x - x_ref)) with the tip "
+                    "position x (1/rad for a rotary joint; general form)", shape=True),
+          ParamSpec("x_ref", "m", -1e6, 1e6, 0.0, "where the lag's scale is 1 (fits hold it at the record's mean "
+                    "tip position; general form)", shape=True),
+          ParamSpec("start", "1", -1.0, 1.0, 0.0, "where in its band the play began (-1 .. 1, 0 centred; "
+                    "general form)", shape=True, state=True))
+
+
+class BacklashStep(Step):
+    """Per-sample backlash: step(x) -> tip position."""
+
+    effect_name = "backlash"
+
+    def reset(self) -> None:
+        self.y = None
+        self.z = None
+        self.plain = is_plain(self.params)   # fixed with the parameters: decided once, not per sample
+
+    def step(self, x: float) -> float:
+        p = self.params
+        if self.plain:
+            r = 0.5 * p["width"]
+            self.y = x if self.y is None else clamp_step(self.y, x - r, x + r)
+            return float(self.y)
+        r1, r2, w1, w2 = mix_layout(p)
+        xr = float(x) - p["x_ref"]
+        if self.z is None:
+            self.z = play_mix_start(xr, r1, r2, float(p["start"]))
+        z1, z2, y = play_mix_step(self.z[0], self.z[1], xr, r1, r2, w1, w2, float(p["grow"]))
+        self.z = (z1, z2)
+        return float(y + p["x_ref"])
+
+
+BACKLASH = register(Effect(
+    name="backlash",
+    link="position",
+    doc="play operator: tip = clamp(tip_prev, motor - width/2, motor + width/2); general form: an elastic "
+        "part, a wider slow play and a lag growing with position (a tendon in a sheath)",
+    params=PARAMS,
+    inputs=("x",),
+    output="x",
+    simulate=_simulate,
+    guess=_guess,
+    step_class=BacklashStep,
+))

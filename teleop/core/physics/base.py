@@ -1,0 +1,363 @@
+"""The pieces every effect is made of: named signals, parameter specs, the Effect record and the registry.
+
+- `Signals`: a frozen bundle of equal-length 1-D arrays over time (SI units), the input of every effect.
+- `ParamSpec`: one parameter's name, unit, fit bounds, typical value and meaning.
+- `Effect`: one model = pure array function `simulate(signals, params) -> (n,)`, a per-sample `Step`
+  class with the same math, a `guess(signals, y) -> params` for fitting, and its parameter specs.
+- `REGISTRY` / `get_effect(name)`: the catalogue by canonical name (DESIGN.md).
+
+Parameters travel as plain ``{name: float}`` dicts so they map one-to-one to JSON and to fit vectors.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+import numpy as np
+
+from teleop.core.errors import InputError
+
+#: channel name -> meaning and unit; every Signals field except t is optional.
+CHANNELS: dict[str, str] = {
+    "t": "time [s]",
+    "x": "input (motor, proximal) position [m or rad]; increasing x = the motor hauls the cable in (pulling)",
+    "v": "velocity of x [m/s or rad/s]; derived from x by central differences when not given",
+    "load": "distal (tip) force [N or N m]",
+    "force": "a force channel the effect modifies (sensor reading, contact force) [N or N m]",
+    "temperature": "temperature at the sensor [degC]",
+    "theta": "accumulated sheath bend angle along the cable route [rad]",
+    "d": "contact indentation [m]; d <= 0 means no contact",
+    "d_dot": "indentation rate [m/s]; derived from d when not given",
+}
+
+LINKS = ("position", "force", "sensor", "contact")
+
+
+@dataclass(frozen=True, eq=False)
+class Signals:
+    """Equal-length (n,) float arrays over time. Missing channels are None.
+
+    `v` is derived from `x`, and `d_dot` from `d`, with `np.gradient` (central differences) when absent.
+    """
+
+    t: np.ndarray
+    x: np.ndarray | None = None
+    v: np.ndarray | None = None
+    load: np.ndarray | None = None
+    force: np.ndarray | None = None
+    temperature: np.ndarray | None = None
+    theta: np.ndarray | None = None
+    d: np.ndarray | None = None
+    d_dot: np.ndarray | None = None
+
+    def __post_init__(self):
+        t = np.asarray(self.t, dtype=float)
+        if t.ndim != 1 or t.size < 2:
+            raise InputError(f"signals: 't' must be a 1-D array of at least 2 samples, got shape {t.shape}")
+        if not np.isfinite(t).all() or np.any(np.diff(t) <= 0):
+            raise InputError("signals: 't' must be finite and strictly increasing")
+        object.__setattr__(self, "t", t)
+        for name in CHANNELS:
+            if name == "t":
+                continue
+            a = getattr(self, name)
+            if a is None:
+                continue
+            a = np.asarray(a, dtype=float)
+            if a.ndim == 0:
+                a = np.full(t.shape, float(a))
+            if a.shape != t.shape:
+                raise InputError(f"signals: channel '{name}' has shape {a.shape}, expected {t.shape} like 't'")
+            if not np.isfinite(a).all():
+                raise InputError(f"signals: channel '{name}' holds NaN or inf")
+            object.__setattr__(self, name, a)
+        if self.x is not None and self.v is None:
+            object.__setattr__(self, "v", np.gradient(self.x, t))
+        if self.d is not None and self.d_dot is None:
+            object.__setattr__(self, "d_dot", np.gradient(self.d, t))
+
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return int(self.t.shape[0])
+
+    def __getitem__(self, name: str) -> np.ndarray | None:
+        if name not in CHANNELS:
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def channels(self) -> tuple[str, ...]:
+        """Names of the channels present."""
+        return tuple(c for c in CHANNELS if getattr(self, c) is not None)
+
+    def replace(self, **changes) -> "Signals":
+        """A copy with channels replaced; replacing x (or d) without v (or d_dot) re-derives the rate."""
+        if "x" in changes and "v" not in changes:
+            changes["v"] = None
+        if "d" in changes and "d_dot" not in changes:
+            changes["d_dot"] = None
+        return dataclasses.replace(self, **changes)
+
+    def window(self, index) -> "Signals":
+        """Samples `index` (slice or index array) of every channel."""
+        kw = {c: getattr(self, c)[index] for c in self.channels()}
+        return Signals(**kw)
+
+    def require(self, names, who: str) -> None:
+        """Raise InputError naming `who` and the first missing channel."""
+        for name in names:
+            if getattr(self, name) is None:
+                raise InputError(f"{who}: needs signal channel '{name}' ({CHANNELS[name]})")
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One model parameter: SI unit, fit bounds [lower, upper], a typical value, and its meaning.
+
+    `log=True` fits it on a log scale (for quantities spanning decades; then lower > 0), or, with `tiny` > 0,
+    a signed quantity spanning decades (lower < 0 < upper) on asinh(value / tiny): linear within +-tiny,
+    logarithmic beyond, either sign (a stiffness that may be negative).
+    Values given to an effect must be >= 0 when lower >= 0, and > 0 when `positive` (a divisor).
+    `shape=True`: a parameter of the effect's general form whose default is the plain form (backlash's
+    elastic part, wide play, growth and start): fits hold it at its default unless asked to free it.
+    `state=True`: an initial state of the record, not a property of the link (where a play began in its
+    band): fitted on every recording (never carried from one to another), and a value on a bound is a
+    state the data can hold, not a sign that the effect's form is wrong.
+    """
+
+    name: str
+    unit: str
+    lower: float
+    upper: float
+    default: float
+    doc: str
+    log: bool = False
+    positive: bool = False
+    shape: bool = False
+    state: bool = False
+    tiny: float = 0.0
+
+    def __post_init__(self):
+        signed = self.log and self.tiny > 0
+        if not self.lower < self.upper or (self.log and not signed and self.lower <= 0) or (
+                signed and not self.lower < 0 < self.upper):
+            raise ValueError(f"ParamSpec {self.name}: bad bounds [{self.lower}, {self.upper}]")
+
+    def _scale(self, value: float) -> float:
+        """The fit's coordinate of `value`: log, asinh(value / tiny) (signed log) or the value itself."""
+        if self.log:
+            return math.asinh(value / self.tiny) if self.tiny > 0 else math.log(value)
+        return value
+
+    def to_unit(self, value: float) -> float:
+        """Map a value in [lower, upper] to [0, 1] (linearly, in log or in signed log)."""
+        lo, hi = self._scale(self.lower), self._scale(self.upper)
+        return (self._scale(value) - lo) / (hi - lo)
+
+    def from_unit(self, u: float) -> float:
+        """Inverse of `to_unit`."""
+        lo, hi = self._scale(self.lower), self._scale(self.upper)
+        z = lo + u * (hi - lo)
+        if self.log:
+            return self.tiny * math.sinh(z) if self.tiny > 0 else math.exp(z)
+        return z
+
+    def dvalue_du(self, value: float) -> float:
+        """d value / d u at `value` (for standard errors)."""
+        span = self._scale(self.upper) - self._scale(self.lower)
+        if self.log:
+            return (math.hypot(self.tiny, value) if self.tiny > 0 else value) * span
+        return span
+
+    def clip(self, value: float) -> float:
+        """`value` clipped into [lower, upper]."""
+        return float(min(max(value, self.lower), self.upper))
+
+
+class Step(ABC):
+    """Per-sample (real-time) form of an effect: same math as the array form, state held here.
+
+    Subclasses set `effect_name`, implement `reset()` and `step(<channels>) -> float` whose keyword names
+    are the effect's input channels (e.g. `BacklashStep.step(x)`), and read parameters from
+    `self.params`. The first `step` call initialises the state exactly as the array form does.
+    """
+
+    effect_name: str = ""
+    _effect: "Effect | None" = None  # set for effects outside the registry (chains)
+
+    def __init__(self, params: Mapping[str, float] | None = None):
+        effect = type(self)._effect or get_effect(self.effect_name)
+        self.params = effect.check(params)
+        self.reset()
+
+    @abstractmethod
+    def reset(self) -> None:
+        """Forget the state; the next `step` starts afresh."""
+
+    @abstractmethod
+    def step(self, **u) -> float:
+        """Advance one sample and return the output channel's value."""
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One named model of the catalogue.
+
+    name: canonical name (registry key); link: 'position' | 'force' | 'sensor' | 'contact';
+    inputs: channels `simulate` and `Step.step` need; optional: channels used when present;
+    output: the channel the result stands for (chaining writes it back there);
+    simulate(signals, params) -> (n,) array; guess(signals, y) -> params dict; step_class: Step subclass.
+    """
+
+    name: str
+    link: str
+    doc: str
+    params: tuple[ParamSpec, ...]
+    inputs: tuple[str, ...]
+    output: str
+    simulate: Callable[[Signals, Mapping[str, float]], np.ndarray]
+    guess: Callable[[Signals, np.ndarray], dict]
+    step_class: type
+    optional: tuple[str, ...] = field(default=())
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.params)
+
+    def spec(self, name: str) -> ParamSpec:
+        """The ParamSpec called `name`."""
+        for p in self.params:
+            if p.name == name:
+                return p
+        raise InputError(f"effect '{self.name}': unknown parameter '{name}' (expected {list(self.param_names)})")
+
+    def defaults(self) -> dict:
+        """Typical parameter values."""
+        return {p.name: p.default for p in self.params}
+
+    def plain_form(self) -> dict:
+        """{name: default} of the general form's parameters (ParamSpec.shape): held there, the plain form."""
+        return {p.name: p.default for p in self.params if p.shape}
+
+    def check(self, params: Mapping[str, float] | None) -> dict:
+        """A full, validated {name: float} dict: missing names take defaults, unknown names raise."""
+        out = self.defaults()
+        if params is None:
+            return out
+        for k, v in dict(params).items():
+            if k not in out:
+                raise InputError(f"effect '{self.name}': unknown parameter '{k}' "
+                                 f"(expected {list(self.param_names)})")
+            v = float(v)
+            spec = self.spec(k)
+            if not math.isfinite(v) or (spec.positive and v <= 0) or (spec.lower >= 0 and v < 0):
+                need = "> 0" if spec.positive else (">= 0" if spec.lower >= 0 else "finite")
+                raise InputError(f"effect '{self.name}': parameter '{k}' must be {need}, got {v}")
+            out[k] = v
+        return out
+
+    def apply(self, signals: Signals, params: Mapping[str, float] | None = None) -> np.ndarray:
+        """The output channel (n,) for `signals` under `params` (defaults where missing)."""
+        signals.require(self.inputs, f"effect '{self.name}'")
+        return self.simulate(signals, self.check(params))
+
+    def describe(self) -> dict:
+        """JSON-ready summary: name, link, doc, inputs, output and each parameter's unit, bounds, default."""
+        return {"name": self.name, "link": self.link, "doc": self.doc, "inputs": list(self.inputs),
+                "optional": list(self.optional), "output": self.output,
+                "params": {p.name: {"unit": p.unit, "lower": p.lower, "upper": p.upper, "default": p.default,
+                                    "log": p.log, "doc": p.doc} for p in self.params}}
+
+    def make_step(self, params: Mapping[str, float] | None = None) -> Step:
+        """A fresh per-sample simulator with these parameters."""
+        return self.step_class(params)
+
+    def initial_guess(self, signals: Signals, y: np.ndarray) -> dict:
+        """Data-driven starting point for a fit, clipped into the bounds."""
+        g = self.check(self.guess(signals, np.asarray(y, dtype=float)))
+        return {p.name: p.clip(g[p.name]) for p in self.params}
+
+
+REGISTRY: dict[str, Effect] = {}
+
+
+def register(effect: Effect) -> Effect:
+    """Add `effect` to REGISTRY under its name (once) and return it."""
+    if effect.name in REGISTRY:
+        raise ValueError(f"effect '{effect.name}' registered twice")
+    if effect.link not in LINKS:
+        raise ValueError(f"effect '{effect.name}': link must be one of {LINKS}")
+    REGISTRY[effect.name] = effect
+    return effect
+
+
+def get_effect(name: str) -> Effect:
+    """The registered effect called `name`; InputError listing the known names otherwise."""
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise InputError(f"unknown effect '{name}' (known: {', '.join(sorted(REGISTRY))})") from None
+
+
+def chain(*effects: "Effect | str", name: str | None = None) -> Effect:
+    """One effect applying `effects` in order, each one's output written into its `output` channel for the
+    next (e.g. chain("linear_contact", "viscoelasticity", "contact_damping"), or capstan then coulomb).
+
+    Parameters are namespaced "<effect>.<param>"; inputs are the channels no earlier effect produces.
+    Channels are replaced as they are (rates such as v are not re-derived), identically in the Step form.
+    The guess uses defaults for all but the last effect. Not registered.
+    """
+    effs = tuple(get_effect(e) if isinstance(e, str) else e for e in effects)
+    if not effs or len({e.name for e in effs}) != len(effs):
+        raise InputError("chain: needs one or more distinct effects")
+    cname = name or "+".join(e.name for e in effs)
+    params = tuple(dataclasses.replace(p, name=f"{e.name}.{p.name}") for e in effs for p in e.params)
+    produced: set[str] = set()
+    inputs: list[str] = []
+    optional: list[str] = []
+    for e in effs:
+        inputs += [c for c in e.inputs if c not in produced and c not in inputs]
+        optional += [c for c in e.optional if c not in produced and c not in optional]
+        produced.add(e.output)
+
+    def split(p: Mapping[str, float]) -> list[dict]:
+        return [{k.split(".", 1)[1]: v for k, v in p.items() if k.split(".", 1)[0] == e.name} for e in effs]
+
+    def simulate(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+        for e, sub in zip(effs, split(p)):
+            y = e.simulate(s, sub)
+            s = dataclasses.replace(s, **{e.output: y})
+        return y
+
+    def guess(s: Signals, y: np.ndarray) -> dict:
+        out = {}
+        for e in effs[:-1]:
+            out.update({f"{e.name}.{k}": v for k, v in e.defaults().items()})
+            s = dataclasses.replace(s, **{e.output: e.simulate(s, e.defaults())})
+        out.update({f"{effs[-1].name}.{k}": v for k, v in effs[-1].initial_guess(s, y).items()})
+        return out
+
+    class ChainStep(Step):
+        """Per-sample chain: step(**channels) -> the last effect's output."""
+
+        def reset(self) -> None:
+            self.steps = [e.make_step(sub) for e, sub in zip(effs, split(self.params))]
+
+        def step(self, **u) -> float:
+            for e, st in zip(effs, self.steps):
+                y = st.step(**{c: u[c] for c in e.inputs + e.optional if c in u and u[c] is not None})
+                u[e.output] = y
+            return y
+
+    eff = Effect(name=cname, link=effs[-1].link, doc=" then ".join(e.doc for e in effs), params=params,
+                 inputs=tuple(inputs), output=effs[-1].output, simulate=simulate, guess=guess,
+                 step_class=ChainStep, optional=tuple(optional))
+    ChainStep._effect = eff
+    ChainStep.effect_name = cname
+    return eff
+

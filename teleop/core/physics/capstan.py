@@ -1,0 +1,189 @@
+"""Capstan (tendon-sheath) friction: T_load = T_hold exp(mu Theta) (seed 000 eqs 3, 7; seed 001 eqs 4-7).
+
+Conventions: the motor (proximal) force F_m and the tip (distal) force F_t; x increasing means the motor
+hauls the cable in (pulling phase, seed 001 xi > 0), decreasing means it pays out (releasing phase).
+While pulling F_m = F_t exp(+mu Theta); while releasing F_m = F_t exp(-mu Theta). During a reversal
+the cable sticks in the sheath: the tip force stays constant while the motor force travels between the
+two lines (seed 001 Fig 2b, "flat transitions"). This is modelled as a play operator in force: the motor
+force follows the cable stretch, F_m <- F_m + k dx, clamped to the band
+[F_t exp(-mu Theta), F_t exp(+mu Theta)]; k [N/m] is the stick stiffness seen at the motor. k -> inf
+gives the plain sign(dx) switch. The inverse (compensation) needs no k: the tip force is the play of the
+motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from teleop.core.kernels.friction import capstan_play_run, capstan_play_step, capstan_tip_run
+from teleop.core.kernels.jit import broadcast_call
+from teleop.core.kernels.ufuncs import hold_loop, tip_loop
+from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+
+
+def capstan_out(T_in, mu, theta):
+    """Output tension of a capstan driven by T_in: T_out = T_in exp(-mu theta). Broadcasts (e.g. (6,) cables)."""
+    return motor2tip(T_in, mu, theta, True)
+
+
+def capstan_in(T_out, mu, theta):
+    """Inverse of `capstan_out`: the driving tension that holds T_out, T_in = T_out exp(mu theta)."""
+    return motor2tip(T_out, mu, theta, False)
+
+
+def _pulling(pulling):
+    """1.0 for pulling, 0.0 for releasing; accepts bools or signed numbers (0 counts as pulling, seed 001 eq 5)."""
+    p = np.asarray(pulling)
+    return p.astype(float) if p.dtype == bool else (p >= 0).astype(float)
+
+
+def _mu_theta(mu, theta):
+    return np.asarray(mu, dtype=float) * np.asarray(theta, dtype=float)
+
+
+def tip2motor(F_tip, mu, theta, pulling):
+    """Motor force [N] from tip force [N]: F_m = F_t exp(+/- mu theta), + while pulling (sign(dx) switch)."""
+    # F_t exp(+mu theta) pulling = capstan_hold of a releasing cable (exp(+mu Theta)), and the other way round
+    return broadcast_call(hold_loop, F_tip, 1.0 - _pulling(pulling), _mu_theta(mu, theta))
+
+
+def motor2tip(F_motor, mu, theta, pulling):
+    """Compensation, inverse of `tip2motor`: F_t = F_m exp(-/+ mu theta), - while pulling.
+
+    Seed 000 eq 7 (T_hold = T_load e^-mu theta) with the load/hold sides picked by the motion (kernel
+    friction.capstan_hold).
+    """
+    return broadcast_call(hold_loop, F_motor, _pulling(pulling), _mu_theta(mu, theta))
+
+
+def capstan_band(F_tip, mu, theta):
+    """(lo, hi) motor forces reachable for tip force F_tip: the releasing and pulling lines, lo <= hi."""
+    a, b = motor2tip(F_tip, mu, theta, True), motor2tip(F_tip, mu, theta, False)  # F e^-mu theta, F e^+mu theta
+    return np.minimum(a, b), np.maximum(a, b)
+
+
+def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
+    """(n,) motor force [N] with stick transitions at reversals.
+
+    x (n,) motor position [m], F_tip (n,) tip force [N], theta scalar or (n,) [rad], k stick stiffness
+    [N/m]; F0 initial motor force (default F_tip[0], inside the band).
+    F_m,k = clamp(F_m,k-1 + k (x_k - x_k-1), F_t,k e^-mu theta, F_t,k e^+mu theta) (kernel
+    friction.capstan_play_step).
+    """
+    x = np.ascontiguousarray(x, dtype=float)
+    F_tip = np.ascontiguousarray(np.broadcast_to(np.asarray(F_tip, dtype=float), x.shape))
+    mt = np.ascontiguousarray(np.broadcast_to(_mu_theta(mu, theta), x.shape))
+    y0 = float(F_tip.ravel()[0]) if F0 is None else float(F0)
+    return capstan_play_run(x, F_tip, mt, float(k), y0, float(x[0]), np.empty(x.shape[0]))
+
+
+def motor2tip_transitions(F_motor, mu, theta, F0=None):
+    """(n,) tip force [N] estimated from motor force (n,) [N] with flat transitions (direction-free).
+
+    F_t,k = clamp(F_t,k-1, F_m,k e^-mu theta, F_m,k e^+mu theta); F0 default F_motor[0] (kernel
+    friction.capstan_tip_step). Inverts `tip2motor_transitions` whenever the tip force is constant during
+    reversals.
+    """
+    F_motor = np.ascontiguousarray(F_motor, dtype=float)
+    mt = np.ascontiguousarray(np.broadcast_to(_mu_theta(mu, theta), F_motor.shape))
+    y0 = float(F_motor.ravel()[0]) if F0 is None else float(F0)
+    return capstan_tip_run(F_motor, mt, y0, np.empty(F_motor.shape[0]))
+
+
+def _theta(signals: Signals, params: Mapping[str, float]):
+    return signals.theta if signals.theta is not None else params["theta"]
+
+
+def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
+    P = p.get("preload", 0.0)   # + 0.0 and - 0.0 leave the plain law's floats as they are
+    return tip2motor_transitions(signals.x, signals.load + P, p["mu"], _theta(signals, p), p["k"]) - P
+
+
+def _guess(signals: Signals, y: np.ndarray) -> dict:
+    th = _theta(signals, {"theta": PARAMS[1].default})
+    ok = (np.abs(signals.load) > 1e-3 * max(np.abs(signals.load).max(), 1e-12)) & (np.abs(y) > 0)
+    ratio = np.abs(np.log(np.abs(y[ok]) / np.abs(signals.load[ok]))) if ok.any() else np.array([0.1])
+    mu = float(np.percentile(ratio, 90) / np.mean(th)) if np.mean(th) > 0 else 0.1
+    # stick stiffness: band width over the motor travel needed to cross it, from the largest dF/dx
+    dx = np.diff(signals.x)
+    dF = np.diff(y)
+    moving = np.abs(dx) > 1e-12
+    k = float(np.percentile(np.abs(dF[moving] / dx[moving]), 95)) if moving.sum() > 10 else PARAMS[2].default
+    return {"mu": mu, "theta": float(np.mean(th)), "k": k}
+
+
+PARAMS = (
+    ParamSpec("mu", "1", 0.0, 1.5, 0.056, "sheath friction coefficient"),
+    ParamSpec("theta", "rad", 0.0, 8 * np.pi, np.deg2rad(140.0),
+              "total wrap angle Theta (ignored when the signals carry a 'theta' channel; "
+              "mu and theta are identifiable only as a product: fix one when fitting)"),
+    ParamSpec("k", "N/m", 1.0, 1e8, 2e4, "stick stiffness during reversals (motor force per motor travel)",
+              log=True),
+    ParamSpec("preload", "N", 0.0, 50.0, 0.0, "pretension the cable carries beside the load (an antagonistic "
+              "pair's, or a load sensor zeroed under tension): the sheath grips load + preload, the motor "
+              "force is read from the preload (general form; 0: the plain law)", shape=True),
+)
+
+
+class CapstanStep(Step):
+    """Per-sample capstan_friction: step(x, load, theta=None) -> motor force [N]."""
+
+    effect_name = "capstan_friction"
+
+    def reset(self) -> None:
+        self.x_prev = None
+        self.F = 0.0
+
+    def step(self, x: float, load: float, theta: float | None = None) -> float:
+        p = self.params
+        mu_theta = p["mu"] * (p["theta"] if theta is None else theta)
+        P = p.get("preload", 0.0)
+        T = float(load) + P   # the tension the sheath grips
+        if self.x_prev is None:  # starts on the tip force, clamped into its band
+            self.F = capstan_play_step(T, 0.0, T, mu_theta, p["k"])
+        else:
+            self.F = capstan_play_step(self.F, float(x - self.x_prev), T, mu_theta, p["k"])
+        self.x_prev = x
+        return float(self.F) - P
+
+
+class CapstanCompensator:
+    """Per-sample tip-force estimate from the motor (proximal) force with flat transitions.
+
+    Same math as `motor2tip_transitions`; works per cable on arrays: mu, theta scalars or (c,), and
+    step(F_motor (c,) [N], theta=None (c,) [rad]) -> F_tip (c,) [N] (floats in, float out).
+    """
+
+    def __init__(self, mu, theta, F0=None):
+        self.mu, self.theta = np.asarray(mu, dtype=float), np.asarray(theta, dtype=float)
+        self.F = None if F0 is None else np.asarray(F0, dtype=float)
+
+    def reset(self, F0=None) -> None:
+        """Forget the held tip force (the next step starts from its motor force, or from F0)."""
+        self.F = None if F0 is None else np.asarray(F0, dtype=float)
+
+    def step(self, F_motor, theta=None):
+        F_motor = np.asarray(F_motor, dtype=float)
+        mt = self.mu * (self.theta if theta is None else np.asarray(theta, dtype=float))
+        prev = F_motor if self.F is None else self.F
+        # F_t = clamp(F_t_prev, lower line, upper line): kernel friction.capstan_tip_step per cable
+        F = broadcast_call(tip_loop, prev, F_motor, mt)
+        self.F = np.asarray(F, dtype=float)
+        return float(F) if self.F.ndim == 0 else self.F.copy()
+
+
+CAPSTAN_FRICTION = register(Effect(
+    name="capstan_friction",
+    link="force",
+    doc="motor force from tip load: F_t exp(+mu Theta) pulling, exp(-mu Theta) releasing, "
+        "stick transitions of stiffness k at reversals",
+    params=PARAMS,
+    inputs=("x", "load"),
+    optional=("theta",),
+    output="load",
+    simulate=_simulate,
+    guess=_guess,
+    step_class=CapstanStep,
+))

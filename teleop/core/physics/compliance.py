@@ -1,0 +1,57 @@
+"""Cable compliance: the cable stretches under load, so the tip lags the motor by load / k.
+
+tip = x - load / k, with x the motor position [m] (cable hauled in) and load the tip tension [N].
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+
+
+def cable_stretch(x: np.ndarray, load: np.ndarray, k: float) -> np.ndarray:
+    """(n,) tip position [m]: x - load / k, with k the cable (and sheath) axial stiffness [N/m]."""
+    return np.asarray(x, dtype=float) - np.asarray(load, dtype=float) / k
+
+
+def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return cable_stretch(signals.x, signals.load, p["k"])
+
+
+def _guess(signals: Signals, y: np.ndarray) -> dict:
+    # x - y = load / k  ->  1/k by least squares through the origin
+    e = signals.x - y
+    c = float(np.dot(signals.load, e) / max(np.dot(signals.load, signals.load), 1e-300))
+    return {"k": 1.0 / c if c > 0 else PARAMS[0].default}
+
+
+PARAMS = (ParamSpec("k", "N/m", 1.0, 1e9, 2e4, "axial stiffness of the cable between motor and tip",
+                    log=True, positive=True),)
+
+
+class ComplianceStep(Step):
+    """Per-sample cable_compliance: step(x, load) -> tip position [m]."""
+
+    effect_name = "cable_compliance"
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, x: float, load: float) -> float:
+        return float(x - load / self.params["k"])
+
+
+CABLE_COMPLIANCE = register(Effect(
+    name="cable_compliance",
+    link="position",
+    doc="load-dependent stretch: tip = motor - load / k",
+    params=PARAMS,
+    inputs=("x", "load"),
+    output="x",
+    simulate=_simulate,
+    guess=_guess,
+    step_class=ComplianceStep,
+))

@@ -1,0 +1,160 @@
+"""Pad contact: the force an indenter feels at indentation d [m] (d <= 0: no contact, zero force).
+
+- linear_contact:  F = k d                                   k [N/m]
+- hertz_contact:   F = k d^1.5                               k [N/m^1.5] (sphere on a half-space)
+- viscoelasticity: standard linear solid acting on the elastic force Fe of the channel `force` (the
+  quasi-linear form): F = g Fe + q, dq/dt = (1 - g) dFe/dt - q / tau. With Fe = k d this is the SLS of
+  instantaneous stiffness k, relaxed stiffness g k and relaxation time tau: under a held indentation F
+  relaxes from k d to g k d; faster indentation gives more force. Discretised exactly for Fe linear over
+  each sample interval: q_k = a q_k-1 + (1 - g) (dFe/dt) tau (1 - a), a = exp(-dt / tau).
+- contact_damping: F = Fe + c d_dot while in contact, never pulling (F >= 0), zero out of contact.
+Every contact force is zero without contact and never negative.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.scan import affine_scan
+
+
+def linear_force(d, k):
+    """Spring contact force [N]: k max(d, 0)."""
+    return k * np.maximum(np.asarray(d, dtype=float), 0.0)
+
+
+def hertz_force(d, k):
+    """Hertz contact force [N]: k max(d, 0)^1.5."""
+    return k * np.maximum(np.asarray(d, dtype=float), 0.0) ** 1.5
+
+
+def sls_force(t, Fe, d, g, tau):
+    """(n,) viscoelastic contact force [N] from the elastic force Fe (n,) [N], indentation d (n,) [m]."""
+    t, Fe = np.asarray(t, dtype=float), np.asarray(Fe, dtype=float)
+    dt = np.diff(t, prepend=t[0] - (t[1] - t[0]))
+    a = np.exp(-dt / tau)
+    dFe = np.diff(Fe, prepend=Fe[0])
+    q = affine_scan(0.0, a, (1.0 - g) * (dFe / dt) * tau * (1.0 - a))
+    return np.where(np.asarray(d) > 0, np.maximum(g * Fe + q, 0.0), 0.0)
+
+
+def damped_force(Fe, d, d_dot, c):
+    """Contact force [N] with damping c [N s/m]: max(Fe + c d_dot, 0) in contact, else 0."""
+    return np.where(np.asarray(d) > 0, np.maximum(np.asarray(Fe, dtype=float) + c * np.asarray(d_dot), 0.0), 0.0)
+
+
+def _loaded(s: Signals, y: np.ndarray) -> np.ndarray:
+    return (s.d > 0.05 * max(float(s.d.max()), 1e-300)) & (y > 0)
+
+
+def _linear_guess(s: Signals, y: np.ndarray) -> dict:
+    m = _loaded(s, y)
+    return {"k": float(np.median(y[m] / s.d[m]))} if m.any() else {}
+
+
+def _hertz_guess(s: Signals, y: np.ndarray) -> dict:
+    m = _loaded(s, y)
+    return {"k": float(np.median(y[m] / s.d[m] ** 1.5))} if m.any() else {}
+
+
+def _sls_guess(s: Signals, y: np.ndarray) -> dict:
+    m = (s.force > 0.2 * max(float(s.force.max()), 1e-300)) & (y > 0)
+    g = float(np.percentile(y[m] / s.force[m], 5)) if m.any() else 0.5
+    return {"g": g, "tau": 0.05 * float(s.t[-1] - s.t[0])}
+
+
+def _damping_guess(s: Signals, y: np.ndarray) -> dict:
+    m = (s.d > 0) & (y > 0) & (np.abs(s.d_dot) > 0)
+    if not m.any():
+        return {}
+    c = float(np.dot(s.d_dot[m], (y - s.force)[m]) / np.dot(s.d_dot[m], s.d_dot[m]))
+    return {"c": c} if c > 0 else {}
+
+
+class LinearContactStep(Step):
+    """Per-sample linear_contact: step(d) -> force [N]."""
+
+    effect_name = "linear_contact"
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, d: float) -> float:
+        return float(self.params["k"] * max(d, 0.0))
+
+
+class HertzContactStep(Step):
+    """Per-sample hertz_contact: step(d) -> force [N]."""
+
+    effect_name = "hertz_contact"
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, d: float) -> float:
+        return float(self.params["k"] * max(d, 0.0) ** 1.5)
+
+
+class ViscoelasticityStep(Step):
+    """Per-sample viscoelasticity: step(t, force, d) -> force [N]; force = the elastic force Fe."""
+
+    effect_name = "viscoelasticity"
+
+    def reset(self) -> None:
+        self.t_prev = None
+        self.Fe_prev = 0.0
+        self.q = 0.0
+
+    def step(self, t: float, force: float, d: float) -> float:
+        g, tau = self.params["g"], self.params["tau"]
+        if self.t_prev is not None and t > self.t_prev:
+            dt = t - self.t_prev
+            a = math.exp(-dt / tau)
+            self.q = a * self.q + (1.0 - g) * ((force - self.Fe_prev) / dt) * tau * (1.0 - a)
+        self.t_prev, self.Fe_prev = t, force
+        return float(max(g * force + self.q, 0.0)) if d > 0 else 0.0
+
+
+class ContactDampingStep(Step):
+    """Per-sample contact_damping: step(force, d, d_dot) -> force [N]."""
+
+    effect_name = "contact_damping"
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, force: float, d: float, d_dot: float) -> float:
+        return float(max(force + self.params["c"] * d_dot, 0.0)) if d > 0 else 0.0
+
+
+LINEAR_CONTACT = register(Effect(
+    name="linear_contact", link="contact", doc="spring pad: F = k d in contact",
+    params=(ParamSpec("k", "N/m", 1.0, 1e7, 500.0, "pad stiffness", log=True),),
+    inputs=("d",), output="force",
+    simulate=lambda s, p: linear_force(s.d, p["k"]), guess=_linear_guess, step_class=LinearContactStep))
+
+HERTZ_CONTACT = register(Effect(
+    name="hertz_contact", link="contact", doc="Hertz pad: F = k d^1.5 in contact",
+    params=(ParamSpec("k", "N/m^1.5", 1.0, 1e9, 1e4, "Hertz coefficient (4/3 E* sqrt(R))", log=True),),
+    inputs=("d",), output="force",
+    simulate=lambda s, p: hertz_force(s.d, p["k"]), guess=_hertz_guess, step_class=HertzContactStep))
+
+VISCOELASTICITY = register(Effect(
+    name="viscoelasticity", link="contact",
+    doc="standard linear solid on the elastic force: relaxation to g Fe with time constant tau",
+    params=(ParamSpec("g", "1", 0.0, 1.0, 0.6, "relaxed / instantaneous stiffness ratio"),
+            ParamSpec("tau", "s", 1e-4, 1e4, 1.0, "relaxation time", log=True, positive=True)),
+    inputs=("t", "force", "d"), output="force",
+    simulate=lambda s, p: sls_force(s.t, s.force, s.d, p["g"], p["tau"]), guess=_sls_guess,
+    step_class=ViscoelasticityStep))
+
+CONTACT_DAMPING = register(Effect(
+    name="contact_damping", link="contact", doc="F = Fe + c d_dot in contact, never pulling",
+    params=(ParamSpec("c", "N s/m", 1e-4, 1e6, 5.0, "contact damping coefficient", log=True),),
+    inputs=("force", "d", "d_dot"), output="force",
+    simulate=lambda s, p: damped_force(s.force, s.d, s.d_dot, p["c"]), guess=_damping_guess,
+    step_class=ContactDampingStep))

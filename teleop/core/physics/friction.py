@@ -1,0 +1,199 @@
+"""Friction added to the tip load on its way to the motor: Coulomb, viscous, Stribeck and Dahl.
+
+Each effect returns the motor-side force F_m = load + F_f, with F_f:
+- coulomb_friction:  Fc sign(v)
+- viscous_friction:  b v
+- stribeck_friction: (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v)   (the full Stribeck curve, Coulomb included)
+- dahl_hysteresis:   dF/dx = sigma (1 - F/Fc sgn(dx)), integrated along the motor position x; for each
+  sample (x monotone in between) exactly: F_k = s Fc + (F_k-1 - s Fc) exp(-sigma |dx| / Fc), s = sgn(dx),
+  from F = 0 at the first sample. Smooth pre-sliding transition of initial slope sigma after reversals.
+v is the motor velocity (positive while pulling); sign(0) = 0.
+Each formula is one scalar kernel of teleop.core.kernels.friction; the array forms loop over it (compiled), the
+Steps call it per sample.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+from teleop.core.kernels.friction import coulomb_force, dahl_run, dahl_step, stribeck_force, viscous_force
+from teleop.core.kernels.jit import broadcast_call
+from teleop.core.kernels.ufuncs import coulomb_loop, stribeck_loop, viscous_loop
+from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+
+
+def coulomb(v, Fc):
+    """Coulomb friction force [N] for velocity v: Fc sign(v) (kernel friction.coulomb_force)."""
+    return broadcast_call(coulomb_loop, v, Fc)
+
+
+def viscous(v, b):
+    """Viscous friction force [N]: b v, b [N s/m] (kernel friction.viscous_force)."""
+    return broadcast_call(viscous_loop, v, b)
+
+
+def stribeck(v, Fc, Fs, vs):
+    """Stribeck friction [N]: (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v); vs [m/s] Stribeck velocity
+    (kernel friction.stribeck_force)."""
+    return broadcast_call(stribeck_loop, v, Fc, Fs, vs)
+
+
+def dahl(x, sigma, Fc, F0: float = 0.0):
+    """(n,) Dahl friction force [N] along the position x (n,) [m]; sigma [N/m], Fc [N] (> 0).
+    F_k = a F_k-1 + s Fc (1 - a), a = exp(-sigma |dx| / Fc), s = sign(dx) (kernel friction.dahl_step)."""
+    x = np.ascontiguousarray(x, dtype=float)
+    return dahl_run(x, float(sigma), float(Fc), float(F0), np.empty(x.shape[0]))
+
+
+def _moving(v: np.ndarray) -> np.ndarray:
+    return np.abs(v) > 1e-3 * max(float(np.abs(v).max()), 1e-300)
+
+
+def _coulomb_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return s.load + coulomb(s.v, p["Fc"])
+
+
+def _coulomb_guess(s: Signals, y: np.ndarray) -> dict:
+    m = _moving(s.v)
+    return {"Fc": float(np.median(np.abs(y - s.load)[m])) if m.any() else 0.1}
+
+
+def _viscous_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return s.load + viscous(s.v, p["b"])
+
+
+def _viscous_guess(s: Signals, y: np.ndarray) -> dict:
+    b = float(np.dot(s.v, y - s.load) / max(np.dot(s.v, s.v), 1e-300))
+    return {"b": b if b > 0 else 1.0}
+
+
+def _stribeck_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return s.load + stribeck(s.v, p["Fc"], p["Fs"], p["vs"])
+
+
+def _stribeck_guess(s: Signals, y: np.ndarray) -> dict:
+    m = _moving(s.v)
+    if m.sum() < 10:
+        return {}
+    # friction along the motion, binned by speed: Fc where fastest, Fs the low-speed peak, vs where the
+    # excess over Fc has fallen to 1/e of its peak
+    f, sp = ((y - s.load) * np.sign(s.v))[m], np.abs(s.v[m])
+    edges = np.unique(np.percentile(sp, np.linspace(0, 100, 21)))
+    which = np.clip(np.searchsorted(edges, sp, side="right") - 1, 0, max(edges.size - 2, 0))
+    med = np.array([np.median(f[which == b]) if np.any(which == b) else np.nan for b in range(edges.size - 1)])
+    centre = 0.5 * (edges[:-1] + edges[1:])
+    ok = np.isfinite(med)
+    if ok.sum() < 3:
+        return {"Fc": float(np.median(np.abs(f))), "Fs": float(np.percentile(np.abs(f), 90)),
+                "vs": float(np.percentile(sp, 25))}
+    med, centre = med[ok], centre[ok]
+    Fc = max(float(np.median(med[-max(2, med.size // 4):])), 0.0)
+    peak = int(np.argmax(med))
+    Fs = max(float(med[peak]), Fc)
+    excess = med - Fc
+    after = np.nonzero(excess[peak:] <= excess[peak] / np.e)[0]
+    vs = float(centre[peak + after[0]]) if after.size else float(np.percentile(sp, 25))
+    return {"Fc": Fc, "Fs": Fs if Fs > 1.2 * Fc else 2.0 * Fc, "vs": vs}
+
+
+def _dahl_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return s.load + dahl(s.x, p["sigma"], p["Fc"])
+
+
+def _dahl_guess(s: Signals, y: np.ndarray) -> dict:
+    f = y - s.load
+    Fc = float(np.percentile(np.abs(f), 95))
+    # initial slope dF/dx just after reversals ~ sigma: take the steep end of |dF/dx|
+    dx, dF = np.diff(s.x), np.diff(f)
+    m = np.abs(dx) > 1e-12
+    sigma = float(np.percentile(np.abs(dF[m] / dx[m]), 90)) if m.sum() > 10 else 1e4
+    return {"Fc": Fc, "sigma": sigma}
+
+
+class CoulombStep(Step):
+    """Per-sample coulomb_friction: step(v, load) -> motor force [N]."""
+
+    effect_name = "coulomb_friction"
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, v: float, load: float) -> float:
+        return float(load + coulomb_force(float(v), self.params["Fc"]))
+
+
+class ViscousStep(Step):
+    """Per-sample viscous_friction: step(v, load) -> motor force [N]."""
+
+    effect_name = "viscous_friction"
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, v: float, load: float) -> float:
+        return float(load + viscous_force(float(v), self.params["b"]))
+
+
+class StribeckStep(Step):
+    """Per-sample stribeck_friction: step(v, load) -> motor force [N]."""
+
+    effect_name = "stribeck_friction"
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, v: float, load: float) -> float:
+        p = self.params
+        return float(load + stribeck_force(float(v), p["Fc"], p["Fs"], p["vs"]))
+
+
+class DahlStep(Step):
+    """Per-sample dahl_hysteresis: step(x, load) -> motor force [N]."""
+
+    effect_name = "dahl_hysteresis"
+
+    def reset(self) -> None:
+        self.x_prev = None
+        self.F = 0.0
+
+    def step(self, x: float, load: float) -> float:
+        if self.x_prev is not None:
+            self.F = dahl_step(self.F, x - self.x_prev, self.params["sigma"], self.params["Fc"])
+        self.x_prev = x
+        return float(load + self.F)
+
+
+_FC = ParamSpec("Fc", "N", 0.0, 50.0, 0.2, "Coulomb (kinetic) friction force")
+
+COULOMB_FRICTION = register(Effect(
+    name="coulomb_friction", link="force", doc="constant, direction-dependent: load + Fc sign(v)",
+    params=(_FC,), inputs=("v", "load"), output="load",
+    simulate=_coulomb_sim, guess=_coulomb_guess, step_class=CoulombStep))
+
+VISCOUS_FRICTION = register(Effect(
+    name="viscous_friction", link="force", doc="velocity-proportional: load + b v",
+    params=(ParamSpec("b", "N s/m", 1e-6, 1e5, 10.0, "viscous friction coefficient", log=True),),
+    inputs=("v", "load"), output="load",
+    simulate=_viscous_sim, guess=_viscous_guess, step_class=ViscousStep))
+
+STRIBECK_FRICTION = register(Effect(
+    name="stribeck_friction", link="force",
+    doc="extra friction at low speed: load + (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v)",
+    params=(_FC,
+            ParamSpec("Fs", "N", 0.0, 50.0, 0.3, "static (breakaway) friction force"),
+            ParamSpec("vs", "m/s", 1e-7, 10.0, 1e-3, "Stribeck velocity", log=True, positive=True)),
+    inputs=("v", "load"), output="load",
+    simulate=_stribeck_sim, guess=_stribeck_guess, step_class=StribeckStep))
+
+DAHL_HYSTERESIS = register(Effect(
+    name="dahl_hysteresis", link="force",
+    doc="Dahl pre-sliding: load + F, dF/dx = sigma (1 - F/Fc sgn(dx)) along the motor position",
+    params=(ParamSpec("sigma", "N/m", 1.0, 1e9, 1e4, "rest stiffness (initial slope after a reversal)",
+                      log=True),
+            ParamSpec("Fc", "N", 1e-6, 50.0, 0.2, "Coulomb friction force reached in sliding",
+                      log=True, positive=True)),
+    inputs=("x", "load"), output="load",
+    simulate=_dahl_sim, guess=_dahl_guess, step_class=DahlStep))

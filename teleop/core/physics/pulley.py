@@ -1,0 +1,250 @@
+"""Cable-pulley transmission (seed 002, Xue et al. 2017): tension lost over a chain of pulleys and the
+cable's elastic elongation, with stick transitions at reversals.
+
+Seed 002 in the project holds only its abstract, introduction and nomenclature (wrap angle theta, cable
+and pulley radii, friction between cable, pulley and shaft, bending rigidity, elongation dL = T d / (E A));
+the model below is built from those quantities and says where it simplifies:
+
+- friction at pulley i (wrap angle theta_i, equivalent friction coefficient mu_i): the moving cable's
+  tension grows towards the side that drives it by K_i = exp(mu_i theta_i). Shaft (bearing) friction is
+  proportional to the axle load 2 T sin(theta_i / 2), hence to T, and is folded into mu_i.
+- bending rigidity: bending the cable onto radius R_i and straightening it again takes the moment
+  M = EI / R_i; a stranded cable's internal friction keeps most of that work, so each unit length drawn
+  over the pulley loses about EI / R_i^2 of tension: B_i = EI / R_i^2 [N], load-independent. (EI is the
+  dissipative bending rigidity [N m^2]; an upper bound for a cable that bends elastically.)
+- one pulley, pulling (the motor side drives, x increasing): T_out = K_i T_in + B_i; releasing (the load
+  drives): T_out = max((T_in - B_i) / K_i, 0), T_in the tip-side tension, T_out the motor side.
+  The chain applies this pulley by pulley from the tip to the motor; the motor force lies between the
+  releasing line lo(T_tip) and the pulling line hi(T_tip).
+- reversals: the cable sticks on the pulleys and the motor force travels between the lines with the cable
+  stretch, F_m <- clamp(F_m + k dx, lo, hi), k the stick stiffness [N/m] (the capstan law's transition,
+  teleop.core.physics.capstan); solved as a clamp prefix scan of y = F_m - k x.
+- elongation: segment j (length d_j [m], tension T_j) stretches by T_j d_j / EA; the tip position is
+  x - sum_j T_j d_j / EA. During a transition the segment tensions are interpolated between their
+  releasing and pulling profiles by where the motor force sits in its band.
+
+Array functions take a `PulleyChain`; the catalogue effects (`pulley_friction`: force link, x and load ->
+motor force; `pulley_elongation`: position link, x and load -> tip position) are its lumped one-pulley
+form, whose parameters a recording can identify: mu and wrap only as the product mu wrap (fix one),
+bend = sum_i B_i, and c = L / EA the cable's compliance (the lumped pulley sits mid-cable, so the mean
+segment tension (T_tip + F_m) / 2 stretches the whole length).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.scan import clamp_scan, clamp_step
+
+
+@dataclass(frozen=True)
+class Pulley:
+    """One pulley: wrap angle theta [rad], radius R [m], equivalent friction coefficient mu [-] (cable and
+    shaft), span d [m] of free cable from this pulley towards the motor (its segment's length)."""
+
+    theta: float
+    R: float
+    mu: float
+    d: float = 0.0
+
+    def __post_init__(self):
+        if not (self.theta >= 0 and self.R > 0 and self.mu >= 0 and self.d >= 0):
+            raise ValueError(f"pulley: theta, mu, d must be >= 0 and R > 0, got {self}")
+
+
+@dataclass(frozen=True)
+class PulleyChain:
+    """Pulleys from the tip to the motor, the cable's dissipative bending rigidity EI [N m^2], axial
+    stiffness EA [N], and the tip segment's length d_tip [m] (from the load to the first pulley)."""
+
+    pulleys: tuple
+    EI: float = 0.0
+    EA: float = math.inf
+    d_tip: float = 0.0
+
+    @property
+    def K(self) -> np.ndarray:
+        """(p,) tension ratio exp(mu_i theta_i) per pulley."""
+        return np.array([math.exp(p.mu * p.theta) for p in self.pulleys])
+
+    @property
+    def B(self) -> np.ndarray:
+        """(p,) bending loss EI / R_i^2 per pulley [N]."""
+        return np.array([self.EI / p.R ** 2 for p in self.pulleys])
+
+    @property
+    def spans(self) -> np.ndarray:
+        """(p + 1,) segment lengths [m], tip segment first."""
+        return np.array([self.d_tip] + [p.d for p in self.pulleys])
+
+
+def pulley_out(T_in, K, B, pulling):
+    """Motor-side tension [N] after one pulley from the tip-side tension T_in [N] (broadcasts):
+    K T_in + B pulling, max((T_in - B) / K, 0) releasing."""
+    T_in = np.asarray(T_in, dtype=float)
+    return np.where(pulling, K * T_in + B, np.maximum((T_in - B) / K, 0.0))
+
+
+def segment_tensions(T_tip, chain: PulleyChain, pulling) -> np.ndarray:
+    """(p + 1, n) tensions [N] of the segments, tip segment first, for tip tension T_tip (n,) and the
+    direction `pulling` (bool, scalar or (n,)): the last row is the motor force."""
+    T = np.atleast_1d(np.asarray(T_tip, dtype=float))
+    rows = [T]
+    for K, B in zip(chain.K, chain.B):
+        rows.append(pulley_out(rows[-1], K, B, pulling))
+    return np.vstack(rows)
+
+
+def pulley_band(T_tip, chain: PulleyChain) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi): the releasing and pulling lines of the motor force [N] for tip tension T_tip [N]."""
+    return segment_tensions(T_tip, chain, False)[-1], segment_tensions(T_tip, chain, True)[-1]
+
+
+def pulley_motor_force(x, T_tip, chain: PulleyChain, k: float, F0: float | None = None) -> np.ndarray:
+    """(n,) motor force [N] for motor position x (n,) [m] and tip tension T_tip (n,) [N] with stick
+    transitions of stiffness k [N/m]: F_k = clamp(F_k-1 + k (x_k - x_k-1), lo_k, hi_k), F0 default T_tip[0]
+    clamped into its band."""
+    x = np.asarray(x, dtype=float)
+    T = np.broadcast_to(np.asarray(T_tip, dtype=float), x.shape)
+    lo, hi = pulley_band(T, chain)
+    F0 = float(np.clip(T[0] if F0 is None else F0, lo[0], hi[0]))
+    # y = F - k x turns the driven play into a plain clamp: y_k = clamp(y_k-1, lo_k - k x_k, hi_k - k x_k)
+    y = clamp_scan(F0 - k * x[0], lo - k * x, hi - k * x)
+    return y + k * x
+
+
+def pulley_elongation(F_motor, T_tip, chain: PulleyChain) -> np.ndarray:
+    """(n,) cable stretch [m] between motor and tip: sum_j T_j d_j / EA, the segment tensions T_j
+    interpolated between their releasing and pulling profiles by the motor force's place in its band."""
+    T = np.atleast_1d(np.asarray(T_tip, dtype=float))
+    if not math.isfinite(chain.EA):
+        return np.zeros(T.shape)
+    rel, pull = segment_tensions(T, chain, False), segment_tensions(T, chain, True)
+    width = pull[-1] - rel[-1]
+    s = np.where(width > 0, (np.asarray(F_motor, dtype=float) - rel[-1]) / np.where(width > 0, width, 1.0), 0.5)
+    seg = rel + np.clip(s, 0.0, 1.0) * (pull - rel)
+    return chain.spans @ seg / chain.EA
+
+
+def lumped_chain(p: Mapping[str, float]) -> PulleyChain:
+    """The catalogue effects' one-pulley chain: wrap, mu, bend (= EI / R^2 with R = 1 m)."""
+    return PulleyChain((Pulley(theta=p["wrap"], R=1.0, mu=p["mu"]),), EI=p["bend"])
+
+
+# ---- catalogue effects ------------------------------------------------------------------------------------
+
+def _friction_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return pulley_motor_force(s.x, s.load, lumped_chain(p), p["k"])
+
+
+def _friction_guess(s: Signals, y: np.ndarray) -> dict:
+    wrap = PARAMS_F[1].default
+    pull = s.v > 0.2 * np.percentile(np.abs(s.v), 90)
+    if pull.sum() > 5 and np.ptp(s.load[pull]) > 0:
+        K, B = np.polyfit(s.load[pull], y[pull], 1)      # pulling line F_m = K T + B
+    else:
+        K, B = math.exp(PARAMS_F[0].default * wrap), 0.0
+    mu = math.log(max(K, 1.0 + 1e-6)) / wrap
+    dx, dF = np.diff(s.x), np.diff(y)
+    moving = np.abs(dx) > 1e-12
+    k = float(np.percentile(np.abs(dF[moving] / dx[moving]), 95)) if moving.sum() > 10 else PARAMS_F[3].default
+    return {"mu": mu, "wrap": wrap, "bend": max(float(B), 0.0), "k": k}
+
+
+PARAMS_F = (
+    ParamSpec("mu", "1", 0.0, 1.5, 0.1, "equivalent cable-pulley friction coefficient (shaft friction folded in)"),
+    ParamSpec("wrap", "rad", 0.0, 8 * np.pi, np.pi,
+              "total wrap angle of the cable over the pulleys (mu and wrap are identifiable only as a "
+              "product: fix one when fitting)"),
+    ParamSpec("bend", "N", 0.0, 50.0, 0.05, "bending-rigidity loss summed over the pulleys, sum EI / R_i^2"),
+    ParamSpec("k", "N/m", 1.0, 1e8, 2e4, "stick stiffness during reversals (motor force per motor travel)",
+              log=True),
+)
+
+
+class PulleyFrictionStep(Step):
+    """Per-sample pulley_friction: step(x, load) -> motor force [N]."""
+
+    effect_name = "pulley_friction"
+
+    def reset(self) -> None:
+        self.x_prev = None
+        self.F = 0.0
+        p = self.params
+        self._K, self._B = math.exp(p["mu"] * p["wrap"]), p["bend"]
+
+    def _band(self, load: float) -> tuple[float, float]:
+        return max((load - self._B) / self._K, 0.0), self._K * load + self._B
+
+    def step(self, x: float, load: float) -> float:
+        lo, hi = self._band(float(load))
+        if self.x_prev is None:
+            self.F = clamp_step(float(load), lo, hi)
+        else:
+            self.F = clamp_step(self.F + self.params["k"] * (x - self.x_prev), lo, hi)
+        self.x_prev = x
+        return float(self.F)
+
+
+PULLEY_FRICTION = register(Effect(
+    name="pulley_friction",
+    link="force",
+    doc="motor force from tip load over pulleys (seed 002): exp(mu wrap) T + bend pulling, "
+        "(T - bend) exp(-mu wrap) releasing, stick transitions of stiffness k",
+    params=PARAMS_F,
+    inputs=("x", "load"),
+    output="load",
+    simulate=_friction_sim,
+    guess=_friction_guess,
+    step_class=PulleyFrictionStep,
+))
+
+
+def _elong_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    F_m = pulley_motor_force(s.x, s.load, lumped_chain(p), p["k"])
+    return s.x - p["c"] * 0.5 * (s.load + F_m)
+
+
+def _elong_guess(s: Signals, y: np.ndarray) -> dict:
+    g = _friction_guess(s, s.load)   # no motor force here: the friction starts at its defaults
+    g.update(mu=PARAMS_E[1].default, bend=PARAMS_E[3].default)
+    e = s.x - y
+    c = float(np.dot(s.load, e) / max(np.dot(s.load, s.load), 1e-300))
+    return {**g, "c": c if c > 0 else PARAMS_E[0].default}
+
+
+PARAMS_E = (ParamSpec("c", "m/N", 1e-9, 1e-1, 2e-5, "cable compliance L / (E A) between motor and tip",
+                      log=True, positive=True),) + PARAMS_F
+
+
+class PulleyElongationStep(Step):
+    """Per-sample pulley_elongation: step(x, load) -> tip position [m]."""
+
+    effect_name = "pulley_elongation"
+
+    def reset(self) -> None:
+        p = self.params
+        self._friction = PulleyFrictionStep({k: p[k] for k in ("mu", "wrap", "bend", "k")})
+
+    def step(self, x: float, load: float) -> float:
+        F_m = self._friction.step(x=x, load=load)
+        return float(x - self.params["c"] * 0.5 * (load + F_m))
+
+
+PULLEY_ELONGATION = register(Effect(
+    name="pulley_elongation",
+    link="position",
+    doc="tip position after the cable's elastic elongation over pulleys (seed 002): "
+        "x - c (T_tip + F_motor) / 2, F_motor from pulley_friction",
+    params=PARAMS_E,
+    inputs=("x", "load"),
+    output="x",
+    simulate=_elong_sim,
+    guess=_elong_guess,
+    step_class=PulleyElongationStep,
+))

@@ -1,0 +1,128 @@
+"""Effects inside a force sensor: loading/unloading hysteresis and drift (temperature or time).
+
+- sensor_hysteresis: reading = F + h s, with s in [-1, 1] the loading state: +1 while the measured force
+  rises, -1 while it falls. s switches play-type: z = play of F with half-width delta
+  (z_k = clamp(z_k-1, F_k - delta, F_k + delta)), s = (F - z) / delta, so after a reversal the offset
+  travels linearly from +h to -h over 2 delta of force change (delta -> 0: an abrupt switch).
+  Starts neutral (s = 0).
+- thermal_drift: reading = F + c (T - T0), T the sensor temperature [degC].
+- thermal_drift_time: when no temperature is recorded, reading = F + offset + rate (t - t_0), t_0 = t[0].
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.scan import clamp_step, play
+
+
+def hysteresis_offset(F: np.ndarray, h: float, delta: float, z0=None) -> np.ndarray:
+    """(n,) reading offset [N] of a sensor with loading/unloading hysteresis h [N], switch half-width delta [N].
+
+    F may be (n, k) (k sensors along the columns). z0: the switch state [N] before F[0] ((k,) or a float;
+    default F[0], neutral); the state after the last sample is F[-1] - offset[-1] delta / h."""
+    F = np.asarray(F, dtype=float)
+    z = play(F[0] if z0 is None else np.asarray(z0, dtype=float), F, delta)
+    return h * (F - z) / delta
+
+
+def thermal_offset(T: np.ndarray, c: float, T0: float) -> np.ndarray:
+    """Reading offset [N]: c (T - T0), c [N/K], T and T0 [degC]."""
+    return c * (np.asarray(T, dtype=float) - T0)
+
+
+def _hyst_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return s.force + hysteresis_offset(s.force, p["h"], p["delta"])
+
+
+def _hyst_guess(s: Signals, y: np.ndarray) -> dict:
+    e = y - s.force
+    h = 0.5 * float(np.percentile(e, 98) - np.percentile(e, 2))
+    return {"h": h, "delta": 0.05 * float(np.ptp(s.force)) + 1e-6}
+
+
+def _thermal_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return s.force + thermal_offset(s.temperature, p["c"], p["T0"])
+
+
+def _thermal_guess(s: Signals, y: np.ndarray) -> dict:
+    # y - F = c T - c T0: a straight line in T
+    c, a = np.polyfit(s.temperature, y - s.force, 1)
+    return {"c": float(c), "T0": float(-a / c) if abs(c) > 1e-12 else float(np.mean(s.temperature))}
+
+
+def _time_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
+    return s.force + p["offset"] + p["rate"] * (s.t - s.t[0])
+
+
+def _time_guess(s: Signals, y: np.ndarray) -> dict:
+    rate, offset = np.polyfit(s.t - s.t[0], y - s.force, 1)
+    return {"rate": float(rate), "offset": float(offset)}
+
+
+class SensorHysteresisStep(Step):
+    """Per-sample sensor_hysteresis: step(force) -> reading [N]."""
+
+    effect_name = "sensor_hysteresis"
+
+    def reset(self) -> None:
+        self.z = None
+
+    def step(self, force: float) -> float:
+        d = self.params["delta"]
+        self.z = force if self.z is None else clamp_step(self.z, force - d, force + d)
+        return float(force + self.params["h"] * (force - self.z) / d)
+
+
+class ThermalDriftStep(Step):
+    """Per-sample thermal_drift: step(force, temperature) -> reading [N]."""
+
+    effect_name = "thermal_drift"
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, force: float, temperature: float) -> float:
+        return float(force + self.params["c"] * (temperature - self.params["T0"]))
+
+
+class TimeDriftStep(Step):
+    """Per-sample thermal_drift_time: step(t, force) -> reading [N]; t_0 is the first t seen."""
+
+    effect_name = "thermal_drift_time"
+
+    def reset(self) -> None:
+        self.t0 = None
+
+    def step(self, t: float, force: float) -> float:
+        if self.t0 is None:
+            self.t0 = t
+        return float(force + self.params["offset"] + self.params["rate"] * (t - self.t0))
+
+
+SENSOR_HYSTERESIS = register(Effect(
+    name="sensor_hysteresis", link="sensor",
+    doc="loading vs unloading offset: +h while the force rises, -h while it falls, play-type switch",
+    params=(ParamSpec("h", "N", 0.0, 50.0, 0.1, "half the gap between loading and unloading readings"),
+            ParamSpec("delta", "N", 1e-6, 100.0, 0.2, "half the force change over which the offset flips",
+                      log=True, positive=True)),
+    inputs=("force",), output="force",
+    simulate=_hyst_sim, guess=_hyst_guess, step_class=SensorHysteresisStep))
+
+THERMAL_DRIFT = register(Effect(
+    name="thermal_drift", link="sensor", doc="offset following temperature: c (T - T0)",
+    params=(ParamSpec("c", "N/K", -10.0, 10.0, 0.01, "temperature coefficient of the reading"),
+            ParamSpec("T0", "degC", -50.0, 150.0, 20.0, "temperature of zero offset")),
+    inputs=("force", "temperature"), output="force",
+    simulate=_thermal_sim, guess=_thermal_guess, step_class=ThermalDriftStep))
+
+THERMAL_DRIFT_TIME = register(Effect(
+    name="thermal_drift_time", link="sensor",
+    doc="drift without a temperature channel: offset + rate (t - t0)",
+    params=(ParamSpec("offset", "N", -100.0, 100.0, 0.0, "offset at the first sample"),
+            ParamSpec("rate", "N/s", -10.0, 10.0, 0.0, "drift rate")),
+    inputs=("t", "force"), output="force",
+    simulate=_time_sim, guess=_time_guess, step_class=TimeDriftStep))

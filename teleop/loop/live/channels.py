@@ -1,0 +1,152 @@
+"""What the live view shows: channels, their rates, and how each message is built from a tick row.
+
+Rates are on the rows' session time (a channel publishes when at least 1/rate has passed since its last
+message), so they hold whatever the loop rate. Plots (JSON with a JSON schema) at 100 Hz, the 3D scene
+(foxglove.FrameTransforms, foxglove.SceneUpdate) at 50 and 10 Hz, faults (foxglove.Log) when they happen,
+per-second timing and the live view's own counters at 1 Hz.
+"""
+
+from __future__ import annotations
+
+import json
+
+import orjson
+from foxglove.messages import (Color, FrameTransform, FrameTransforms, LinePrimitive, LinePrimitiveLineType, Log,
+                               LogLevel, Point3, Pose, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive,
+                               Timestamp, Vector3, CubePrimitive, CylinderPrimitive)
+
+from teleop.io.recording.layout import Layout
+
+STATE_NAMES = ("DISABLED", "ALIGNING", "ENABLED", "CLUTCHED", "FAULT")  # teleop.loop.states.State values
+WORLD = "world"  # the robot's base frame {B}
+
+# topic: (rate [Hz] on session time, row fields) for the JSON plot channels
+PLOTS = {
+    "/live/stylus": (100.0, ("measured_cp", "measured_cv", "force_raw", "servo_cf", "buttons", "operator_present")),
+    "/live/cables": (100.0, ("servo_jp", "commanded_lengths", "position_steps", "measured_lengths")),
+    "/live/tensions": (100.0, ("fsr_counts", "tensions", "compensated_tensions")),
+    "/live/wrench": (100.0, ("measured_cf", "wrench_truth")),
+    "/live/loop": (100.0, ("state", "lateness_us", "tick_us", "read_us", "map_us", "robot_us", "estimate_us",
+                           "render_us", "write_us", "record_us")),
+}
+TOPIC_TF, RATE_TF = "/live/tf", 50.0
+TOPIC_SCENE, RATE_SCENE = "/live/scene", 10.0
+TOPIC_FAULTS = "/live/faults"
+TOPIC_TIMING, TOPIC_STATS = "/live/timing", "/live/stats"
+RATES = {**{k: v[0] for k, v in PLOTS.items()}, TOPIC_TF: RATE_TF, TOPIC_SCENE: RATE_SCENE, TOPIC_TIMING: 1.0,
+         TOPIC_STATS: 1.0}
+
+
+def plot_schema(layout: Layout, topic: str) -> bytes:
+    """JSON schema of a plot channel (numbers and arrays of numbers, with `t` [s] and `tick`)."""
+    widths = {s.name: s.width for s in layout.signals}
+    if "position_steps" in widths:
+        widths["measured_lengths"] = widths["position_steps"]   # derived from the steps (RowMessages.plot)
+    props = {"tick": {"type": "integer"}, "t": {"type": "number", "description": "session time [s]"}}
+    for name in PLOTS[topic][1]:
+        if name in widths:
+            props[name] = {"type": "number"} if widths[name] == 1 else {"type": "array", "items": {"type": "number"}}
+    if topic == "/live/loop":
+        props["state_name"] = {"type": "string"}
+    return json.dumps({"type": "object", "properties": props}).encode()
+
+
+def stamp(t_ns: int) -> Timestamp:
+    return Timestamp(sec=t_ns // 1_000_000_000, nsec=t_ns % 1_000_000_000)
+
+
+class RowMessages:
+    """Builds the live messages from a row (the column names of teleop.loop.tap.session_layout).
+
+    Args:
+        layout: the session's row layout.
+        geometry: {"B": (6, 3) base anchors [m], "r": (6, 3) platform anchors [m]} or None.
+        pads: [{"name", "center": (3,) [m], "size": (2,) [m], "outline": "disc" | "square", "thickness" [m],
+            "color": (r, g, b, a)}] drawn in the scene (teleop.loop.session.pad_scene).
+    """
+
+    def __init__(self, layout: Layout, geometry: dict | None = None, pads: list | None = None):
+        self.cols = layout.columns()
+        self.plots = {topic: [n for n in names if n in self.cols] for topic, (_, names) in PLOTS.items()}
+        # the lengths the motors measure: home lengths minus the steps hauled in (needs both from the session)
+        self.L_home = (geometry or {}).get("L_home")
+        self.steps_per_m = (geometry or {}).get("steps_per_m")
+        if self.L_home is not None and self.steps_per_m and "position_steps" in self.cols:
+            self.plots["/live/cables"].append("measured_lengths")
+        self.B = (geometry or {}).get("B")
+        self.r = (geometry or {}).get("r")
+        self.pads = list(pads or [])
+
+    def plot(self, topic: str, row) -> bytes:
+        c = self.cols
+        msg = {"tick": int(row[c["tick"]][0]), "t": float(row[c["t"]][0])}
+        for name in self.plots[topic]:
+            if name == "measured_lengths":
+                steps = row[c["position_steps"]]
+                msg[name] = [float(L - n / self.steps_per_m) for L, n in zip(self.L_home, steps)]
+                continue
+            v = row[c[name]].tolist()
+            msg[name] = v[0] if len(v) == 1 else v
+        if topic == "/live/loop":
+            s = int(msg["state"])
+            msg["state_name"] = STATE_NAMES[s] if 0 <= s < len(STATE_NAMES) else str(s)
+        return orjson.dumps(msg, option=orjson.OPT_SERIALIZE_NUMPY)
+
+    def transforms(self, row, t_ns: int) -> bytes:
+        c = self.cols
+        ts = stamp(t_ns)
+        ee, stylus = row[c["setpoint_cp"]].tolist(), row[c["measured_cp"]].tolist()
+        q = Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)
+        return FrameTransforms(transforms=[
+            FrameTransform(timestamp=ts, parent_frame_id=WORLD, child_frame_id="end_effector",
+                           translation=Vector3(x=ee[0], y=ee[1], z=ee[2]), rotation=q),
+            FrameTransform(timestamp=ts, parent_frame_id=WORLD, child_frame_id="stylus",
+                           translation=Vector3(x=stylus[0], y=stylus[1], z=stylus[2]), rotation=q)]).encode()
+
+    def scene(self, row, t_ns: int) -> bytes:
+        c = self.cols
+        ts = stamp(t_ns)
+        ee = row[c["setpoint_cp"]].tolist()
+        state = int(row[c["state"]][0])
+        red = Color(r=0.9, g=0.1, b=0.1, a=1.0)
+        ee_color = red if state == 4 else Color(r=0.1, g=0.6, b=0.9, a=1.0)
+        ident = Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)
+        entities = [SceneEntity(timestamp=ts, frame_id=WORLD, id="end_effector", spheres=[SpherePrimitive(
+            pose=Pose(position=Vector3(x=ee[0], y=ee[1], z=ee[2]), orientation=ident),
+            size=Vector3(x=0.008, y=0.008, z=0.008), color=ee_color)])]
+        f = row[c["measured_cf"]].tolist()[:3]
+        entities.append(SceneEntity(timestamp=ts, frame_id=WORLD, id="force", lines=[LinePrimitive(
+            type=LinePrimitiveLineType.LineList, thickness=0.002, scale_invariant=False,
+            points=[Point3(x=ee[0], y=ee[1], z=ee[2]),
+                    Point3(x=ee[0] + 0.01 * f[0], y=ee[1] + 0.01 * f[1], z=ee[2] + 0.01 * f[2])],
+            color=Color(r=1.0, g=0.6, b=0.0, a=1.0))]))  # 1 cm per newton
+        if self.B is not None and self.r is not None:
+            pts = []
+            for b, r in zip(self.B, self.r):
+                pts += [Point3(x=b[0], y=b[1], z=b[2]), Point3(x=ee[0] + r[0], y=ee[1] + r[1], z=ee[2] + r[2])]
+            entities.append(SceneEntity(timestamp=ts, frame_id=WORLD, id="cables", lines=[LinePrimitive(
+                type=LinePrimitiveLineType.LineList, thickness=0.001, scale_invariant=False, points=pts,
+                color=Color(r=0.3, g=0.3, b=0.3, a=1.0))]))
+        for pad in self.pads:
+            x, y, z = pad["center"]
+            sx, sy = pad["size"]
+            col = pad.get("color") or (0.8, 0.5, 0.6, 0.8)
+            color = Color(r=col[0], g=col[1], b=col[2], a=col[3])
+            pose = Pose(position=Vector3(x=x, y=y, z=z), orientation=ident)
+            size = Vector3(x=sx, y=sy, z=float(pad.get("thickness", 0.01)))
+            shape = {"cylinders": [CylinderPrimitive(pose=pose, size=size, bottom_scale=1.0, top_scale=1.0,
+                                                     color=color)]} if pad.get("outline") == "disc" else \
+                {"cubes": [CubePrimitive(pose=pose, size=size, color=color)]}
+            entities.append(SceneEntity(timestamp=ts, frame_id=WORLD, id=f"pad/{pad['name']}", **shape))
+        return SceneUpdate(entities=entities).encode()
+
+
+def fault_log(event: dict, t_ns: int) -> bytes:
+    """A state change as a foxglove.Log (ERROR for FAULT, WARNING for leaving ENABLED, INFO otherwise)."""
+    dst = str(event.get("dst", ""))
+    level = LogLevel.Error if dst == "FAULT" else (LogLevel.Warning if event.get("src") == "ENABLED" else
+                                                   LogLevel.Info)
+    text = f"{event.get('src', '')} -> {dst}" + (f": {event['reason']}" if event.get("reason") else "")
+    return Log(timestamp=stamp(t_ns), level=level, message=text, name="teleop.loop", file="", line=0).encode()
+
+

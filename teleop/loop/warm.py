@@ -1,0 +1,165 @@
+"""Compile (or load from numba's on-disk cache) every kernel the loop and the simulated robot call, with the
+argument types they call them with, before the loop starts: the first tick must not pay for a compile.
+
+    seconds = warm_up(geom)        # once per process (later calls return 0.0 at once)
+
+A cold cache compiles each kernel (seconds, once per machine and source version); a warm one loads them
+(well under a second, most of it numba's own start-up).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+_done = []  # [True] once warmed (the argument types do not depend on the geometry's values)
+
+
+def kernels() -> list:
+    """Every compiled kernel (numba dispatcher) of teleop.core.kernels."""
+    from teleop.core.kernels import estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, \
+        tap, tension, ufuncs
+
+    out = []
+    for mod in (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, tap, tension,
+                ufuncs):
+        out += [v for v in vars(mod).values() if hasattr(v, "py_func") and getattr(v, "__module__", "") == mod.__name__]
+    return out
+
+
+def warm_up(geom=None) -> float:
+    """Run every hot-path kernel once with the loop's argument types (default geometry if None); seconds."""
+    from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
+    from teleop.core.estimation.kalman import KalmanNoise
+    from teleop.core.estimation.reading import ReadingEstimator
+    from teleop.core.estimation.tick import LoopTick
+    from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation
+    from teleop.core.geometry import default_geometry
+    from teleop.core.kernels import sim as KS
+    from teleop.core.kernels import tap as KTap
+    from teleop.core.kernels import tension as KT
+    from teleop.core.kernels.geometry import forward_kinematics
+    from teleop.core.kinematics import FREE_AXIAL, check_lengths, lengths2pose, pose2lengths, poses2lengths, rotation_zyx, structure_matrix
+    from teleop.core.mapping import MappingParams
+    from teleop.core.rendering import Renderer, engage_count
+    from teleop.core.sensors import default_fsr_calibration
+    from teleop.core.tension import TensionSolver
+
+    if _done:
+        return 0.0
+    geom = default_geometry() if geom is None else geom
+    t0 = time.perf_counter()
+    n = len(geom.B)
+    poly = tuple((0.0, 0.0) for _ in range(6))
+    turn = TurnCompensation((AxisTurnFit(axis=2, duration=0.1, forward=poly, backward=poly),))
+    dyn = DynamicParams(b=1.0, dahl_sigma=1e4, dahl_Fc=0.01)
+    for name in ESTIMATOR_NAMES:  # the loop's path: mapping, FSR counts, estimate + Kalman, render
+        for kal in (KalmanNoise(),):  # (no filter: the same array types)
+            est = ReadingEstimator(geom, name, turn=turn, dynamic=dyn, kalman=kal)
+            lt = LoopTick(geom, MappingParams(), est, Renderer())
+            lt.renderer.enable()
+            lt.engage(np.zeros(3))
+            for k in range(3):
+                est.update_arrays(np.full(n, 400.0 + k), np.zeros(6), 1e-3)
+                est.update_arrays(np.full(n, 400 + k, dtype=np.int64), np.zeros(6), 1e-3)  # a robot's ADC counts
+                lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.0 + k), 1e-3)
+                lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.5 + k), 1e-3)  # a non-table count
+                est.update_floats([400.0] * n, [0.0] * 6, 1e-3)
+            lt.map([0.0] * 3, [0.0] * 3, [0.0] * 3, [0.0] * 3, lt.follower.lengths(0.0, 0.0, 0.0))
+            lt.render(0.1, 0.0, 0.0, 1e-3, 0.0, 0.0, 0.0)
+            est.tick.estimate([0.0] * 6, [2.0] * n, 1e-3)
+    # the simulated robot's reading: forward kinematics, pose terms, tension distribution, capstan chain
+    q = np.zeros(6)
+    L = pose2lengths(q, geom)
+    forward_kinematics(np.ascontiguousarray(L), q.copy(), FREE_AXIAL, geom.r, geom.B, 1e-12, 12)
+    A, theta, tip = np.empty((6, n)), np.empty(n), np.empty(3)
+    KS.pose_terms(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
+                  np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip)
+    f = -structure_matrix(q, geom) @ np.full(n, 2.85)
+    cap = np.full((2, n), np.nan)
+    for _ in range(2):
+        KS.cable_sensor(f, A, float(geom.mu), theta, -L, float(geom.t_min), float(geom.t_max), 2.85, 5e3, cap,
+                        np.empty(n), np.empty(n))
+    KS.contact_moment(tip, np.zeros(3), np.empty(6))
+    KS.position_steps(L, L, 1e5, np.empty(n, dtype=np.int64))
+    for implicit in (True, False):  # scenes.world.PadWorld.step: pybullet's tuples in, a tuple out
+        KS.series_spring_force((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), np.zeros(3), 0.005, np.zeros((3, 3, 3)), 0.1,
+                               (0.0, 0.0, 0.0), implicit)
+    KS.pose_target(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
+                   np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip, np.empty(3))
+    KS.follow_pose(np.ascontiguousarray(L), float(geom.l_min), float(geom.l_max), q.copy(), FREE_AXIAL, geom.r, geom.B,
+                   1e-12, 12, 1e-6,
+                   np.asarray(geom.v, dtype=float), float(geom.theta0), np.asarray(geom.tip, dtype=float),
+                   np.empty((n, 6)), A, theta, tip, np.empty(3))
+    # the sim robot's reading (scenes.sim_robot.SimRobot.read): the contact force as pybullet's tuple
+    kc = np.array([geom.mu, geom.t_min, geom.t_max, 2.85, 5e3, 1e5])
+    KS.reading(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6), np.empty(n),
+               np.empty(n), np.empty(n, dtype=np.int64))
+    from teleop.core.sensors import FsrBranchLag
+
+    for fsr in (True, False):  # with the FSR chain (the matched plant) and without (effects in between)
+        KS.reading_counts(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6),
+                          np.empty(n), np.empty(n), np.empty(n, dtype=np.int64), fsr,
+                          *FsrBranchLag(default_fsr_calibration(), n).kernel_args(), np.zeros((1, n)), 0,
+                          np.empty(n, dtype=np.int64))
+    KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
+    from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample, tension_monitors
+
+    lag = FsrBranchLag(default_fsr_calibration(), n)
+    for _ in range(2):  # the first reading, then the lag
+        lag.counts(np.full(n, 2.85), np.zeros(n))
+    # the loop's safety monitors and finiteness checks (float and int arrays)
+    TensionRange(5.5, 0.2, 0.05, n).update(0.0, np.full(n, 2.85))
+    StuckCable(0.05, 0.3, 1e-7, n).update(0.0, np.full(n, 2.85), np.zeros(n))
+    tension_monitors(TensionRange(5.5, 0.2, 0.05, n), StuckCable(0.05, 0.3, 1e-7, n), 0.0, np.full(n, 2.85), np.zeros(n))
+    check = type("R", (), {"fsr_counts": np.zeros(n, dtype=np.int64), "position_steps": np.zeros(n, dtype=np.int64),
+                           "commanded_lengths": L, "t": 0.0, "measured_cp": np.zeros(3), "measured_cv": np.zeros(3),
+                           "orientation": np.eye(3)})()
+    is_finite_reading(check)
+    is_finite_sample(check)
+    check.fsr_counts, check.position_steps = np.zeros(n), np.zeros(n)  # a ProcessRobot's reading: floats
+    is_finite_reading(check)
+    from teleop.core.kernels.safety import all_finite, all_finite2
+
+    for a in (np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros((3, n))[1, :6]):  # the loop's estimate check
+        all_finite(a)
+    all_finite2(np.zeros(n), np.zeros((3, n))[1, :6])  # the loop's estimate check (tensions, wrench)
+    # the simulated operator (devices.simulated): one step with and without tremor
+    from teleop.core.kernels import operator as KO
+
+    c = np.zeros(KO.N_CONST)
+    c[[KO.H, KO.M, KO.K, KO.B, KO.PERIOD, KO.DUTY]] = 1e-3, 0.15, 150.0, 6.0, 2.0, 0.5
+    c[KO.HI:KO.HI + 3] = 1.0
+    for tremor in (True, False):
+        KO.operator_steps(np.zeros(9), 0.0, 0.0, 0.0, 0, 1, c, np.zeros((1, 3)), 0, tremor, np.zeros((0, 3)),
+                          np.zeros((0, 2)))
+    KO.script_offset(KO.POKES, 0.1, 0.01, 2.0, 0.5)
+    # the recorder's tap: a reading's counts and steps as ints (inline robot) or floats (ProcessRobot)
+    from teleop.core.kernels.tap import tap_row
+
+    o, w = np.arange(29, dtype=np.int64) * 16, np.full(29, 6, dtype=np.int64)
+    w[[KTap.STAGES, KTap.ORIENT, KTap.CP, KTap.CV, KTap.SETPOINT, KTap.SERVO_CF]] = 7, 9, 3, 3, 3, 3
+    for dt in (np.int64, np.float64):
+        c6 = np.zeros(6, dtype=dt)
+        tap_row(np.zeros(29 * 16), o, w, 0, 0.0, 0, 0, 0, np.zeros(7, dtype=np.int64), True, 0.0, np.zeros(3),
+                np.zeros(3), np.eye(3), 1, True, True, np.zeros(6), L, True, 0.0, 0, c6, c6, L, 1, 0, True, L,
+                np.zeros(6), np.zeros(6), 0.0, 0.0, 0.0, 0.0, np.zeros(3))
+    from teleop.core.kernels.tap import sim_log_row  # teleop bench sim's log: a tick with a reading and one without
+
+    for j in (0, -1):
+        sim_log_row(0, np.zeros(7, dtype=np.int64), np.zeros((1, 7), dtype=np.int64), 0, 0, 0, 0,
+                    np.zeros((1, 4), dtype=np.int64), np.zeros(3), np.zeros((1, 3)), np.zeros(3), np.zeros((1, 3)), j,
+                    L, np.zeros((1, n)), np.zeros(n, dtype=np.int64), np.zeros((1, n), dtype=np.int64), np.zeros(6),
+                    np.zeros(1))
+    check_lengths(L, geom)
+    TensionSolver(A, geom.t_min, geom.t_max, 2.85).solve(f)
+    # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's
+    # first-engagement forward kinematics and its engage rule
+    rotation_zyx(0.0, 0.0, 0.0)
+    poses2lengths(np.zeros((1, 6)), geom)
+    lengths2pose(L, geom, guess=q)
+    engage_count(0, 0.0, 0.0, 0.0, 0.2)
+    KT.OK  # noqa: B018 - imported for the sim robot's status check
+    _done.append(True)
+    return time.perf_counter() - t0

@@ -1,1 +1,0 @@
-"""teleop/protocols."""
