@@ -21,8 +21,10 @@ from __future__ import annotations
 import json
 
 import numpy as np
+from foxglove.messages import FrameTransforms, Log
 from mcap.writer import CompressionType, IndexType, Writer
 
+from teleop.io.recording.foxglove import fault_log, frame_transforms
 from teleop.io.recording.layout import (PROFILE, TOPIC_EVENTS, TOPIC_TIMING, Layout, RowEncoder, json_schema,
                                      metadata_record)
 
@@ -53,16 +55,12 @@ class SessionWriter:
 
     def _views(self, layout: Layout) -> None:
         """Channels in Foxglove's schemas (protobuf): /teleop/log always, /tf when the row has the poses."""
-        from foxglove.messages import FrameTransforms, Log
-
-        from teleop.loop.live.channels import RowMessages
-
         for topic, cls in ((TOPIC_LOG, Log), (TOPIC_TF, FrameTransforms)):
             sc = cls.get_schema()
             sid = self.w.register_schema(sc.name, "protobuf", bytes(sc.data))
             self.channels[topic] = self.w.register_channel(topic, "protobuf", sid)
         names = {s.name for s in layout.signals}
-        self.tf = RowMessages(layout) if {"setpoint_cp", "measured_cp"} <= names else None
+        self.tf_cols = layout.columns() if {"setpoint_cp", "measured_cp"} <= names else None
         self.t_tf = -1e9
         self.n_tf = self.n_log = 0
 
@@ -74,19 +72,18 @@ class SessionWriter:
         for topic, tick, t, payload in self.encoder.encode(row):
             lt = self.log_time(t)
             add(ch[topic], lt, payload, lt, tick & 0xFFFFFFFF)
-        if self.tf is not None and t - self.t_tf >= TF_PERIOD - 1e-9:
+        if self.tf_cols is not None and t - self.t_tf >= TF_PERIOD - 1e-9:
             self.t_tf = t
             self.n_tf += 1
             lt = self.log_time(t)
-            add(ch[TOPIC_TF], lt, self.tf.transforms(row, lt), lt, self.n_tf)
+            ee, stylus = row[self.tf_cols["setpoint_cp"]].tolist(), row[self.tf_cols["measured_cp"]].tolist()
+            add(ch[TOPIC_TF], lt, frame_transforms(ee, stylus, lt), lt, self.n_tf)
 
     def write_json(self, topic: str, t: float, obj: dict) -> None:
         self.event_seq += 1
         lt = self.log_time(t)
         self.w.add_message(self.channels[topic], lt, json.dumps(obj, default=str).encode(), lt, self.event_seq)
         if topic == TOPIC_EVENTS:
-            from teleop.loop.live.channels import fault_log
-
             self.n_log += 1
             self.w.add_message(self.channels[TOPIC_LOG], lt, fault_log(obj, lt), lt, self.n_log)
 

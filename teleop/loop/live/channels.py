@@ -11,14 +11,11 @@ from __future__ import annotations
 import json
 
 import orjson
-from foxglove.messages import (Color, FrameTransform, FrameTransforms, LinePrimitive, LinePrimitiveLineType, Log,
-                               LogLevel, Point3, Pose, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive,
-                               Timestamp, Vector3, CubePrimitive, CylinderPrimitive)
+from foxglove.messages import (Color, CubePrimitive, CylinderPrimitive, LinePrimitive, LinePrimitiveLineType, Point3,
+                               Pose, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive, Vector3)
 
+from teleop.io.recording.foxglove import STATE_NAMES, WORLD, frame_transforms, stamp
 from teleop.io.recording.layout import Layout
-
-STATE_NAMES = ("DISABLED", "ALIGNING", "ENABLED", "CLUTCHED", "FAULT")  # teleop.loop.states.State values
-WORLD = "world"  # the robot's base frame {B}
 
 # topic: (rate [Hz] on session time, row fields) for the JSON plot channels
 PLOTS = {
@@ -49,10 +46,6 @@ def plot_schema(layout: Layout, topic: str) -> bytes:
     if topic == "/live/loop":
         props["state_name"] = {"type": "string"}
     return json.dumps({"type": "object", "properties": props}).encode()
-
-
-def stamp(t_ns: int) -> Timestamp:
-    return Timestamp(sec=t_ns // 1_000_000_000, nsec=t_ns % 1_000_000_000)
 
 
 class RowMessages:
@@ -94,14 +87,7 @@ class RowMessages:
 
     def transforms(self, row, t_ns: int) -> bytes:
         c = self.cols
-        ts = stamp(t_ns)
-        ee, stylus = row[c["setpoint_cp"]].tolist(), row[c["measured_cp"]].tolist()
-        q = Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)
-        return FrameTransforms(transforms=[
-            FrameTransform(timestamp=ts, parent_frame_id=WORLD, child_frame_id="end_effector",
-                           translation=Vector3(x=ee[0], y=ee[1], z=ee[2]), rotation=q),
-            FrameTransform(timestamp=ts, parent_frame_id=WORLD, child_frame_id="stylus",
-                           translation=Vector3(x=stylus[0], y=stylus[1], z=stylus[2]), rotation=q)]).encode()
+        return frame_transforms(row[c["setpoint_cp"]].tolist(), row[c["measured_cp"]].tolist(), t_ns)
 
     def scene(self, row, t_ns: int) -> bytes:
         c = self.cols
@@ -139,14 +125,3 @@ class RowMessages:
                 {"cubes": [CubePrimitive(pose=pose, size=size, color=color)]}
             entities.append(SceneEntity(timestamp=ts, frame_id=WORLD, id=f"pad/{pad['name']}", **shape))
         return SceneUpdate(entities=entities).encode()
-
-
-def fault_log(event: dict, t_ns: int) -> bytes:
-    """A state change as a foxglove.Log (ERROR for FAULT, WARNING for leaving ENABLED, INFO otherwise)."""
-    dst = str(event.get("dst", ""))
-    level = LogLevel.Error if dst == "FAULT" else (LogLevel.Warning if event.get("src") == "ENABLED" else
-                                                   LogLevel.Info)
-    text = f"{event.get('src', '')} -> {dst}" + (f": {event['reason']}" if event.get("reason") else "")
-    return Log(timestamp=stamp(t_ns), level=level, message=text, name="teleop.loop", file="", line=0).encode()
-
-

@@ -14,6 +14,7 @@ import multiprocessing as mp
 import os
 import time
 
+from teleop.io.recording.foxglove import fault_log
 from teleop.loop.live import channels as lc
 from teleop.loop.live.server import ChannelInfo, FoxgloveServer
 from teleop.io.recording.layout import Layout
@@ -104,7 +105,7 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
         for kind, obj in drain_pipe(conn):
             if kind == "event":
                 t_ns = t0_ns + int(round(float(obj.get("t", 0.0)) * 1e9))
-                payload = lc.fault_log(obj, t_ns)
+                payload = fault_log(obj, t_ns)
                 events.append((t_ns, payload))
                 del events[:-MAX_EVENTS]
                 send(lc.TOPIC_FAULTS, t_ns, payload)

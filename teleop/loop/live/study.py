@@ -18,7 +18,7 @@ import json
 import threading
 import time
 
-from teleop.loop.live.channels import stamp
+from teleop.io.recording.foxglove import stamp
 from teleop.loop.live.server import SUBPROTOCOL, ChannelInfo, FoxgloveServer
 
 SLOTS = "ABCDEFGH"
