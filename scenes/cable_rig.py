@@ -5,7 +5,7 @@ This is the project's simulation of the setup that `teleop diagnose` takes as it
 always has capstan friction over its bend (teleop.core.physics capstan law with stick transitions), the tip
 pulls a linear preloaded spring. On top of it any catalogue effects can be switched on (`effects`), or
 physics outside the catalogue (`OUTSIDE`: a stiffening spring, a pulley eccentricity, a sensor delay), and
-the recording is written as interchange CSV (DESIGN.md) with any subset of the columns, in mm and deg.
+the recording is written as interchange CSV (docs/formats.md) with any subset of the columns, in mm and deg.
 
 It shares with the diagnosis only the physics models (teleop.core.physics); the CSV is written here, not by the
 diagnosis' writer, so a recording from this bench is "made elsewhere" as far as the diagnosis knows.

@@ -1,8 +1,8 @@
 """Silicone catalogue for the pad scenes: the modulus each pad material uses [Pa], its source and mode.
 
 Indentation compresses the pad under the tip, so every silicone here carries a *compression-equivalent*
-Young's modulus (the README of ../shared/data notes compression moduli are 2-3x the small-strain tension
-moduli of the same silicone; tension would make every pad 2-3x too soft):
+Young's modulus (compression moduli are 2-3x the small-strain tension moduli of the same silicone;
+tension would make every pad 2-3x too soft):
 
 - Ecoflex 00-10, 00-30, 00-50: measured uniaxial compression moduli (0 % thinner) from
   `ecoflex_compression_moduli.csv` (abubakardawood/phantom-material-database, CC BY 4.0).
@@ -48,7 +48,7 @@ TIP_RADIUS = 0.0015          # [m] flat tip of the end effector (3 mm shaft end;
 RIGID_CONTACT_STIFFNESS = 1.0e5  # [N/m] cap for rigid contact: 15x Dragon Skin 30, far stiffer than the robot
 SMALL_STRAIN = (0.05, 0.25)  # [-] engineering-strain window of the tensile small-strain fit (past the toe)
 
-# Smooth-On datasheet 100 % moduli [psi] (../shared/data/README.md), kept for the record and the report.
+# Smooth-On datasheet 100 % moduli [psi], kept for the record and the report.
 DATASHEET_100PCT_PSI = {"ecoflex_00_10": 8.0, "ecoflex_00_20": 8.0, "ecoflex_00_30": 10.0,
                         "ecoflex_00_50": 12.0, "dragon_skin_10": 22.0, "dragon_skin_20": 49.0,
                         "dragon_skin_30": 86.0}

@@ -1,4 +1,4 @@
-"""RELIABILITY.md watchdogs, safe state and limits, host side: every item drives the loop into the condition
+"""Watchdogs, safe state and limits (docs/safety.md), host side: every item drives the loop into the condition
 with a manual clock and checks the state, the stylus force and the motion commands tick by tick."""
 
 import os

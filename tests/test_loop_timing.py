@@ -62,7 +62,7 @@ class CostlyStub(Stub):
 
 def test_run_paced_absolute_schedule_and_summary(monkeypatch):
     """30 ticks of 100 us at 1 kHz on a controlled clock: tick k starts k periods after the start, within
-    one spin turn; the summary has the DESIGN.md keys and the period histogram counts every period."""
+    one spin turn; the summary has the loop-timing keys and the period histogram counts every period."""
     import teleop.loop.timing as timing
 
     clock = FakeTime()
@@ -74,7 +74,7 @@ def test_run_paced_absolute_schedule_and_summary(monkeypatch):
     np.testing.assert_allclose(tp.times, np.arange(30) * 1e-3, atol=2e-6)  # within 2 spin turns
     assert np.all(log.lateness[:30] >= 0) and np.all(log.lateness[:30] < 2_000)
     s = log.summary(1000.0)
-    assert {"rate_hz", "ticks", "tick_us", "lateness_us", "deadline_misses", "stages_us"} <= set(s)  # DESIGN.md
+    assert {"rate_hz", "ticks", "tick_us", "lateness_us", "deadline_misses", "stages_us"} <= set(s)  # docs/formats.md
     assert list(s["stages_us"]) == list(STAGES)
     assert sum(s["period_histogram"]["counts"]) + s["period_histogram"]["overflow"] == 29  # 30 starts
     assert abs(s["period_us"]["p50"] - 1000.0) <= 2.0 and s["deadline_misses"] == 0

@@ -1,4 +1,4 @@
-"""Recording (RELIABILITY.md): bit-exact round trip with metadata, damaged files (every truncation, bit
+"""Recording (docs/safety.md): bit-exact round trip with metadata, damaged files (every truncation, bit
 flips) never crash the reader and give back an intact prefix, a slow or full disk only drops rows (counted,
 alarmed, bounded memory) without changing the loop side's timing, and the writer shares no interpreter lock
 with the loop (shown with counters and process ids; time figures belong to `teleop bench loop`)."""

@@ -1,4 +1,4 @@
-"""SIGKILL at random moments (RELIABILITY.md): every file stays readable, at most 0.5 s is lost, and the
+"""SIGKILL at random moments (docs/safety.md): every file stays readable, at most 0.5 s is lost, and the
 surviving records are intact and in sequence. The recorder process is killed 24 times while a producer
 feeds it rows 1 ms apart on their own clock (t = tick x 1 ms); the loss is counted in ticks from the ring's
 counters (pushed, written, made durable), not timed. Then whole sessions (loop process and recorder

@@ -1,6 +1,6 @@
 """Measurements on the emulated link: watchdog stop time (emulated clock) and round-trip latency (wall).
 
-The host goes silent three ways (RELIABILITY.md): the loop pauses (watchdog_trials), the host process is
+The host goes silent three ways (docs/safety.md): the loop pauses (watchdog_trials), the host process is
 killed (kill_trials), the port is closed without a STOP (close_trials); each runs many episodes on one
 emulator and reads every stop time from the harness on the emulated clock.
 

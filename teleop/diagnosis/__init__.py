@@ -5,7 +5,7 @@
 
 Modules, in the order the data flows:
 
-- recording_io: interchange CSV (DESIGN.md) and any layout through a TOML column map (maps/mrdlab.toml);
+- recording_io: interchange CSV (docs/formats.md) and any layout through a TOML column map (maps/mrdlab.toml);
   malformed input -> one-line InputError naming file, line, column. session_export: MCAP sessions -> CSV.
 - links: which links a recording holds (position motor -> tip, the spring law tip travel -> tip force,
   force tip load -> motor, contact indentation -> force) and the simulation of each: an affine map output =
@@ -17,7 +17,7 @@ Modules, in the order the data flows:
   temperature, time, position period, indentation rate/depth) with R^2 evidence and time windows.
 - identify: joint least-squares fits of baseline + effect (bounded parameters of the registry's specs),
   held-out ranking with parsimony and an information criterion, greedy additions; `none` when nothing
-  pays. diagnose: the report (DESIGN.md JSON keys), `unexplained` for structured residual left over.
+  pays. diagnose: the report (JSON keys: docs/formats.md), `unexplained` for structured residual left over.
 - peer: a linear ARX model (numpy least squares), free-run scored on the same held-out split;
   sindy_peer: PySINDy (polynomial + Fourier library, STLSQ; static and free-run forms).
 - crossfile: parameters identified on one recording scored on the others.
@@ -25,6 +25,6 @@ Modules, in the order the data flows:
   the simulated robot and the estimator. feedforward: backlash pre-compensation of position commands.
 - generator, scoring: concealed-effect recordings and the benchmark's confusion matrix.
 
-Plots and reports made from ../shared/data/mrdlab carry: "Contains data from the MRDLab
+Plots and reports made from MRDLab recordings carry: "Contains data from the MRDLab
 mis-tool-characterization dataset, ODbL 1.0."
 """

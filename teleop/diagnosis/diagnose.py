@@ -1,4 +1,4 @@
-"""Diagnose a recording end to end: links -> baseline -> locate -> name effects -> report (DESIGN.md keys).
+"""Diagnose a recording end to end: links -> baseline -> locate -> name effects -> report (JSON keys: docs/formats.md).
 
 `diagnose(rec)` returns a `Diagnosis`: per link the identification result, and `as_dict()` gives the JSON
 object {"recording", "channels", "baseline": {"params", "rmse"}, "findings": [...], "unexplained": [...]}
@@ -204,7 +204,7 @@ class Diagnosis:
         return out
 
     def as_dict(self) -> dict:
-        """The JSON object of DESIGN.md."""
+        """The JSON object of docs/formats.md."""
         channels = {}
         for name, x in self.rec.channels.items():
             channels[name] = {"unit": self.rec.units[name]}

@@ -1,4 +1,4 @@
-"""Recordings in and out: the interchange CSV of DESIGN.md and other layouts through a TOML column map.
+"""Recordings in and out: the interchange CSV (docs/formats.md) and other layouts through a TOML column map.
 
 A `Recording` holds time `t` (n,) [s] and named channels in SI units (m, rad, N, N m; temperature in C).
 Canonical channel names: motor_pos, tip_pos, actuator_pos, motor_force, tip_force, bend_angle,

@@ -1,4 +1,4 @@
-"""Safety monitors of the loop (RELIABILITY.md "Watchdogs" and "Limits"): each returns a fault reason or None.
+"""Safety monitors of the loop (docs/safety.md): each returns a fault reason or None.
 
 Monitors hold a little state and are updated once per tick with the host time `now` [s]; none of them
 trips on a single noisy sample: a condition must persist for its window.

@@ -13,11 +13,11 @@ import numpy as np
 
 from teleop.loop.core import STAGES
 
-LATE_NS = 500_000  # a tick more than 0.5 ms late is a deadline miss at 1 kHz (RELIABILITY.md)
+LATE_NS = 500_000  # a tick more than 0.5 ms late is a deadline miss at 1 kHz (docs/safety.md)
 
 
 def late_threshold_ns(rate_hz: float) -> int:
-    """Lateness [ns] beyond which a tick is a deadline miss: half a period (0.5 ms at 1 kHz, RELIABILITY.md;
+    """Lateness [ns] beyond which a tick is a deadline miss: half a period (0.5 ms at 1 kHz, docs/safety.md;
     0.125 ms at 4 kHz)."""
     return int(round(0.5e9 / rate_hz))
 
@@ -112,7 +112,7 @@ BUDGET_RATES_HZ = (1000.0, 4000.0)  # the loop rates the timing budget is checke
 
 def budget_verdict(summary: dict, seconds: float, recording: bool, max_fraction: float = 0.001,
                    min_seconds: float = 60.0, rates_hz: tuple = BUDGET_RATES_HZ) -> dict:
-    """The RELIABILITY.md timing budget on a loop summary: <= max_fraction of ticks more than half a period
+    """The timing budget of docs/safety.md on a loop summary: <= max_fraction of ticks more than half a period
     late (skipped deadlines count), over >= min_seconds [s] at one of rates_hz [Hz] with recording on.
 
     `pass` is the criterion on the misses; `conclusive` says whether the run was long enough, at a budget rate
@@ -162,7 +162,7 @@ class TimingLog:
         return np.diff(self.start[:self.n])
 
     def summary(self, rate_hz: float) -> dict:
-        """The `teleop bench loop` JSON body (DESIGN.md) for the ticks logged so far, plus the period
+        """The `teleop bench loop` JSON body (docs/formats.md) for the ticks logged so far, plus the period
         statistics ("period_us": mean, p50, p99, p999, max, min) and histogram ("period_histogram")."""
         n = self.n
         lat, tick = self.lateness[:n], self.tick[:n]

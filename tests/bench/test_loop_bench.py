@@ -1,4 +1,4 @@
-"""`teleop bench loop`: DESIGN.md JSON keys plus the period histogram, the budget verdict and the PNG, on a
+"""`teleop bench loop`: its JSON keys plus the period histogram, the budget verdict and the PNG, on a
 short run (the budget itself needs --seconds 60: a benchmark, never asserted here)."""
 
 import json

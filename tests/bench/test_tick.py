@@ -1,4 +1,4 @@
-"""`teleop bench tick`: JSON keys (DESIGN.md), bad arguments, fast tick == reference; no wall-clock assertions."""
+"""`teleop bench tick`: JSON keys (docs/formats.md), bad arguments, fast tick == reference; no wall-clock assertions."""
 
 import json
 

@@ -58,7 +58,7 @@ def test_never_worse_than_a_single_play_operator(tmp_path, seed, amp_deg, gain, 
 
 @pytest.mark.parametrize("path", [EXAMPLE_MRDLAB / "tool4_left_43_first8s.TXT",
                                   pytest.param(MRDLAB / "tool4_left_20.TXT", marks=needs_mrdlab)],
-                         ids=["excerpt in examples/", "full run in ../shared"])
+                         ids=["excerpt in examples/", "full MRDLab run"])
 def test_mrdlab_position_columns_only(tmp_path, path):
     full = read_recording(path, "mrdlab")
     chans = {k: full.channels[k] for k in ("motor_pos", "tip_pos")}

@@ -1,11 +1,11 @@
-"""`teleop bench loop`: the paced master-slave loop's timing (DESIGN.md JSON), recording on by default.
+"""`teleop bench loop`: the paced master-slave loop's timing (JSON keys: docs/formats.md), recording on by default.
 
     teleop bench loop --seconds 60 --rate 1000 --json loop.json --plot loop.png
     teleop bench loop --find-max-rate --seconds 10 --json maxrate.json
 
-Besides the DESIGN.md keys the JSON has "period_us" (mean, p50, p99, p999, max, min of the tick-to-tick
+Besides the loop-timing keys the JSON has "period_us" (mean, p50, p99, p999, max, min of the tick-to-tick
 period), "period_histogram" (bins of T/20 over [0, 3 T) and an overflow count), printed as a text histogram,
-and "budget": the RELIABILITY.md check (<= 0.1 % of ticks more than 0.5 ms late, skipped deadlines
+and "budget": the timing budget of docs/safety.md (<= 0.1 % of ticks more than 0.5 ms late, skipped deadlines
 counted). The check is conclusive only with `--seconds 60` (or more) at `--rate 1000` with recording on;
 the default 10 s run prints PASS/FAIL marked "not conclusive" and why. The exit code is 0 either way
 (a benchmark, not a test). `--plot F` writes the period histogram as a PNG.
@@ -20,7 +20,7 @@ from teleop.apps.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, 
                              rt_priority)
 from teleop.core.errors import InputError
 
-MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (RELIABILITY.md)
+MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (docs/safety.md)
 
 
 def register(subparsers) -> None:

@@ -1,4 +1,4 @@
-"""`teleop bench sim`: the simulation's real-time factor, unpaced (DESIGN.md: >= 20x real time).
+"""`teleop bench sim`: the simulation's real-time factor, unpaced (budget, docs/safety.md: >= 20x real time).
 
     teleop bench sim --seconds 60 --seed 0 --json sim.json
 
@@ -53,7 +53,7 @@ import numpy as np
 
 from teleop.core.errors import InputError
 
-BUDGET_FACTOR = 20.0  # DESIGN.md performance budget: simulation >= 20x real time when not paced
+BUDGET_FACTOR = 20.0  # docs/safety.md performance budget: simulation >= 20x real time when not paced
 RATE_HZ = 1000.0  # loop rate [Hz] (the physics step is 1 ms too)
 LOOP_STAGES = ("stylus", "map", "robot", "estimate", "render", "write", "record")  # teleop.loop.core.STAGES
 STAGES = ("stylus", "map", "kinematics", "pybullet_step", "physics_other", "cable_sensor", "robot_io", "estimate",

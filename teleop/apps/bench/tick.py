@@ -14,7 +14,7 @@ garbage collection is off while timing.
 On a machine shared with other processes the wall-clock p99 measures the scheduler more than the tick:
 `--clock cpu` times this thread's CPU time instead, and `--realtime 50` runs under SCHED_FIFO like the loop
 (teleop.loop.timing.set_realtime).
-JSON (DESIGN.md): {"ticks", "tick_us": {"p50","p99","max"}, "reference_tick_us": {"p50","p99","max"},
+JSON (docs/formats.md): {"ticks", "tick_us": {"p50","p99","max"}, "reference_tick_us": {"p50","p99","max"},
 "speedup_p50"}.
 """
 
@@ -242,7 +242,7 @@ def make_ticks(estimator: str = "dynamic", dt: float = 1e-3):
 
 def bench_tick(ticks: int = 20000, estimator: str = "dynamic", seed: int = 0, warmup: int = 1000,
                clock: str = "wall") -> dict:
-    """Interleaved timing of the project and reference full ticks; the DESIGN.md JSON object.
+    """Interleaved timing of the project and reference full ticks; the JSON object of docs/formats.md.
 
     clock: "wall" (time.perf_counter_ns) or "cpu" (time.thread_time_ns: CPU time of this thread, so a tick
     preempted by another process is not charged for the wait).

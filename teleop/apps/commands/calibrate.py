@@ -11,8 +11,8 @@ calibration from a recording and write the calibration file (TOML, docs/formats.
 Prints the fitted values with their standard errors; the plot (fit and residual) goes to --plot, by
 default beside --out with the suffix .png.
 
-No measured FSR or FBG calibration recording exists in the project or in ../shared/data (checked
-2026-11-24): those two fits have run on protocols generated from the sensor physics only
+No measured FSR or FBG calibration recording exists in the project: those two fits have run on protocols
+generated from the sensor physics only
 (`python -m teleop.core.calibration.generate DIR` writes them). The one-sensor fit runs on the real MRDLab
 instrument runs (`--map mrdlab`), whose spindle and jaw torques are not one pull-only cable's tensions.
 """

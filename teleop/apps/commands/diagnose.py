@@ -1,5 +1,5 @@
 """`teleop diagnose REC...`: where simulation and recording differ, which physics is missing, and the fit
-once it is modelled (JSON keys of DESIGN.md)."""
+once it is modelled (JSON keys: docs/formats.md)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""`teleop export FILE --csv OUT [--cable N]`: a session as the interchange CSV of DESIGN.md, one cable.
+"""`teleop export FILE --csv OUT [--cable N]`: a session as the interchange CSV (docs/formats.md), one cable.
 
 Columns (one row per robot telemetry frame): t_s (the reading's own time stamp, `t_robot`: when the robot
 sampled it, which rate laws need; the loop's receive time, jittered by scheduling, where the robot's stamps do

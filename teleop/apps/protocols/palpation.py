@@ -385,7 +385,7 @@ class PalpationResult:
     cpu_s: float = 0.0
 
     def to_json(self) -> dict:
-        """The DESIGN.md JSON object (wall time left out: same seed, same bytes)."""
+        """The JSON object of docs/formats.md (wall time left out: same seed, same bytes)."""
         from scenes.materials import ATTRIBUTION
 
         return {"test": self.test, "speed_profile": self.profile, "seed": self.seed,

@@ -1,7 +1,7 @@
 """One sensor for all cables (seed 001 sec. 2.2, eq 7): Kp, Kr and the transition widths of one
 instrumented cable, from its proximal (motor) and distal (tip) force.
 
-The recording is interchange CSV (DESIGN.md) with `motor_force_N` and `tip_force_N` (or N m), or any
+The recording is interchange CSV (docs/formats.md) with `motor_force_N` and `tip_force_N` (or N m), or any
 layout through a column map (`--map`, e.g. the shipped `mrdlab`). The fit is
 `teleop.core.sensors.fit_proximal_distal` (line fits of the pulling and releasing phases, then least squares
 of the play-operator prediction); this module adds standard errors (cov = s^2 (J^T J)^-1, J by central

@@ -1,4 +1,4 @@
-"""The estimators' names (DESIGN.md) and the `dynamic` estimator's friction parameters.
+"""The estimators' names (docs/formats.md) and the `dynamic` estimator's friction parameters.
 
 - non_compensated: f = -A t_fsr.
 - single: capstan compensation per cable (seed 000 eq 7), Theta_i = theta_i (eq 6) + theta0, direction from

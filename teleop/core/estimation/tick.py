@@ -42,7 +42,7 @@ COUNTS_KERNELS = {"dynamic": K.counts_dynamic}
 
 
 class TickComputer:
-    """One tick's compute for the loop (see module docstring). `name` is the estimator's DESIGN.md name:
+    """One tick's compute for the loop (see module docstring). `name` is the estimator's name (docs/formats.md):
     non_compensated, single, double (needs `turn`) or dynamic (`dynamic` parameters)."""
 
     def __init__(self, geom: Geometry, estimator: str = "dynamic", *, turn: TurnCompensation | None = None,

@@ -1,4 +1,4 @@
-"""teleop/core/physics: transmission, sensor and contact effects, one small model each (DESIGN.md catalogue).
+"""teleop/core/physics: transmission, sensor and contact effects, one small model each (docs/architecture.md).
 
 Every effect is registered under its canonical name and used three ways:
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from teleop.io.recording.layout import Layout
 
-LATE_US = 500.0  # a tick more than this late is a miss (RELIABILITY.md)
+LATE_US = 500.0  # a tick more than this late is a miss (docs/safety.md)
 
 
 class SecondStats:

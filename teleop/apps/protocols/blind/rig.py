@@ -58,7 +58,7 @@ class RigOptions:
     Attributes:
         compensation: render the friction-compensated, Kalman-filtered wrench (the project's `dynamic`
             estimator); False renders the raw FSR wrench f = -A t (ablation).
-        estimator: DESIGN.md estimator name used when compensation is on.
+        estimator: estimator name (docs/formats.md) used when compensation is on.
         force_scale: stylus force per newton of estimated tip force [-]. 0.1 keeps the stiffest area
             stable in the hand: rigid PLA renders 0.1 * 0.5 * 9.1e3 = 455 N/m, and with the chain's ~7 ms
             lag (see kalman_bandwidth) that feeds the hand a negative damping K tau = 3.2 N s/m, half the

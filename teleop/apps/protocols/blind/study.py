@@ -190,7 +190,7 @@ class StudyResult:
         return out
 
     def to_dict(self) -> dict:
-        """The JSON of DESIGN.md: per participant order and ratings, "mean", "std", "correct_ranking_rate",
+        """The JSON (docs/formats.md): per participant order and ratings, "mean", "std", "correct_ranking_rate",
         "kendall_tau_mean", plus Kendall's W, the rendered and true stiffness and the seed's Table 3."""
         ms = self.mean_std()
         rendered = self.rendered_stiffness()
