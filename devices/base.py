@@ -24,7 +24,7 @@ def _direct_init(cls):
     """Give the frozen dataclass `cls` an __init__ that writes the instance's __dict__ directly instead of calling
     object.__setattr__ once per field (the generated __init__ of a frozen dataclass): the same signature,
     defaults and default factories, built from the dataclass's own fields. A reading and a stylus sample are
-    made every tick; this takes RobotReading's construction from ~1.6 us to ~0.8 us."""
+    made every tick, so their construction is on the loop's hot path."""
     names, params, env = [], [], {"_MISSING": dataclasses.MISSING}
     for f in dataclasses.fields(cls):
         names.append(f.name)

@@ -180,7 +180,7 @@ class PadWorld:
             self._cid = c.createConstraint(self.body, -1, -1, -1, pb.JOINT_FIXED, [0, 0, 0], [0, 0, 0], start)
             c.changeConstraint(self._cid, start, maxForce=1e4)
         cid = c._client
-        # pybullet's calls with their arguments bound by position (keywords cost ~0.3-0.9 us more a call:
+        # pybullet's calls with their arguments bound by position (keywords cost more a call, and there are
         # five calls per step); the tip's own queries bind the body too
         self._tip_pos = functools.partial(pb.getBasePositionAndOrientation, self.body, cid)
         self._tip_vel = functools.partial(pb.getBaseVelocity, self.body, cid)

@@ -12,8 +12,8 @@ from teleop.core.mapping import MappingParams
 from teleop.core.rendering import RenderParams
 
 # the loop's rendering defaults: CHAI3D engage (0.2 N for 3 ticks), 0.25 s ramp-in, passivity damper off (the
-# seed's force path; through the blind-test rig the observer damps ~40 % of a poke's ticks and lowers the
-# rendered loading stiffness by ~30 %, so it is opt-in: render.alpha_max, `teleop session --passivity-damping`)
+# seed's force path; through the blind-test rig the observer damps many of a poke's ticks and lowers the
+# rendered loading stiffness, so it is opt-in: render.alpha_max, `teleop session --passivity-damping`)
 LOOP_RENDER = RenderParams(scale=1.0, zero_negative_z=False, engage_N=0.2, engage_ticks=3, ramp_s=0.25,
                            alpha_max=0.0)
 

@@ -189,10 +189,9 @@ class TimingLog:
 def default_spin_us(rate_hz: float) -> float:
     """Spin before each deadline [us]: 200 us, at most half the period. A SCHED_FIFO loop that spins
     through the whole period (200 us of a 250 us period at 4 kHz) hits the kernel's real-time throttle
-    (sched_rt_runtime_us: 950 ms of each second) and is stopped for ~50 ms every second: 5 % of the ticks
-    (measured: 5.6 % late at 4 kHz). Less spin means more sleeps, whose wake-ups this shared virtual machine
-    sometimes delays by milliseconds (4 kHz, 30 s runs interleaved: 0.081-0.087 % late with 50 us of spin,
-    0.044-0.053 % with 150 us); half the period keeps the loop's core busy ~70 % at 4 kHz."""
+    (sched_rt_runtime_us: 950 ms of each second) and is stopped for ~50 ms every second: 5 % of the ticks.
+    Less spin means more sleeps, whose wake-ups a shared virtual machine sometimes delays by milliseconds;
+    half the period is the compromise."""
     return min(200.0, 0.5e6 / rate_hz)
 
 

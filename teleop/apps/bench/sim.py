@@ -26,7 +26,7 @@ per tick [us] p50/p99), in the order of the data flow:
   render, write, record   the loop's stages of those names
   loop_other    the tick outside its stages;  harness: clock and trajectory log, outside the tick.
 The stages sum to the wall time. The robot's own stages (kinematics to cable_sensor) need timers inside the
-robot that a session does not have (~3 us a tick, 6 % of it): they run with `--stages` only; without it
+robot that a session does not have (they cost time of their own): they run with `--stages` only; without it
 those stages read 0, robot_io holds the whole ROBOT stage, and the real-time factor is the simulation's.
 
 With the batch path (default; `--no-batch` skips it) the same commanded lengths, one row per reading, are
@@ -74,7 +74,7 @@ def register(subparsers) -> None:
     p.add_argument("--stages", action="store_true",
                    help="split the robot's time (kinematics .. cable_sensor) with timers inside it, which cost "
                         "~3 us a tick: the factor then includes them (the loop's own stages are always timed)")
-    p.add_argument("--no-stages", action="store_true", help=argparse.SUPPRESS)  # the default since 2026-11-24
+    p.add_argument("--no-stages", action="store_true", help=argparse.SUPPRESS)  # the default; kept so older command lines parse
     p.add_argument("--json", metavar="F", help="write the result JSON here")
     p.set_defaults(func=run)
 

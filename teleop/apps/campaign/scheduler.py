@@ -15,15 +15,12 @@ without a nanny); a result is the same bytes wherever it ran.
 A LocalCluster runs with LOCAL_CONFIG: Dask's defaults wake every process many times a second for things a
 batch of long tasks does not use (the statistical profiler samples the task's stack every 10 ms, the event
 loop's tick monitor runs every 20 ms, work stealing every 100 ms, memory and system monitors every 0.1-0.5
-s), and on a machine with as many workers as cores that CPU is taken from the tasks. Measured with a
-LocalCluster of 2 workers, idle for 20 s and running 1 s busy-loop tasks: the client process (scheduler,
-nannies) took 2.7 % of a core with the defaults, 0.6 % with LOCAL_CONFIG; each worker's own threads 0-10 %
-of its tasks' CPU time with the defaults, 1 % with LOCAL_CONFIG. And the workers keep glibc's own heap
-trimming: Dask's nannies spawn workers with MALLOC_TRIM_THRESHOLD_=65536 (to hand freed memory back to the
-system at once), which costs a blind-jnd task 10-15 % more CPU (its small arrays and pybullet's are
-returned and faulted in again): 1.13 and 1.16 s of CPU per task without it, 1.30 and 1.28 s with it, in
-plain processes taking turns. A nanny also leaves that variable in the environment of the process that
-started it; it is kept out while a LocalCluster starts. A cluster behind tcp:// keeps its own settings.
+s), and on a machine with as many workers as cores that CPU is taken from the tasks; LOCAL_CONFIG turns
+them down. And the workers keep glibc's own heap trimming: Dask's nannies spawn workers with
+MALLOC_TRIM_THRESHOLD_=65536 (to hand freed memory back to the system at once), which costs a blind-jnd
+task CPU (its small arrays and pybullet's are returned and faulted in again). A nanny also leaves that
+variable in the environment of the process that started it; it is kept out while a LocalCluster starts.
+A cluster behind tcp:// keeps its own settings.
 """
 
 from __future__ import annotations

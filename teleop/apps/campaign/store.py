@@ -3,7 +3,7 @@
 Layout of DIR:
     tasks/<task id>.json    {"task", "kind", "label", "identity", "teleop_version", "result"}: a finished
                             task (one line, sorted keys, floats as shortest round-trip repr: the same
-                            result is the same bytes; 2.6x smaller than indented)
+                            result is the same bytes)
     failed/<task id>.json   {"task", "kind", "label", "identity", "error", "traceback"}: the last failure
                             of a task not yet finished (removed when it finishes)
     runs.jsonl              one line per run: scheduler, counts, wall and task times (not results)

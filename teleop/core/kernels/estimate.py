@@ -183,8 +183,8 @@ def fsr_tensions(counts, st, deadband, table, out):
 @njit
 def counts_dynamic(counts, fsr, deadband, table, t, pose, dt, cab, c, st, kf, turn, coefs, out):
     """One tick of the `dynamic` estimator (the loop's) from raw FSR counts in one compiled call: fsr_tensions
-    (counts, its state fsr, dead band, table -> t), then estimate_dynamic (a kernel call costs ~0.1 us plus
-    ~0.05 us an array argument: the loop's estimate stage made one call for each). Counts may be int64 (a
+    (counts, its state fsr, dead band, table -> t), then estimate_dynamic (one call instead of two: every
+    kernel call pays for its argument handling). Counts may be int64 (a
     robot's ADC) or float64. Returns fsr_tensions' count of tensions left NaN (then nothing is estimated: the
     caller converts those counts and calls estimate_dynamic itself)."""
     missing = fsr_tensions(counts, fsr, deadband, table, t)

@@ -102,9 +102,9 @@ def forward_kinematics(L, q, free, r, B, tol, max_iter):
     [m]; only the coordinates listed in `free` move (an axial geometry fixes the roll alpha). Gauss-Newton
     with a forward-difference Jacobian (h = 1e-7) and step halving while the residual grows. Stops when the
     largest length residual is below tol [m], or when the Gauss-Newton step is (every coordinate below tol,
-    [m] and [rad]): lengths that no pose has exactly (the loop's per-cable step limit: 12 % of `teleop bench
-    sim`'s ticks, residuals up to 4e-9 m) have reached their least-squares pose, and further steps are
-    round-off (measured: steps of 2e-5, 3e-7, 1e-14, then 1e-22 after every halving). Returns the largest
+    [m] and [rad]): lengths that no pose has exactly (the loop's per-cable step limit: residuals of a few
+    nm) have reached their least-squares pose, and further steps are
+    round-off (steps shrink to 1e-14 m and below, halving after halving). Returns the largest
     length residual [m] reached. (The Jacobian's position columns reuse the orientation's platform offsets
     of q, `off_q`: the same numbers as recomputing them, without the trigonometry.)"""
     n, m = L.shape[0], free.shape[0]

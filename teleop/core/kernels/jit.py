@@ -10,8 +10,8 @@ warning line; numba itself would refuse to import them).
 
 Cache freshness: a kernel's cached machine code holds the kernels it calls, compiled in, but numba checks
 only the kernel's own file (its time stamp and size). A change in a callee's module (linalg.py under
-geometry.py's forward kinematics) left the old code running from the cache (measured: a fresh compile gave
-contact forces 5e-13 N apart). So every kernel's cache is stamped with a hash of all the kernel sources
+geometry.py's forward kinematics) left the old code running from the cache (a fresh compile gave other
+contact forces). So every kernel's cache is stamped with a hash of all the kernel sources
 (`_kernels_stamp`): any change to any of them recompiles all, once.
 """
 

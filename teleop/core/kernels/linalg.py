@@ -1,7 +1,7 @@
 """Small dense linear algebra for the kernels (6 x 6 at most): Gaussian elimination written out.
 
-Why by hand: numba's np.linalg (LAPACK) costs ~10 us per call at this size in allocation and dispatch,
-more than the arithmetic; the loop and the simulated robot call these every tick.
+Why by hand: numba's np.linalg (LAPACK) costs more per call at this size in allocation and dispatch
+than the arithmetic; the loop and the simulated robot call these every tick.
 
 - `solve_into(M, b, x)`: x = M^-1 b from the complete-pivoting factors (M, b left unchanged).
 - `lu_complete(A, LU, p, q)`: P A Q = L U with complete pivoting (rows p, columns q); its rank.

@@ -100,7 +100,7 @@ def fsr_counts(t_fsr, u, grid, gap, c, r_divider, adc_max, noise, counts):
     """One reading of n FSRs: equivalent tensions u (n,) [N] after the tensions t_fsr (n,) [N] at the FSRs
     (u = t_fsr where u is NaN, a first reading: the loading branch), then counts (n,) int64 =
     adc_round(conductance2counts(loading_conductance(u)) + noise) with noise (n,) [counts]. Returns nothing
-    (a returned array is boxed again: ~1 us a call)."""
+    (a returned array would be boxed again on every call)."""
     for i in range(t_fsr.shape[0]):
         ui = t_fsr[i] if u[i] != u[i] else branch_lag(u[i], t_fsr[i], grid, gap)
         u[i] = ui

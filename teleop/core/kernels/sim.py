@@ -5,7 +5,7 @@ the cable chain tip tensions -> FSR-side tensions, built from the shared kernels
     cable_sensor: tension distribution at A (A t + f = 0, one-dimensional null space closest to t_ref),
         then per cable the capstan with stick transitions along the motor position x = -length
     reading: one reading after the physics steps (contact wrench, motor steps, cable_sensor) in one call:
-        a kernel call costs ~1 us of argument handling, several per reading added up to a tenth of the
+        every kernel call pays for its argument handling, and several per reading added up in the
         closed-loop simulation's tick
     reading_counts: reading and, with nothing between the cable and its FSR, the FSRs' ADC counts
         (sensor.fsr_counts) in the same call

@@ -1,7 +1,6 @@
 """Kernel of the recorder's tap (teleop.loop.tap.RowTap): one tick's numbers copied into the preallocated row
-in one compiled call (a numpy store per signal cost ~10 us a tick, a third of a 4 kHz tick's budget).
-`sim_log_row` does the same for `teleop bench sim`'s trajectory log (its seven numpy row stores cost ~3 us a
-tick, 5 % of the simulation's wall time).
+in one compiled call (instead of a numpy store per signal, whose overhead a 4 kHz tick cannot afford).
+`sim_log_row` does the same for `teleop bench sim`'s trajectory log (instead of seven numpy row stores).
 
 `o` holds the first column of each signal (indices below, from the session layout); blocks whose source is
 absent this tick (no stylus sample, no command, no reading) keep their previous values, as before.

@@ -42,8 +42,9 @@ Catalogue (registry key: inputs -> output, parameters):
 
 The pure math lives in module-level functions (capstan_out/capstan_in, tip2motor/motor2tip and their
 `_transitions` forms, backlash, cable_stretch, coulomb, viscous, stribeck, dahl, hysteresis_offset,
-thermal_offset, linear_force, hertz_force, sls_force, damped_force). Stateful models are solved over whole
-signals by vectorised prefix scans (`scan.py`), not Python loops.
+thermal_offset, linear_force, hertz_force, sls_force, damped_force). Stateful models run over whole
+signals without Python loops (`scan.py`: compiled clamp loops for the play operators, prefix scans for
+first-order recurrences).
 """
 
 from teleop.core.physics.base import (CHANNELS, REGISTRY, Effect, ParamSpec, Signals, Step, chain, get_effect,

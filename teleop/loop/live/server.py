@@ -3,10 +3,10 @@ bounded queues and an exact drop counter.
 
 Why not foxglove-sdk's own server (foxglove.start_server): it serves the same protocol and drops the oldest
 message when a viewer's outbox is full (`message_backlog_size`), but it reports no count of what it dropped.
-Measured with foxglove-sdk 0.30.3: 200 000 messages logged while a subscribed `websockets` client stopped
-reading for 3 s; 16 933 arrived and the only trace of the rest was one log line "outbox for client ... full".
-The issue asks for a drop counter, so the transport is this small server; the messages themselves use
-foxglove-sdk's well-known schemas (foxglove.messages: SceneUpdate, FrameTransforms, Log) and its encoders.
+With a subscribed client that stopped reading, the only trace of what it lost was one log line "outbox
+for client ... full". The issue asks for a drop counter, so the transport is this small server; the
+messages themselves use foxglove-sdk's well-known schemas (foxglove.messages: SceneUpdate, FrameTransforms,
+Log) and its encoders.
 
 Protocol (https://github.com/foxglove/ws-protocol, v1): on connect the server sends `serverInfo` and
 `advertise`; the client sends `subscribe` {id, channelId} / `unsubscribe`; each message goes out as a binary

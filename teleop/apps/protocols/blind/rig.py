@@ -18,18 +18,14 @@ What limits transparency (what the participants can feel). A transparent chain s
 force_scale * motion_scale * k_tip k / (k_tip + k) (`expected_stiffness`): the pad k in series with the
 simulated robot's own stiffness k_tip (scenes.sim_robot tip_stiffness, 1e4 N/m). `teleop blind-test
 --transparency` presses each area at 10, 20 and 30 mm/s and fits the same loading slope to three forces
-against the stylus displacement: the robot's ground-truth contact force (x force scale) matches the
-transparent chain within 10 % on every area at every speed, so the robot's compliance is all in
-`expected_stiffness`, and the device does not limit (455 N/m on rigid is under a Touch's 1.02 N/mm, the
-presses under its 0.88 N). What departs from it is the estimate: the rendered force lags the contact by
-~7 ms (6 ms in the FSR chain and friction compensation, ~1 ms in the 80 Hz Kalman filter), so on rigid,
-whose press is over in ~40 ms of contact, the force goes on rising while the stylus stops and the slope
-reads 11-18 % high (505-535 N/m against 455); Dragon Skin 30 reads 6-7 % high; and at slow presses
-(10 mm/s) the friction compensation, which holds its tip-tension estimate while a cable creeps through
-the capstan's stick transition, makes the two Ecoflex areas read ~30 % high (49 and 25 N/m against 38 and
-19). At the participants' 20 mm/s the neighbour ratios stay within 15 % of the transparent chain's.
-With the Kalman filter at the loop's 8 Hz or at 20 Hz the lag (26 / 12 ms) dominates instead: see
-RigOptions.kalman_bandwidth.
+against the stylus displacement: the robot's ground-truth contact force (x force scale), the transparent
+chain's and the rendered force. The robot's compliance is all in `expected_stiffness`, and the device does
+not limit (455 N/m on rigid is under a Touch's 1.02 N/mm). What departs from it is the estimate: the
+rendered force lags the contact (the FSR chain and friction compensation, then the Kalman filter), so on
+rigid, whose press is short, the force goes on rising while the stylus stops and the slope reads high; and
+at slow presses the friction compensation, which holds its tip-tension estimate while a cable creeps
+through the capstan's stick transition, makes the two Ecoflex areas read high. With a slower Kalman filter
+its lag dominates instead: see RigOptions.kalman_bandwidth.
 """
 
 from __future__ import annotations
@@ -66,18 +62,15 @@ class RigOptions:
             holding a haptic handle in a typical trial of van Beek et al. 2015, "Haptic perception of
             force magnitude and its relation to postural arm dynamics in 3D", Sci Rep 5:18004). It is
             also well inside a Geomagic Touch's z stiffness (>= 1.02 N/mm, 3D Systems specifications).
-            At 0.2 (rigid 909 N/m, K tau 6.4 N s/m: past the hand's damping) the hand bounces on rigid:
-            `teleop blind-test --participants 10 --seed 1 --force-scale 0.2` renders rigid / Dragon Skin
-            30 at 1.13 (2.27 transparent) and ranks 60 % fully correct (100 % at 0.1).
+            At 0.2 (rigid 909 N/m, K tau 6.4 N s/m: past the hand's damping) the hand bounces on rigid
+            and the ranking suffers (`teleop blind-test --force-scale 0.2`).
         motion_scale: robot displacement per stylus displacement [-].
         gap: pad surface distance ahead of the tip at the home pose [m] (effector brought just over it).
         robot_substeps: physics steps (1 ms) per robot-link exchange: the robot link runs at 1 kHz / this.
             1: the loop's own default (LoopParams.robot_rate_hz None: a robot exchange every 1 kHz tick)
             and the simulated robot's reading rate, so the estimator sees every FSR sample. The rendering
-            lag is hardly the link's (with the 80 Hz filter ~7 ms at 1 kHz, ~8 ms at 250 Hz, measured
-            against the ground-truth contact force): `teleop blind-test --participants 10 --seed 1
-            --robot-substeps 4` (250 Hz) ranks 100 % fully correct with neighbour ratios within 7 % of
-            the transparent chain, like 1 kHz (6 %), in 15 s of wall time instead of 22-27 s.
+            lag is hardly the link's, so a slower link (`--robot-substeps 4`: 250 Hz) ranks as well, in
+            less wall time.
         settle: time the chain runs before a participant's first poke (engage + force ramp-in) [s].
         hold: time the participant holds at the deepest point [s].
         release_speed: stylus speed back to rest after a poke [m/s].
@@ -92,14 +85,11 @@ class RigOptions:
             force), and a spring rendered with a delay tau feeds the hand a negative damping K tau. At
             80 Hz the filter adds ~1 ms: rigid's 455 N/m x 7 ms = 3.2 N s/m, half the hand's 6 N s/m
             (see force_scale), and a press on rigid, over in ~40 ms of contact, renders about what the
-            unfiltered estimate shows (`teleop blind-test --transparency`: 535 / 505 / 515 N/m at 10 / 20
-            / 30 mm/s against 455 N/m transparent). What it lets through is small: the FSR noise (0.02 N
-            per cable, ~0.03 N on the tip unfiltered) is under a sixth of what the stylus detection
-            threshold (0.02 N) means at the tip (0.2 N at force scale 0.1). The loop's 8 Hz default lags
-            26 ms; at 20 Hz (12 ms) rigid renders 154 / 548 / 547 N/m over the same speeds (`--transparency
-            --kalman-bandwidth 20`): its presses spread with the participants' speed, and `teleop
-            blind-test --participants 10 --seed 1 --kalman-bandwidth 20` ranks 70 % fully correct
-            (rigid / Dragon Skin 30 rendered at 1.70, 2.27 transparent) against 100 % at 80 Hz.
+            unfiltered estimate shows (`teleop blind-test --transparency`). What it lets through is
+            small: the FSR noise (0.02 N per cable, ~0.03 N on the tip unfiltered) is under a sixth of
+            what the stylus detection threshold (0.02 N) means at the tip (0.2 N at force scale 0.1).
+            The loop's 8 Hz default lags far more; at 20 Hz the slope rendered on rigid spreads with the
+            participants' speed and the ranking suffers (`--transparency --kalman-bandwidth 20`).
         sensor: the robot's tension sensors (teleop.core.sensors.SENSOR_KINDS: fsr, fbg, one; scenes.sim_sensors).
     """
 
