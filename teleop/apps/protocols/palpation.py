@@ -68,12 +68,12 @@ class PalpationParams:
         turn_deadband: dead band of `double`'s turn detectors [m] (teleop.core.estimation.turn): 1 nm, far above
             the forward kinematics' round-off (along an axis the tip does not move, the pose wiggles by
             ~1e-17 m; with no dead band every wiggle was a turn, so the x and y fits fired through every z
-            move: x/y MAE 0.41 N) and far below one reading's travel (>= 2.5 um at 100 Hz and 0.25 mm/s).
+            move) and far below one reading's travel (>= 2.5 um at 100 Hz and 0.25 mm/s).
         turn_level_tail: the last fraction of each half cycle of the no-load run whose mean is the settled
             level of `double`'s turn fit: 0.1, the wrench just before the next turn. Along y two cables'
             lengths pass an extremum at the hole's centre and reverse mid-stroke; the second half of the half
             cycle (the former level) held their transition, so the y fit never settled (a 20 s jump segment)
-            and `double` read the y pokes +0.07 to +0.11 N high.
+            and `double` read the y pokes high.
         sensor: the robot's tension sensors (teleop.core.sensors.SENSOR_KINDS): fsr (the FSR array, the four
             estimators), fbg (a distal FBG per cable) or one (the FSR array and cable 0's FBG, seed 001's
             sensor-model approach); teleop.apps.protocols.palpation_sensors.
