@@ -417,7 +417,7 @@ class SimRobot(ContextDevice):
     def _noise_rows(self, m: int) -> np.ndarray:
         """(m, n) ADC noise [counts], N(0, noise_counts): the next m rows of the seeded stream, drawn 1024 rows
         at a time (Generator.normal fills element by element: the numbers of drawing m rows when needed; a
-        draw costs ~1 us whatever its size). The rows are views of a block that is replaced, never written."""
+        draw has a fixed cost whatever its size). The rows are views of a block that is replaced, never written."""
         buf, i = self._nbuf, self._nbuf_i
         if i + m > len(buf):
             fresh = self.rng.normal(0.0, self.params.noise_counts, (max(m, 1024), buf.shape[1]))

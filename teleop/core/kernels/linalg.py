@@ -10,8 +10,8 @@ than the arithmetic; the loop and the simulated robot call these every tick.
   residual of the rows beyond the rank (0 when b is in the range of A).
 - `horner(c, s)`: the power series sum c_j s^j (numpy.polynomial.polynomial.polyval's order of operations).
 - `interp1(x, xp, fp)`: np.interp at one float x (numpy's formula and edge cases, as numba's facsimile of
-  numpy's arr_interp): numba's np.interp boxes a scalar x into arrays, ~75 ns a call against ~10 ns; the
-  simulated FSRs interpolate six times a reading.
+  numpy's arr_interp): numba's np.interp boxes a scalar x into arrays, which costs more than the
+  interpolation; the simulated FSRs interpolate six times a reading.
 """
 
 from __future__ import annotations
