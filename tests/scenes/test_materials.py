@@ -33,7 +33,7 @@ def test_tensile_fit_is_a_small_strain_slope():
     e, s = read_tensile(data_dir() / "tensile_dragon_skin_30.csv")
     E = small_strain_modulus(e, s)
     assert 3e5 < E < 6e5  # Dragon Skin 30 small-strain tension, a few hundred kPa
-    # compression-equivalent is 2-3x tension (README)
+    # compression-equivalent is 2-3x tension (scenes/materials.py)
     assert 2.0 < get_material("dragon_skin_30").E / E < 3.0
 
 
