@@ -26,48 +26,36 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from teleop.diagnosis.links import (LinkData, LinkModel, effect_signals, fast_replace, fit_baseline,
-                                   is_contact_law, moves, predict)
+                                   is_contact_law, predict)
 from teleop.core.physics import REGISTRY, get_effect
+from teleop.core.physics.base import LinkRecord
 
 ACCEPT = 1.20        # held-out RMSE must fall by >= 20 % for an effect to be named
 PARSIMONY = 0.08     # candidates within 8 % of the best held-out RMSE count as equally good (a
                      # discontinuous model's switching time is noise-limited: smoother relatives win a
                      # few per cent at reversals without being the physics)
 MAX_EFFECTS = 3      # per link
-#: starts of a fit that adds the effect: the Stribeck curve's peak and its velocity scale have basins of their
-#: own (a sine's low-speed stretches are short: from its data-driven guess a fit can settle on half the
-#: peak at twice the speed, 3.3x the fit part's RMSE of the right one; generator seed 2, case 56)
-STARTS = {"stribeck_friction": 6}
 FIT_SAMPLES = 2000   # fits run on the fit part decimated to about this many samples (stateful effects
                      # integrate along the smoothed drive, exact on monotone stretches); scores use all
 MIN_FIT_RATE_DT = 0.01  # ... but never decimated below 100 Hz (reversal timing), so long records fit more
-# never candidates: the contact baseline law itself, and time drift (no physical cause named: a drift
-# with time and no temperature channel is reported as unexplained, correlate "time")
-EXCLUDED = ("linear_contact", "thermal_drift_time")
-ALTERNATIVES_TO_CAPSTAN = ("pulley_friction",)
+
+
+def record(d: LinkData) -> LinkRecord:
+    """What an effect's rules (physics Rules) read of link data d."""
+    return LinkRecord(d.u, d.y, d.x, d.theta, d.temperature, d.u if d.link.through_spring else d.y, d.resolution_s)
 
 
 def fixed_params(d: LinkData, name: str, general: bool = False, direction: float = 1.0) -> dict:
-    """Parameters held fixed when fitting `name` on link data d: those identifiable only as a product or
-    sum with another (capstan theta with mu, unless a bend-angle channel is recorded; a pulley chain's
-    wrap with its mu; the thermal T0 with the baseline offset; backlash's reference position with its
-    width), the parameters of the effect's general
-    form at their plain defaults (ParamSpec.shape) unless `general`, and those the recording's metadata
-    says the user's simulation already has (`LinkData.known`)."""
-    out = {} if general else get_effect(name).plain_form()
-    if name == "capstan_friction" and not (d.theta is None and "mu" in d.known.get(name, {})):
-        # theta with mu: only the product shows; a known mu (the user's simulation has it) and no recorded
-        # bend leave the wrap to be fitted
-        out["theta"] = get_effect(name).spec("theta").default
-    elif name in ("pulley_friction", "pulley_elongation"):   # mu and the wrap: only their product shows
-        out["wrap"] = get_effect(name).spec("wrap").default
-    elif name == "thermal_drift" and d.temperature is not None:
-        out["T0"] = float(np.mean(d.temperature))
-    elif name == "backlash":   # the general form's width holds at the record's mean tip position
-        out["x_ref"] = float(np.mean(d.u if d.link.through_spring else d.y))
-    elif name == "parallel_spring" and d.x is not None:   # counted from the record's mean drive position
-        out["x_ref"] = direction * float(np.mean(d.x))
-    return {**out, **d.known.get(name, {})}
+    """Parameters held fixed when fitting `name` on link data d: the effect's own (Rules.hold: those
+    identifiable only as a product or sum with another, references counted from the record), the
+    parameters of the effect's general form at their plain defaults (ParamSpec.shape) unless `general`,
+    and those the recording's metadata says the user's simulation already has (`LinkData.known`)."""
+    eff = get_effect(name)
+    known = d.known.get(name, {})
+    out = {} if general else eff.plain_form()
+    if eff.rules.hold is not None:
+        out.update(eff.rules.hold(record(d), known, direction))
+    return {**out, **known}
 
 
 @dataclass(frozen=True)
@@ -99,9 +87,9 @@ def robust_rms(r: np.ndarray) -> float:
     """RMS of r with Huber's loss: samples within HUBER robust standard deviations (1.4826 MAD) count
     squared, those beyond linearly. The fit part's score for the information criterion and for picking
     among starts: a real recording carries events no model explains (the MRDLab rig switching its
-    reaction torque on 0.5 s into each run holds a large share of the fit part's squared residual), and a
-    plain RMS lets them decide between models that differ everywhere else. Close to `rms` for residuals
-    without such events (Gaussian noise)."""
+    reaction torque on 0.5 s into each run holds 28-43 % of the fit part's squared residual), and a
+    plain RMS lets them decide between models that differ everywhere else. Equal to `rms` for residuals
+    without such events (Gaussian noise: within 0.5 %)."""
     if not r.size:
         return math.nan
     c = HUBER * 1.4826 * float(np.median(np.abs(r - np.median(r))))
@@ -143,7 +131,7 @@ def applicable(d: LinkData, baseline: bool = False) -> list[str]:
         have.add("theta")
     out = []
     for name, eff in sorted(REGISTRY.items()):
-        if eff.link not in d.link.effect_kinds or (name in EXCLUDED and not baseline):
+        if eff.link not in d.link.effect_kinds or (not eff.rules.finding and not baseline):
             continue
         if all(i in have for i in eff.inputs):
             out.append(name)
@@ -233,7 +221,7 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
     best = None
     if len(layout) >= 3:  # three or more shape parameters (Stribeck): local minima, try more starts
         starts = max(starts, 3)
-    starts = max([starts] + [STARTS.get(n, 0) for n in names])
+    starts = max([starts] + [get_effect(n).rules.starts for n in names])
     for s in range(max(starts, 1)):
         w = w0.copy()
         if s > 0:
@@ -277,25 +265,10 @@ def baseline_fit(d: LinkData, fit_idx: slice, hold_idx: slice) -> Fit:
 
 
 def wrong_form(name: str, params: dict, d: LinkData) -> bool:
-    """True when fitted parameters contradict the effect's defining signature (then it is not named):
-    Stribeck means more friction at low speed than in sliding (Fs > Fc); a relaxation faster than the
-    data resolve (tau below twice the inputs' smoothing) is damping, not viscoelasticity; a Dahl transition
-    (length Fc / sigma) shorter than the drive moves in one sample is a jump at the reversal: Coulomb
-    friction, the Dahl law's limit (a near-step Dahl wins a few per cent there by splitting the reversal's
-    sample, which is the rate's discretisation, not a pre-sliding regime)."""
-    if name == "stribeck_friction":
-        return params["Fs"] <= 1.1 * params["Fc"]
-    if name == "viscoelasticity":
-        return params["tau"] < 2.0 * d.resolution_s
-    if name == "dahl_hysteresis" and d.x is not None:
-        return params["Fc"] / params["sigma"] < drive_step(d)
-    return False
-
-
-def drive_step(d: LinkData) -> float:
-    """The drive's typical travel [its unit] in one sample: the median per-sample move while moving."""
-    moving = moves(d.x)
-    return float(np.median(moving)) if moving.size else 0.0
+    """True when fitted parameters contradict the effect's defining signature (Rules.wrong_form; then it
+    is not named)."""
+    rule = get_effect(name).rules.wrong_form
+    return rule is not None and bool(rule(params, record(d)))
 
 
 def _pick(cands: list[Fit], d: LinkData) -> Fit | None:
@@ -366,43 +339,16 @@ def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tup
         fits.append(fit_chain(d, start, names, fit_idx, hold_idx, starts=2, seed=seed))
     except (ValueError, FloatingPointError, np.linalg.LinAlgError):
         pass
-    if "capstan_friction" in names:
-        # the capstan's mu Theta and stick stiffness span decades: also start from a few typical sheaths
-        th = float(np.mean(d.theta)) if d.theta is not None else get_effect("capstan_friction").spec("theta").default
-        span = max(float(np.ptp(d.x)), 1e-12) if d.x is not None else 1.0
-        # within one direction of motion the capstan is proportional: F_m = g e^(+-mu Theta) F_t + c, so
-        # the pulling and releasing samples alone give the gain and mu Theta (the whole record's least
-        # squares can even turn the gain's sign when the hysteresis loop is fat)
-        idx = np.arange(fit_idx.start or 0, fit_idx.stop)
-        sgn = np.sign(np.gradient(d.x))[idx] * start.direction if d.x is not None else np.zeros(idx.size)
-        lines = []
-        for side in (1.0, -1.0):
-            sel = idx[sgn == side]
-            if sel.size > 20:
-                A = np.column_stack([d.u[sel], np.ones(sel.size)])
-                (g_side, c_side), *_ = np.linalg.lstsq(A, d.y[sel], rcond=None)
-                lines.append((g_side, c_side))
-        starts_ = [(abs(start.gain), start.offset)]
-        if len(lines) == 2:   # the pulling side carries the higher motor force: it sets the direction
-            ubar = float(np.mean(d.u[idx]))
-            if lines[0][0] * ubar + lines[0][1] < lines[1][0] * ubar + lines[1][1]:
-                start = LinkModel(start.link, start.gain, start.offset, -start.direction, start.load_sign)
-                lines = lines[::-1]
-        if len(lines) == 2 and lines[0][0] * lines[1][0] > 0:
-            g_mid = math.sqrt(lines[0][0] * lines[1][0]) * math.copysign(1.0, lines[0][0])
-            ratio = abs(lines[0][0] / lines[1][0])
-            mt = 0.5 * abs(math.log(ratio)) if ratio > 0 else 0.1
-            starts_ = [(g_mid, 0.5 * (lines[0][1] + lines[1][1]), mt)]
-        else:
-            starts_ = [(g, c, mt) for g, c in starts_ for mt in (0.1, 0.3)]
-        for g_s, c_s, mu_theta in starts_:
-            band = 2.0 * float(np.mean(np.abs(d.u))) * abs(g_s) * math.sinh(max(mu_theta, 0.02))
-            p0 = {"mu": min(mu_theta / th, 1.4), "theta": get_effect("capstan_friction").spec("theta").default,
-                  "k": max(band / (0.05 * span), 1.0), **fixed_params(d, "capstan_friction")}
+    idx = np.arange(fit_idx.start or 0, fit_idx.stop)
+    for name in names:   # an effect's own starts in a baseline (Rules.baseline_starts: the capstan's lines)
+        rule = get_effect(name).rules.baseline_starts
+        if rule is None:
+            continue
+        others = tuple(n for n in names if n != name)
+        for direction, g_s, c_s, p0 in rule(record(d), idx, start.gain, start.offset, start.direction):
             try:
-                seeded = LinkModel(start.link, float(g_s), float(c_s), start.direction, start.load_sign,
-                                   (("capstan_friction", p0),))
-                others = tuple(n for n in names if n != "capstan_friction")
+                seeded = LinkModel(start.link, g_s, c_s, direction, start.load_sign,
+                                   ((name, {**p0, **fixed_params(d, name)}),))
                 fits.append(fit_chain(d, seeded, others, fit_idx, hold_idx, seed=seed))
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 pass
@@ -421,10 +367,8 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
     base = simulation_baseline(d, fit_idx, hold_idx, baseline, seed)
     ranking = {}
     pool = [n for n in applicable(d) if n not in base.names]
-    if "capstan_friction" in base.names:
-        # a lumped pulley chain's friction is the capstan law plus a constant bending loss on force data
-        # alone: beside a capstan baseline it would rename Coulomb friction, not find the pulleys
-        pool = [n for n in pool if n not in ALTERNATIVES_TO_CAPSTAN]
+    # an effect the baseline's cannot be told apart from is no candidate (Rules.alike)
+    pool = [n for n in pool if not set(get_effect(n).rules.alike) & set(base.names)]
     steps, current, delay = _grow(d, base, (), pool, 0, fit_idx, hold_idx, seed, progress, ranking)
     if not delay and any(s.shape for n in base.names for s in get_effect(n).params):
         steps, current = _general_baseline(d, base, tuple(steps), current, fit_idx, hold_idx, seed)
@@ -440,7 +384,7 @@ def _general_baseline(d: LinkData, base: Fit, steps: tuple, current: Fit, fit_id
     with sharp transitions is the same law as a Coulomb friction beside it, and then the catalogue's name
     stands). It is not added on top of them: beside another friction it absorbs what the recording does
     not carry (the session's Coulomb cable without its bend column, whose wrap varies with the pose: a
-    pretension paid there)."""
+    pretension paid x1.65 there)."""
     alone = general_form(d, base, list(base.names), fit_idx, hold_idx, seed)
     if alone is base or not generalised(base, alone) or not _pays(alone, base):
         return steps, current
@@ -486,15 +430,17 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
                 # a position-only force moves the gain, and the gain multiplies the load's own hysteresis
                 # loop, which a friction already in the chain had taken its share of: the chain refits too
                 f = fit_chain(d, current.model, (name,), fit_idx, hold_idx, seed=seed,
-                              freeze=round_ > 0 and name not in POSITION_ONLY)
-                if name == "backlash" and d.link.kind == "position" and not current.model.effects:
-                    f = min([f] + _play_restarts(d, current.model, fit_idx, hold_idx, seed), key=lambda g: g.rmse_fit)
+                              freeze=round_ > 0 and not position_only(name))
+                restarts = get_effect(name).rules.gain_restarts
+                if restarts and d.link.kind == get_effect(name).link and not current.model.effects:
+                    f = min([f] + _gain_restarts(d, current.model, name, restarts, fit_idx, hold_idx, seed),
+                            key=lambda g: g.rmse_fit)
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 continue
             if round_ == 0:
                 ranking[name] = f
             cands.append(f)
-            if name in POSITION_ONLY:
+            if position_only(name):
                 cands.extend(_curved(d, f, name, fit_idx, hold_idx, seed))
             if progress is not None:
                 progress(1)
@@ -510,7 +456,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
             # paid, the joint one must pay the threshold twice over (the joint refit frees the whole chain)
             joint = []
             for f in sorted(cands, key=lambda g: g.rmse_hold)[:PAIR_TOP]:
-                if _new(current, f)[-1] in POSITION_ONLY:   # fitted with the chain free already
+                if position_only(_new(current, f)[-1]):   # fitted with the chain free already
                     joint.append(f)
                     continue
                 try:
@@ -580,7 +526,7 @@ def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: 
     and a better information criterion. A shape parameter that ends on its plain bound is held there and
     the rest refitted once. Else `pick` as it is."""
     # a position-only effect's general form was a candidate of its own (_curved), under the same rule
-    free = tuple(f"{n}.{s.name}" for n in added if n not in POSITION_ONLY for s in get_effect(n).params if s.shape)
+    free = tuple(f"{n}.{s.name}" for n in added if not position_only(n) for s in get_effect(n).params if s.shape)
     if not free:
         return pick
     for _ in range(2):
@@ -598,15 +544,15 @@ def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: 
     return f
 
 
-def _play_restarts(d: LinkData, start: LinkModel, fit_idx: slice, hold_idx: slice, seed: int) -> list:
-    """Backlash refitted from larger gains: a wide play flattens the affine least-squares gain (the tip
-    stands still over the dead band), so its fit can end at a too-small gain; the gain through the
-    branches is up to 1 / (1 - play fraction) larger."""
+def _gain_restarts(d: LinkData, start: LinkModel, name: str, factors: tuple, fit_idx: slice, hold_idx: slice,
+                   seed: int) -> list:
+    """Effect `name` refitted from the baseline gain times each of `factors` (Rules.gain_restarts: a wide
+    play flattens the affine least-squares gain, so its fit can end at a too-small gain)."""
     out = []
-    for factor in (1.5, 2.5, 4.0):
+    for factor in factors:
         try:
             out.append(fit_chain(d, LinkModel(start.link, start.gain * factor, start.offset, start.direction,
-                                              start.load_sign, (), start.base), ("backlash",),
+                                              start.load_sign, (), start.base), (name,),
                                  fit_idx, hold_idx, seed=seed))
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             pass
@@ -641,12 +587,12 @@ def _change(d: LinkData, pick: Fit, new: list[str]) -> np.ndarray:
 
 
 def periodic_beats(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
-    """True when `pick` adds a position-only effect (POSITION_ONLY) and a sinusoid in position fitted on top
+    """True when `pick` adds a position-only effect (`position_only`) and a sinusoid in position fitted on top
     of `current` (`periodic_rmse`) does as well on held-out data (within PARSIMONY, or better): the spring's
     contribution is by construction a function of position, so its location cannot tell it from a
     pulley's eccentricity; its shape can, where it fits clearly better (a spring's curvature standing in
     for a late load sensor fits no better than the sinusoid)."""
-    return (any(n in POSITION_ONLY for n in _new(current, pick))
+    return (any(position_only(n) for n in _new(current, pick))
             and periodic_rmse(d, current.model, fit_idx, hold_idx) < pick.rmse_hold * (1 + PARSIMONY))
 
 
@@ -662,14 +608,17 @@ def periodic_rmse(d: LinkData, model: LinkModel, fit_idx: slice, hold_idx: slice
     return rms((r - A @ coef)[hold_idx])
 
 
-#: effects that are a function of the drive position alone: told apart from the load only where the load is
-#: not itself a function of the position, and from a periodic force (an eccentric pulley) by their shape
-POSITION_ONLY = ("parallel_spring",)
+def position_only(name: str) -> bool:
+    """An effect of the drive position alone (Rules.position_only): told apart from the load only where the
+    load is not itself a function of the position, and from a periodic force (an eccentric pulley) by its
+    shape."""
+    return get_effect(name).rules.position_only
+
 LOAD_ALIKE_R2 = 0.95
 
 
 def load_alike(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
-    """True (the candidate is dropped) when `pick` adds a position-only effect (POSITION_ONLY) whose own
+    """True (the candidate is dropped) when `pick` adds a position-only effect (`position_only`) whose own
     contribution the link's load explains (R^2 >= LOAD_ALIKE_R2 on the held-out part): a spring-loaded
     tip's force is its position times the spring rate, and a parallel spring there is a change of the
     baseline gain, or whatever else the gain and a position term can mimic together (a delayed load
@@ -679,7 +628,7 @@ def load_alike(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
     from teleop.diagnosis.locate import r2
 
     new = _new(current, pick)
-    if d.link.kind != "force" or not any(n in POSITION_ONLY for n in new):
+    if d.link.kind != "force" or not any(position_only(n) for n in new):
         return False
     plain = with_plain(pick.model, new)
     change = predict(d, pick.model) - predict(d, plain) if plain != pick.model else _change(d, pick, new)

@@ -23,7 +23,7 @@ from typing import Mapping
 import numpy as np
 
 from teleop.core.kernels.friction import play_mix_run, play_mix_start, play_mix_step
-from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
 from teleop.core.physics.scan import clamp_step, play
 
 TAIL_RATIO = 4.0   # the wide play's width over the main play's
@@ -106,6 +106,11 @@ class BacklashStep(Step):
         return float(y + p["x_ref"])
 
 
+def _hold(rec, known, direction) -> dict:
+    """The general form's width holds at the record's mean tip position."""
+    return {"x_ref": float(np.mean(rec.tip))}
+
+
 BACKLASH = register(Effect(
     name="backlash",
     link="position",
@@ -117,4 +122,8 @@ BACKLASH = register(Effect(
     simulate=_simulate,
     guess=_guess,
     step_class=BacklashStep,
+    # a wide play flattens the affine least-squares gain (the tip stands still over the dead band): refit
+    # from gains up to 1 / (1 - play fraction) larger
+    rules=Rules(channel="tip_pos", primary=("width",), gain_restarts=(1.5, 2.5, 4.0), hold=_hold,
+                draw=lambda rng, s: {"width": rng.uniform(0.08, 0.25) * 2 * s.travel}),
 ))

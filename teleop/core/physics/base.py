@@ -4,7 +4,9 @@
 - `ParamSpec`: one parameter's name, unit, fit bounds, typical value and meaning.
 - `Effect`: one model = pure array function `simulate(signals, params) -> (n,)`, a per-sample `Step`
   class with the same math, a `guess(signals, y) -> params` for fitting, and its parameter specs.
-- `REGISTRY` / `get_effect(name)`: the catalogue by canonical name (DESIGN.md).
+- `Rules`: what the diagnosis, the generators and the docs read of an effect (link channel, primary
+  parameters, what it cannot be told apart from, its fit starts, its generator draw).
+- `REGISTRY` / `get_effect(name)`: the catalogue by canonical name.
 
 Parameters travel as plain ``{name: float}`` dicts so they map one-to-one to JSON and to fit vectors.
 """
@@ -204,6 +206,84 @@ class Step(ABC):
         """Advance one sample and return the output channel's value."""
 
 
+@dataclass(frozen=True, eq=False)
+class LinkRecord:
+    """What an effect's diagnosis rules read of one link's recording: (n,) arrays in SI units, None where
+    the channel is not recorded. u, y: the link's input and output; x: the drive position; tip: the tip's
+    travel (the link's output, or its input where the tip is read through a spring); resolution_s [s]: the
+    shortest time scale the inputs resolve."""
+
+    u: np.ndarray
+    y: np.ndarray
+    x: np.ndarray | None
+    theta: np.ndarray | None
+    temperature: np.ndarray | None
+    tip: np.ndarray
+    resolution_s: float = 0.0
+
+
+def drive_step(x: np.ndarray) -> float:
+    """The drive's typical travel [its unit] in one sample: the median per-sample move while moving."""
+    dx = np.abs(np.diff(x))
+    moving = dx[dx > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)] if dx.size else dx
+    return float(np.median(moving)) if moving.size else 0.0
+
+
+@dataclass(frozen=True)
+class Scale:
+    """The magnitudes a generator draws an effect's parameters against (SI): the drive's half travel
+    [m], the tip load's mean and span [N], the rig's friction level [N] (drawn once per recording), fast
+    and slow drive speeds [m/s] (99th and 25th percentiles of |v| while moving; indentation rates on a
+    pad), the span of the force a sensor reads [N] and of the temperature [K], and a pad's linear
+    stiffness [N/m]."""
+
+    travel: float = 0.0
+    load: float = 0.0
+    load_span: float = 0.0
+    friction: float = 0.0
+    v_fast: float = 0.0
+    v_slow: float = 0.0
+    force_span: float = 0.0
+    temp_span: float = 0.0
+    stiffness: float = 0.0
+
+
+@dataclass(frozen=True)
+class Rules:
+    """An effect's own rules, read by the diagnosis, the generators, the benches and the docs (the catalogue
+    is extended by registering an effect with its rules, in its own module).
+
+    channel: the recording channel the effect shows on in a generated rig ("tip_pos", "motor_force",
+    "force"; a sensor effect: the sensor it sits on by default).
+    primary: the parameters a diagnosis is scored on (the others are nuisance or shape parameters).
+    alike: effects it cannot be told apart from: beside one of them in the baseline it is not a candidate.
+    finding: False for a law that is only ever a baseline, or a change with no physical cause to name.
+    position_only: a function of the drive position alone (told apart from a load that follows the
+    position, and from a periodic force, by its shape only).
+    starts: fit starts when the effect is added (parameters with basins of their own).
+    gain_restarts: factors on the baseline gain to refit from when it is the first effect of its own link
+    (an effect that flattens the affine gain, as a wide play does).
+    hold(record, known, direction) -> {param: value}: parameters held fixed in a fit (those identifiable
+    only as a product or sum with another, and record-relative references); `known` the parameters the
+    user's simulation already has, `direction` +-1 the link's pulling direction.
+    wrong_form(params, record) -> True when fitted values contradict the effect's defining signature.
+    baseline_starts(record, index, gain, offset, direction) -> [(direction, gain, offset, params)]: extra
+    starts when the effect is in a baseline (`index` the fit part's sample indices).
+    draw(rng, scale) -> params: a generator's random parameters, material but not dominant."""
+
+    channel: str = ""
+    primary: tuple[str, ...] = ()
+    alike: tuple[str, ...] = ()
+    finding: bool = True
+    position_only: bool = False
+    starts: int = 1
+    gain_restarts: tuple[float, ...] = ()
+    hold: Callable[[LinkRecord, Mapping[str, float], float], dict] | None = None
+    wrong_form: Callable[[Mapping[str, float], LinkRecord], bool] | None = None
+    baseline_starts: Callable[..., list] | None = None
+    draw: Callable[[np.random.Generator, Scale], dict] | None = None
+
+
 @dataclass(frozen=True)
 class Effect:
     """One named model of the catalogue.
@@ -211,7 +291,8 @@ class Effect:
     name: canonical name (registry key); link: 'position' | 'force' | 'sensor' | 'contact';
     inputs: channels `simulate` and `Step.step` need; optional: channels used when present;
     output: the channel the result stands for (chaining writes it back there);
-    simulate(signals, params) -> (n,) array; guess(signals, y) -> params dict; step_class: Step subclass.
+    simulate(signals, params) -> (n,) array; guess(signals, y) -> params dict; step_class: Step subclass;
+    rules: what the diagnosis, the generators and the docs read of it (`Rules`).
     """
 
     name: str
@@ -224,6 +305,7 @@ class Effect:
     guess: Callable[[Signals, np.ndarray], dict]
     step_class: type
     optional: tuple[str, ...] = field(default=())
+    rules: Rules = field(default=Rules())
 
     @property
     def param_names(self) -> tuple[str, ...]:
@@ -292,8 +374,16 @@ def register(effect: Effect) -> Effect:
         raise ValueError(f"effect '{effect.name}' registered twice")
     if effect.link not in LINKS:
         raise ValueError(f"effect '{effect.name}': link must be one of {LINKS}")
+    unknown = [p for p in effect.rules.primary if p not in effect.param_names]
+    if unknown:
+        raise ValueError(f"effect '{effect.name}': primary parameters {unknown} are not among its parameters")
     REGISTRY[effect.name] = effect
     return effect
+
+
+def unregister(name: str) -> None:
+    """Take effect `name` out of REGISTRY (a throwaway effect registered by a test)."""
+    REGISTRY.pop(name, None)
 
 
 def get_effect(name: str) -> Effect:

@@ -13,6 +13,7 @@ motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)).
 
 from __future__ import annotations
 
+import math
 from typing import Mapping
 
 import numpy as np
@@ -20,7 +21,7 @@ import numpy as np
 from teleop.core.kernels.friction import capstan_play_run, capstan_play_step, capstan_tip_run
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.ufuncs import hold_loop, tip_loop
-from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
 
 
 def capstan_out(T_in, mu, theta):
@@ -174,6 +175,49 @@ class CapstanCompensator:
         return float(F) if self.F.ndim == 0 else self.F.copy()
 
 
+def _hold(rec, known, direction) -> dict:
+    """theta with mu: only the product shows; a known mu (the user's simulation has it) and no recorded
+    bend leave the wrap to be fitted."""
+    return {} if rec.theta is None and "mu" in known else {"theta": PARAMS[1].default}
+
+
+def _baseline_starts(rec, index, gain, offset, direction) -> list:
+    """[(direction, gain, offset, params)]: the capstan's mu Theta and stick stiffness span decades, so a
+    baseline with it also starts from the record's own two lines. Within one direction of motion the
+    capstan is proportional, F_m = g e^(+-mu Theta) F_t + c, so the pulling and releasing samples alone give
+    the gain and mu Theta (the whole record's least squares can even turn the gain's sign when the
+    hysteresis loop is fat); the pulling side carries the higher motor force and sets the direction."""
+    th = float(np.mean(rec.theta)) if rec.theta is not None else PARAMS[1].default
+    span = max(float(np.ptp(rec.x)), 1e-12) if rec.x is not None else 1.0
+    sgn = np.sign(np.gradient(rec.x))[index] * direction if rec.x is not None else np.zeros(index.size)
+    lines = []
+    for side in (1.0, -1.0):
+        sel = index[sgn == side]
+        if sel.size > 20:
+            A = np.column_stack([rec.u[sel], np.ones(sel.size)])
+            (g_side, c_side), *_ = np.linalg.lstsq(A, rec.y[sel], rcond=None)
+            lines.append((g_side, c_side))
+    starts = [(abs(gain), offset)]
+    if len(lines) == 2:
+        ubar = float(np.mean(rec.u[index]))
+        if lines[0][0] * ubar + lines[0][1] < lines[1][0] * ubar + lines[1][1]:
+            direction = -direction
+            lines = lines[::-1]
+    if len(lines) == 2 and lines[0][0] * lines[1][0] > 0:
+        g_mid = math.sqrt(lines[0][0] * lines[1][0]) * math.copysign(1.0, lines[0][0])
+        ratio = abs(lines[0][0] / lines[1][0])
+        mt = 0.5 * abs(math.log(ratio)) if ratio > 0 else 0.1
+        starts = [(g_mid, 0.5 * (lines[0][1] + lines[1][1]), mt)]
+    else:
+        starts = [(g, c, mt) for g, c in starts for mt in (0.1, 0.3)]
+    out = []
+    for g_s, c_s, mu_theta in starts:
+        band = 2.0 * float(np.mean(np.abs(rec.u))) * abs(g_s) * math.sinh(max(mu_theta, 0.02))
+        out.append((direction, float(g_s), float(c_s),
+                    {"mu": min(mu_theta / th, 1.4), "theta": PARAMS[1].default, "k": max(band / (0.05 * span), 1.0)}))
+    return out
+
+
 CAPSTAN_FRICTION = register(Effect(
     name="capstan_friction",
     link="force",
@@ -186,4 +230,5 @@ CAPSTAN_FRICTION = register(Effect(
     simulate=_simulate,
     guess=_guess,
     step_class=CapstanStep,
+    rules=Rules(channel="motor_force", primary=("mu",), hold=_hold, baseline_starts=_baseline_starts),
 ))

@@ -9,7 +9,7 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
 
 
 def cable_stretch(x: np.ndarray, load: np.ndarray, k: float) -> np.ndarray:
@@ -54,4 +54,6 @@ CABLE_COMPLIANCE = register(Effect(
     simulate=_simulate,
     guess=_guess,
     step_class=ComplianceStep,
+    rules=Rules(channel="tip_pos", primary=("k",),
+                draw=lambda rng, s: {"k": s.load_span / (rng.uniform(0.04, 0.12) * 2 * s.travel)}),
 ))

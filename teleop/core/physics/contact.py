@@ -18,7 +18,7 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
 from teleop.core.physics.scan import affine_scan
 
 
@@ -135,13 +135,16 @@ LINEAR_CONTACT = register(Effect(
     name="linear_contact", link="contact", doc="spring pad: F = k d in contact",
     params=(ParamSpec("k", "N/m", 1.0, 1e7, 500.0, "pad stiffness", log=True),),
     inputs=("d",), output="force",
-    simulate=lambda s, p: linear_force(s.d, p["k"]), guess=_linear_guess, step_class=LinearContactStep))
+    simulate=lambda s, p: linear_force(s.d, p["k"]), guess=_linear_guess, step_class=LinearContactStep,
+    rules=Rules(channel="force", primary=("k",), finding=False)))   # the contact baseline's own law
 
 HERTZ_CONTACT = register(Effect(
     name="hertz_contact", link="contact", doc="Hertz pad: F = k d^1.5 in contact",
     params=(ParamSpec("k", "N/m^1.5", 1.0, 1e9, 1e4, "Hertz coefficient (4/3 E* sqrt(R))", log=True),),
     inputs=("d",), output="force",
-    simulate=lambda s, p: hertz_force(s.d, p["k"]), guess=_hertz_guess, step_class=HertzContactStep))
+    simulate=lambda s, p: hertz_force(s.d, p["k"]), guess=_hertz_guess, step_class=HertzContactStep,
+    rules=Rules(channel="force", primary=("k",),
+                draw=lambda rng, s: {"k": s.stiffness / math.sqrt(rng.uniform(2e-3, 5e-3))})))
 
 VISCOELASTICITY = register(Effect(
     name="viscoelasticity", link="contact",
@@ -150,11 +153,16 @@ VISCOELASTICITY = register(Effect(
             ParamSpec("tau", "s", 1e-4, 1e4, 1.0, "relaxation time", log=True, positive=True)),
     inputs=("t", "force", "d"), output="force",
     simulate=lambda s, p: sls_force(s.t, s.force, s.d, p["g"], p["tau"]), guess=_sls_guess,
-    step_class=ViscoelasticityStep))
+    step_class=ViscoelasticityStep,
+    # a relaxation faster than the data resolve (tau below twice the inputs' smoothing) is damping
+    rules=Rules(channel="force", primary=("g", "tau"), wrong_form=lambda p, rec: p["tau"] < 2.0 * rec.resolution_s,
+                draw=lambda rng, s: {"g": rng.uniform(0.4, 0.8), "tau": rng.uniform(0.2, 1.5)})))
 
 CONTACT_DAMPING = register(Effect(
     name="contact_damping", link="contact", doc="F = Fe + c d_dot in contact, never pulling",
     params=(ParamSpec("c", "N s/m", 1e-4, 1e6, 5.0, "contact damping coefficient", log=True),),
     inputs=("force", "d", "d_dot"), output="force",
     simulate=lambda s, p: damped_force(s.force, s.d, s.d_dot, p["c"]), guess=_damping_guess,
-    step_class=ContactDampingStep))
+    step_class=ContactDampingStep,
+    rules=Rules(channel="force", primary=("c",),
+                draw=lambda rng, s: {"c": rng.uniform(0.15, 0.4) * s.stiffness * s.travel / s.v_fast})))

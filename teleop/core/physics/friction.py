@@ -22,7 +22,7 @@ import numpy as np
 from teleop.core.kernels.friction import coulomb_force, dahl_run, dahl_step, stribeck_force, viscous_force
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.ufuncs import coulomb_loop, stribeck_loop, viscous_loop
-from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, drive_step, register
 
 
 def coulomb(v, Fc):
@@ -168,16 +168,31 @@ class DahlStep(Step):
 
 _FC = ParamSpec("Fc", "N", 0.0, 50.0, 0.2, "Coulomb (kinetic) friction force")
 
+def _stribeck_wrong(p, rec) -> bool:
+    """Stribeck means more friction at low speed than in sliding (Fs > Fc)."""
+    return p["Fs"] <= 1.1 * p["Fc"]
+
+
+def _dahl_wrong(p, rec) -> bool:
+    """A Dahl transition (length Fc / sigma) shorter than the drive moves in one sample is a jump at the
+    reversal: Coulomb friction, the Dahl law's limit (a near-step Dahl wins a few per cent there by
+    splitting the reversal's sample, which is the rate's discretisation, not a pre-sliding regime)."""
+    return rec.x is not None and p["Fc"] / p["sigma"] < drive_step(rec.x)
+
+
 COULOMB_FRICTION = register(Effect(
     name="coulomb_friction", link="force", doc="constant, direction-dependent: load + Fc sign(v)",
     params=(_FC,), inputs=("v", "load"), output="load",
-    simulate=_coulomb_sim, guess=_coulomb_guess, step_class=CoulombStep))
+    simulate=_coulomb_sim, guess=_coulomb_guess, step_class=CoulombStep,
+    rules=Rules(channel="motor_force", primary=("Fc",), draw=lambda rng, s: {"Fc": s.friction})))
 
 VISCOUS_FRICTION = register(Effect(
     name="viscous_friction", link="force", doc="velocity-proportional: load + b v",
     params=(ParamSpec("b", "N s/m", 1e-6, 1e5, 10.0, "viscous friction coefficient", log=True),),
     inputs=("v", "load"), output="load",
-    simulate=_viscous_sim, guess=_viscous_guess, step_class=ViscousStep))
+    simulate=_viscous_sim, guess=_viscous_guess, step_class=ViscousStep,
+    rules=Rules(channel="motor_force", primary=("b",),
+                draw=lambda rng, s: {"b": s.friction / s.v_fast * rng.uniform(1.0, 2.0)})))
 
 STRIBECK_FRICTION = register(Effect(
     name="stribeck_friction", link="force",
@@ -186,7 +201,12 @@ STRIBECK_FRICTION = register(Effect(
             ParamSpec("Fs", "N", 0.0, 50.0, 0.3, "static (breakaway) friction force"),
             ParamSpec("vs", "m/s", 1e-7, 10.0, 1e-3, "Stribeck velocity", log=True, positive=True)),
     inputs=("v", "load"), output="load",
-    simulate=_stribeck_sim, guess=_stribeck_guess, step_class=StribeckStep))
+    simulate=_stribeck_sim, guess=_stribeck_guess, step_class=StribeckStep,
+    # the peak and its velocity scale have basins of their own (a sine's low-speed stretches are short:
+    # from its data-driven guess a fit can settle on half the peak at twice the speed)
+    rules=Rules(channel="motor_force", primary=("Fc", "Fs"), starts=6, wrong_form=_stribeck_wrong,
+                draw=lambda rng, s: {"Fc": s.friction, "Fs": s.friction * rng.uniform(1.8, 3.0),
+                                     "vs": s.v_slow * rng.uniform(0.6, 1.2)})))
 
 DAHL_HYSTERESIS = register(Effect(
     name="dahl_hysteresis", link="force",
@@ -196,4 +216,6 @@ DAHL_HYSTERESIS = register(Effect(
             ParamSpec("Fc", "N", 1e-6, 50.0, 0.2, "Coulomb friction force reached in sliding",
                       log=True, positive=True)),
     inputs=("x", "load"), output="load",
-    simulate=_dahl_sim, guess=_dahl_guess, step_class=DahlStep))
+    simulate=_dahl_sim, guess=_dahl_guess, step_class=DahlStep,
+    rules=Rules(channel="motor_force", primary=("Fc",), wrong_form=_dahl_wrong,
+                draw=lambda rng, s: {"Fc": s.friction, "sigma": s.friction / (rng.uniform(0.05, 0.2) * s.travel)})))

@@ -38,7 +38,7 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
 from teleop.core.physics.scan import clamp_scan, clamp_step
 
 
@@ -191,6 +191,11 @@ class PulleyFrictionStep(Step):
         return float(self.F)
 
 
+def _hold_wrap(rec, known, direction) -> dict:
+    """mu and the wrap: only their product shows."""
+    return {"wrap": PARAMS_F[1].default}
+
+
 PULLEY_FRICTION = register(Effect(
     name="pulley_friction",
     link="force",
@@ -202,6 +207,9 @@ PULLEY_FRICTION = register(Effect(
     simulate=_friction_sim,
     guess=_friction_guess,
     step_class=PulleyFrictionStep,
+    # on force data alone the capstan law plus a constant bending loss: beside a capstan baseline it would
+    # rename a Coulomb friction, not find the pulleys
+    rules=Rules(channel="motor_force", primary=("mu",), alike=("capstan_friction",), hold=_hold_wrap),
 ))
 
 
@@ -247,4 +255,5 @@ PULLEY_ELONGATION = register(Effect(
     simulate=_elong_sim,
     guess=_elong_guess,
     step_class=PulleyElongationStep,
+    rules=Rules(channel="tip_pos", primary=("c",), hold=_hold_wrap),
 ))

@@ -15,7 +15,7 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Signals, Step, register
+from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
 from teleop.core.physics.scan import clamp_step, play
 
 
@@ -103,6 +103,15 @@ class TimeDriftStep(Step):
         return float(force + self.params["offset"] + self.params["rate"] * (t - self.t0))
 
 
+def _thermal_hold(rec, known, direction) -> dict:
+    """The zero-offset temperature trades with the baseline offset: held at the record's mean."""
+    return {"T0": float(np.mean(rec.temperature))} if rec.temperature is not None else {}
+
+
+def _thermal_draw(rng, s) -> dict:
+    return {"c": float(rng.choice([-1, 1])) * rng.uniform(0.1, 0.25) * s.force_span / s.temp_span, "T0": 25.0}
+
+
 SENSOR_HYSTERESIS = register(Effect(
     name="sensor_hysteresis", link="sensor",
     doc="loading vs unloading offset: +h while the force rises, -h while it falls, play-type switch",
@@ -110,14 +119,18 @@ SENSOR_HYSTERESIS = register(Effect(
             ParamSpec("delta", "N", 1e-6, 100.0, 0.2, "half the force change over which the offset flips",
                       log=True, positive=True)),
     inputs=("force",), output="force",
-    simulate=_hyst_sim, guess=_hyst_guess, step_class=SensorHysteresisStep))
+    simulate=_hyst_sim, guess=_hyst_guess, step_class=SensorHysteresisStep,
+    rules=Rules(channel="motor_force", primary=("h",),
+                draw=lambda rng, s: {"h": rng.uniform(0.06, 0.12) * s.force_span,
+                                     "delta": rng.uniform(0.02, 0.06) * s.force_span})))
 
 THERMAL_DRIFT = register(Effect(
     name="thermal_drift", link="sensor", doc="offset following temperature: c (T - T0)",
     params=(ParamSpec("c", "N/K", -10.0, 10.0, 0.01, "temperature coefficient of the reading"),
             ParamSpec("T0", "degC", -50.0, 150.0, 20.0, "temperature of zero offset")),
     inputs=("force", "temperature"), output="force",
-    simulate=_thermal_sim, guess=_thermal_guess, step_class=ThermalDriftStep))
+    simulate=_thermal_sim, guess=_thermal_guess, step_class=ThermalDriftStep,
+    rules=Rules(channel="motor_force", primary=("c",), hold=_thermal_hold, draw=_thermal_draw)))
 
 THERMAL_DRIFT_TIME = register(Effect(
     name="thermal_drift_time", link="sensor",
@@ -125,4 +138,6 @@ THERMAL_DRIFT_TIME = register(Effect(
     params=(ParamSpec("offset", "N", -100.0, 100.0, 0.0, "offset at the first sample"),
             ParamSpec("rate", "N/s", -10.0, 10.0, 0.0, "drift rate")),
     inputs=("t", "force"), output="force",
-    simulate=_time_sim, guess=_time_guess, step_class=TimeDriftStep))
+    simulate=_time_sim, guess=_time_guess, step_class=TimeDriftStep,
+    # no physical cause to name: a drift with time and no temperature channel is reported as unexplained
+    rules=Rules(channel="motor_force", primary=("rate",), finding=False)))
