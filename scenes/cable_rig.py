@@ -3,9 +3,12 @@ sheath to a tip that pulls a spring (or carries an external load), with motor an
 
 This is the project's simulation of the setup that `teleop diagnose` takes as its baseline: the sheath
 always has capstan friction over its bend (teleop.core.physics capstan law with stick transitions), the tip
-pulls a linear preloaded spring. On top of it any catalogue effects can be switched on (`effects`), or
-physics outside the catalogue (`OUTSIDE`: a stiffening spring, a pulley eccentricity, a sensor delay), and
-the recording is written as interchange CSV (docs/formats.md) with any subset of the columns, in mm and deg.
+pulls a linear preloaded spring. On top of it any catalogue effect with a generator draw (physics Rules.draw)
+on the position, force or sensor link can be switched on (`effects`, `rig_effects()`), at parameters its
+own draw gives against the recording's scale, or physics outside the catalogue (`OUTSIDE`: a stiffening
+spring, a pulley eccentricity, a sensor delay), and the recording is written as interchange CSV
+(docs/formats.md) with any subset of the columns, in mm and deg. This is the one rig generator: the
+diagnosis' concealed-effect cases (teleop.diagnosis.generator) are recordings of it with an external load.
 
 It shares with the diagnosis only the physics models (teleop.core.physics); the CSV is written here, not by the
 diagnosis' writer, so a recording from this bench is "made elsewhere" as far as the diagnosis knows.
@@ -20,21 +23,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from teleop.core.physics import get_effect
+from pathlib import Path
+
+from teleop.core.physics import REGISTRY, Signals, get_effect
+from teleop.core.physics.base import Scale
 from teleop.core.physics.capstan import tip2motor_transitions
 
-#: catalogue effects this bench can conceal, and the channel each shows on
-RIG_EFFECTS = ("backlash", "coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis",
-               "sensor_hysteresis", "thermal_drift")
+#: the links whose effects the rig can conceal (a contact effect needs a pad: teleop.diagnosis.generator)
+RIG_LINKS = ("position", "force", "sensor")
+#: the interchange column that records each physics channel the rig's effects may read beside their own
+CHANNEL_COLUMNS = {"temperature": "temperature_C", "theta": "bend_angle_deg"}
 #: physics outside the catalogue: a spring that stiffens (cubic), a pulley eccentricity (motor force
 #: periodic in motor position), a transport delay of the tip force sensor
 OUTSIDE = ("stiffening_spring", "eccentric_pulley", "sensor_delay")
 #: the interchange columns the bench can write (t_s always)
 COLUMNS = ("motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "temperature_C")
-#: the parameters a diagnosis is scored on
-PRIMARY = {"backlash": ("width",), "coulomb_friction": ("Fc",), "viscous_friction": ("b",),
-           "stribeck_friction": ("Fc", "Fs"), "dahl_hysteresis": ("Fc",), "sensor_hysteresis": ("h",),
-           "thermal_drift": ("c",)}
+
+
+def rig_effects() -> tuple[str, ...]:
+    """The registered effects this bench can conceal, in registry order: those with a generator draw on the
+    position, force or sensor link."""
+    return tuple(n for n, e in REGISTRY.items() if e.rules.draw is not None and e.link in RIG_LINKS)
 
 
 @dataclass(frozen=True)
@@ -50,7 +59,6 @@ class RigRecording:
     setup: dict = field(default_factory=dict)   # the simulation's own parameters (mu, k_stick, spring)
 
     def write(self, path) -> None:
-        from pathlib import Path
         Path(path).write_text(self.csv, encoding="utf-8")
 
 
@@ -88,16 +96,23 @@ def _trajectory(rng: np.random.Generator, t: np.ndarray, fs: float) -> tuple[str
 
 def observable(effect: str, columns, load: str) -> bool:
     """True when `effect` switched on in the bench shows in a recording with `columns` and `load`: the
-    channel it acts on is recorded, and a second channel it can be compared against."""
+    channel it acts on is recorded, and a second channel it can be compared against. A catalogue effect's
+    rule follows from its link and inputs: on the position link the tip against the motor (a stretch under
+    the load only with an external load: under a linear spring it is a gain), on the force link both
+    forces and the motor's motion, a sensor effect as a force-link effect and the channels it reads."""
     cols = set(columns)
     forces = {"motor_force_N", "tip_force_N"} <= cols
-    if effect == "backlash":
-        return {"motor_pos_mm", "tip_pos_mm"} <= cols or (load == "spring" and {"motor_pos_mm", "tip_force_N"} <= cols)
-    if effect in ("coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis",
-                  "eccentric_pulley"):
+    if effect in REGISTRY and effect not in OUTSIDE:
+        eff = get_effect(effect)
+        if eff.link == "position" and "load" in eff.inputs:
+            return load == "external" and {"motor_pos_mm", "tip_pos_mm"} <= cols and bool(
+                {"motor_force_N", "tip_force_N"} & cols)
+        if eff.link == "position":
+            return {"motor_pos_mm", "tip_pos_mm"} <= cols or (load == "spring" and {"motor_pos_mm", "tip_force_N"} <= cols)
+        needs = {CHANNEL_COLUMNS[c] for c in eff.inputs if c in CHANNEL_COLUMNS}
+        return eff.link in ("force", "sensor") and forces and "motor_pos_mm" in cols and needs <= cols
+    if effect == "eccentric_pulley":
         return forces and "motor_pos_mm" in cols
-    if effect in ("sensor_hysteresis", "thermal_drift"):
-        return forces and "motor_pos_mm" in cols and (effect != "thermal_drift" or "temperature_C" in cols)
     if effect == "stiffening_spring":
         return load == "spring" and "tip_force_N" in cols and bool({"motor_pos_mm", "tip_pos_mm"} & cols)
     if effect == "sensor_delay":
@@ -107,14 +122,26 @@ def observable(effect: str, columns, load: str) -> bool:
 
 
 def _apply(name: str, params: dict, **channels) -> np.ndarray:
-    from teleop.core.physics import Signals
-    return get_effect(name).apply(Signals(**channels), params)
+    """Effect `name`'s array form over the channels it reads (inputs and optional ones) of `channels`."""
+    eff = get_effect(name)
+    use = {c: a for c, a in channels.items() if c == "t" or c in eff.inputs + eff.optional}
+    return eff.apply(Signals(**use), params)
+
+
+def _switched_on(effects, link: str, with_load: bool | None = None) -> list[str]:
+    """The catalogue effects of `effects` on `link`, in registry order (with_load: only those that do, or
+    do not, read the load)."""
+    return [n for n in rig_effects() if n in effects and get_effect(n).link == link
+            and (with_load is None or ("load" in get_effect(n).inputs) == with_load)]
 
 
 def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_hz: float = 500.0,
              duration_s: float = 20.0, noise: float = 1.0, given: dict | None = None) -> RigRecording:
-    """One recording of the bench with `effects` switched on (catalogue names, OUTSIDE names, or 'none')
-    at random parameters drawn from `seed` (int or sequence); `columns` of COLUMNS are written.
+    """One recording of the bench with `effects` switched on (catalogue names of `rig_effects()`, OUTSIDE
+    names, or 'none') at random parameters drawn from `seed` (int or sequence), each catalogue effect's by
+    its own draw (Rules.draw); `columns` of COLUMNS are written. Effects act link by link: the position
+    link's on the tip's travel (those reading the load once it is known), the force link's on the motor
+    force, the sensor effects on the reading of one force sensor.
 
     `given` fixes what is otherwise drawn (a set experiment, e.g. seed 000 Fig 9-13): "x" motor haul-in
     (n,) [m] with n = duration_s * fs_hz, "theta" bend [rad] (scalar or (n,)), "mu", "k_stick" [N/m],
@@ -124,9 +151,9 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     rng = np.random.default_rng(seed)
     given = dict(given or {})
     effects = tuple(e for e in effects if e != "none")
-    unknown = [e for e in effects if e not in RIG_EFFECTS + OUTSIDE]
+    unknown = [e for e in effects if e not in rig_effects() + OUTSIDE]
     if unknown:
-        raise ValueError(f"cable rig: cannot switch on {unknown} (known: {RIG_EFFECTS + OUTSIDE})")
+        raise ValueError(f"cable rig: cannot switch on {unknown} (known: {rig_effects() + OUTSIDE})")
     t = np.arange(int(duration_s * fs_hz)) / fs_hz
     traj, x = _trajectory(rng, t, fs_hz)
     if "x" in given:
@@ -150,22 +177,27 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         theta = np.broadcast_to(np.asarray(given["theta"], dtype=float), t.shape).copy()
     mu = float(given.get("mu", mu))
     temp = 24 + rng.uniform(2, 10) * np.sin(2 * np.pi * t / rng.uniform(15, 40) + rng.uniform(0, 6.3))
-    # position: the tip follows the motor (backlash when on)
+    # position: the tip follows the motor (a play when on); seen through the spring on the tip force
     z = x.copy()
-    if "backlash" in effects:
-        p = {"width": rng.uniform(0.08, 0.25) * 2 * A}
-        truth["backlash"] = {"channel": "tip_force" if load == "spring" else "tip_pos", "params": p}
-        z = _apply("backlash", p, t=t, x=z)
+    on_tip = "tip_force" if load == "spring" else None
+    for name in _switched_on(effects, "position", with_load=False):
+        p = get_effect(name).rules.draw(rng, Scale(travel=A, v_fast=vmax, v_slow=v25))
+        truth[name] = {"channel": on_tip or get_effect(name).rules.channel, "params": p}
+        z = _apply(name, p, t=t, x=z)
     # the load at the tip: a preloaded spring on the tip's travel, or an external load of its own
     if load == "spring":
         ks = rng.uniform(200.0, 2000.0)                 # N/m
         pre = ks * A * rng.uniform(1.2, 2.0)            # keeps the cable taut
         ks, pre = float(given.get("spring_N_per_m", ks)), float(given.get("preload_N", pre))
-        F_tip = pre + ks * z
+        k3 = 0.0
         if "stiffening_spring" in effects:
             k3 = rng.uniform(0.25, 0.5) * ks / A ** 2
             truth["stiffening_spring"] = {"channel": "tip_force", "params": {"k3": k3}}
-            F_tip = F_tip + k3 * z ** 3
+
+        def spring(z):
+            F = pre + ks * z
+            return F + k3 * z ** 3 if k3 else F
+        F_tip = spring(z)
     else:
         L0 = rng.uniform(5.0, 20.0)
         fl = rng.uniform(0.05, 0.4)
@@ -173,29 +205,31 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
                       + 0.1 * np.sin(2 * np.pi * 1.7 * fl * t))
         if "tip_force" in given:
             F_tip = np.broadcast_to(np.asarray(given["tip_force"], dtype=float), t.shape).copy()
+    # position effects under the load (a stretch): with a spring the load is the tip's own travel, solved
+    # by fixed-point iteration (the stretch is a small part of the travel)
+    for name in _switched_on(effects, "position", with_load=True):
+        p = get_effect(name).rules.draw(rng, Scale(travel=A, load=float(np.mean(F_tip)),
+                                                   load_span=float(np.ptp(F_tip)), v_fast=vmax, v_slow=v25))
+        truth[name] = {"channel": on_tip or get_effect(name).rules.channel, "params": p}
+        if load == "spring":
+            z0 = z
+            for _ in range(20):
+                z = _apply(name, p, t=t, x=z0, load=F_tip)
+                F_tip = spring(z)
+        else:
+            z = _apply(name, p, t=t, x=z, load=F_tip)
     L0 = float(np.mean(F_tip))
     # the sheath: capstan friction over the bend, stick transitions at reversals
     band = 2 * L0 * math.sinh(mu * float(np.mean(theta)))
     k_stick = band / (rng.uniform(0.02, 0.08) * A)
     k_stick = float(given.get("k_stick", k_stick))
     F_m = tip2motor_transitions(x, F_tip, mu, theta, k_stick)
-    Fc = rng.uniform(0.08, 0.2) * L0
-    if "coulomb_friction" in effects:
-        p = {"Fc": Fc}
-        F_m = _apply("coulomb_friction", p, t=t, v=v, load=F_m)
-        truth["coulomb_friction"] = {"channel": "motor_force", "params": p}
-    if "viscous_friction" in effects:
-        p = {"b": Fc / vmax * rng.uniform(1.0, 2.0)}
-        F_m = _apply("viscous_friction", p, t=t, v=v, load=F_m)
-        truth["viscous_friction"] = {"channel": "motor_force", "params": p}
-    if "stribeck_friction" in effects:
-        p = {"Fc": Fc, "Fs": Fc * rng.uniform(1.8, 3.0), "vs": v25 * rng.uniform(0.6, 1.2)}
-        F_m = _apply("stribeck_friction", p, t=t, v=v, load=F_m)
-        truth["stribeck_friction"] = {"channel": "motor_force", "params": p}
-    if "dahl_hysteresis" in effects:
-        p = {"Fc": Fc, "sigma": Fc / (rng.uniform(0.05, 0.2) * A)}
-        F_m = _apply("dahl_hysteresis", p, t=t, x=x, load=F_m)
-        truth["dahl_hysteresis"] = {"channel": "motor_force", "params": p}
+    Fc = rng.uniform(0.08, 0.2) * L0           # the rig's friction level, drawn whatever is switched on
+    for name in _switched_on(effects, "force"):
+        p = get_effect(name).rules.draw(rng, Scale(travel=A, load=L0, load_span=float(np.ptp(F_tip)), friction=Fc,
+                                                   v_fast=vmax, v_slow=v25))
+        F_m = _apply(name, p, t=t, x=x, v=v, load=F_m, theta=theta, temperature=temp)
+        truth[name] = {"channel": get_effect(name).rules.channel, "params": p}
     if "eccentric_pulley" in effects:
         lam = rng.uniform(0.5, 1.0) * 2 * A
         amp = rng.uniform(0.1, 0.2) * float(np.ptp(F_m))
@@ -211,16 +245,12 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         sensor_channel = "tip_force"
     if "tip_force_N" not in columns or load != "spring":   # a tip sensor's own effect needs the spring law
         sensor_channel = "motor_force"
-    F = readings[sensor_channel]
-    if "sensor_hysteresis" in effects:
-        p = {"h": rng.uniform(0.06, 0.12) * float(np.ptp(F)), "delta": rng.uniform(0.02, 0.06) * float(np.ptp(F))}
-        readings[sensor_channel] = _apply("sensor_hysteresis", p, t=t, force=F)
-        truth["sensor_hysteresis"] = {"channel": sensor_channel, "params": p}
-    if "thermal_drift" in effects:
-        p = {"c": float(rng.choice([-1, 1])) * rng.uniform(0.1, 0.25) * float(np.ptp(F)) / float(np.ptp(temp)),
-             "T0": 25.0}
-        readings[sensor_channel] = _apply("thermal_drift", p, t=t, force=F, temperature=temp)
-        truth["thermal_drift"] = {"channel": sensor_channel, "params": p}
+    for name in _switched_on(effects, "sensor"):
+        F = readings[sensor_channel]
+        p = get_effect(name).rules.draw(rng, Scale(travel=A, load=L0, force_span=float(np.ptp(F)),
+                                                   temp_span=float(np.ptp(temp)), v_fast=vmax, v_slow=v25))
+        readings[sensor_channel] = _apply(name, p, t=t, x=x, force=F, temperature=temp, theta=theta)
+        truth[name] = {"channel": sensor_channel, "params": p}
     if "sensor_delay" in effects:
         tau = rng.uniform(0.05, 0.15)
         truth["sensor_delay"] = {"channel": "tip_force", "params": {"tau": tau}}

@@ -367,8 +367,8 @@ def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, s
     base = simulation_baseline(d, fit_idx, hold_idx, baseline, seed)
     ranking = {}
     pool = [n for n in applicable(d) if n not in base.names]
-    # an effect the baseline's cannot be told apart from is no candidate (Rules.alike)
-    pool = [n for n in pool if not set(get_effect(n).rules.alike) & set(base.names)]
+    # an effect whose law a baseline effect already is on this data is no candidate (Rules.not_beside)
+    pool = [n for n in pool if not set(get_effect(n).rules.not_beside) & set(base.names)]
     steps, current, delay = _grow(d, base, (), pool, 0, fit_idx, hold_idx, seed, progress, ranking)
     if not delay and any(s.shape for n in base.names for s in get_effect(n).params):
         steps, current = _general_baseline(d, base, tuple(steps), current, fit_idx, hold_idx, seed)

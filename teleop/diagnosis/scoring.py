@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.generator import CASE_EFFECTS, PRIMARY, Case
+from teleop.diagnosis.generator import Case, case_effects, primary
 from teleop.io.recording_io import read_interchange
 
 PARAM_TOL = 0.2
@@ -51,7 +51,7 @@ def score(case: Case, doc: dict) -> dict:
         hit = [f for f in findings if f["effect"] == case.effect]
         errs = {}
         if hit:
-            for p in PRIMARY[case.effect]:
+            for p in primary()[case.effect]:
                 true = case.params[p]
                 errs[p] = abs(hit[0]["params"][p]["value"] - true) / abs(true)
         out["param_errors"] = errs
@@ -68,7 +68,7 @@ def summarise(rows: list[dict]) -> dict:
     """Rates and the confusion matrix over scored cases."""
     eff = [r for r in rows if r["truth"] != "none"]
     clean = [r for r in rows if r["truth"] == "none"]
-    labels = list(CASE_EFFECTS) + ["none"]
+    labels = list(case_effects()) + ["none"]
     named_labels = sorted({r["named"] for r in rows} | set(labels), key=lambda s: (s not in labels,
                           labels.index(s) if s in labels else 0, s))
     confusion = {t: {n: 0 for n in named_labels} for t in labels}

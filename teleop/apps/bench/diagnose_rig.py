@@ -11,9 +11,17 @@ truth is empty, each true effect's primary parameters within 20 %, held-out impr
 from __future__ import annotations
 
 import tempfile
+from itertools import combinations
 from pathlib import Path
 
 import numpy as np
+
+from scenes.cable_rig import OUTSIDE, observable, rig_effects, simulate
+from teleop.core.physics import REGISTRY, get_effect
+from teleop.core.physics.base import alike
+from teleop.diagnosis.diagnose import diagnose
+from teleop.diagnosis.scoring import peer_row
+from teleop.io.recording_io import read_interchange
 
 #: column subsets of the interchange format a rig may record (name -> columns)
 SUBSETS = {
@@ -25,29 +33,28 @@ SUBSETS = {
     "positions only": ("motor_pos_mm", "tip_pos_mm"),
 }
 PARAM_TOL = 0.2
-_FRICTION = ("coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis")
-#: compounds of two effects with distinct signatures (two constant-magnitude frictions on one channel, or a
-#: motor-sensor hysteresis beside one, are one effect to any data: loading and pulling coincide on a spring)
-COMPOUNDS = tuple([("backlash", f) for f in _FRICTION] + [("thermal_drift", f) for f in _FRICTION]
-                  + [("backlash", "thermal_drift"), ("backlash", "sensor_hysteresis"),
-                     ("viscous_friction", "dahl_hysteresis"), ("viscous_friction", "coulomb_friction")])
+
+
+def compounds() -> tuple:
+    """Pairs of the rig's effects (registry order) with distinct signatures: not alike (Rules.alike: two
+    constant-magnitude frictions on one channel, or a motor-sensor hysteresis beside one, are one effect to
+    any data, loading and pulling coinciding on a spring)."""
+    return tuple((a, b) for a, b in combinations(rig_effects(), 2) if not alike(a, b))
 
 
 def rig_plan(n: int, seed: int) -> list[dict]:
     """n rig cases: every (effect or none or outside) in turn over the column subsets and loads, and every
     third case a compound of two effects; reproducible from seed."""
-    from scenes.cable_rig import OUTSIDE, RIG_EFFECTS
-
-    assert all(e in RIG_EFFECTS for pair in COMPOUNDS for e in pair)
+    pairs = compounds()
     rng = np.random.default_rng([seed, 4242])
-    singles = ["none"] + list(RIG_EFFECTS) + list(OUTSIDE)
+    singles = ["none"] + list(rig_effects()) + list(OUTSIDE)
     subsets = list(SUBSETS)
     plan = []
     for i in range(n):
         subset = subsets[i % len(subsets)]
         load = "spring" if (i // len(subsets)) % 3 != 2 else "external"
         if i % 3 == 2:
-            effects = COMPOUNDS[int(rng.integers(len(COMPOUNDS)))]
+            effects = pairs[int(rng.integers(len(pairs)))]
             subset = "spring, no tip position" if i % 2 else "all columns"
             load = "spring"
         else:
@@ -60,17 +67,13 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
                  sindy: bool = False) -> dict:
     """Simulate, write, diagnose and score one rig case (sindy: with the PySINDy peer on the channels of
     the true effects)."""
-    from scenes.cable_rig import PRIMARY, observable, simulate
-    from teleop.diagnosis.diagnose import diagnose
-    from teleop.io.recording_io import read_interchange
-
     cols = SUBSETS[case["subset"]]
     rig = simulate([seed, case["index"], 7], case["effects"], cols, case["load"], fs_hz, duration_s, noise)
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"rig_{case['index']:04d}.csv"
         rig.write(path)
         doc = diagnose(read_interchange(path), sindy=sindy).as_dict()
-    truth = {e: v for e, v in rig.effects.items() if e in PRIMARY and observable(e, cols, case["load"])}
+    truth = {e: v for e, v in rig.effects.items() if e in REGISTRY and observable(e, cols, case["load"])}
     findings = doc["findings"]
     named = [f["effect"] for f in findings]
     if not truth:
@@ -87,7 +90,7 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
         errs, imps = {}, {}
         for e, v in truth.items():
             hit = [f for f in findings if f["effect"] == e]
-            for p in PRIMARY[e]:
+            for p in get_effect(e).rules.primary:
                 if hit:
                     errs[f"{e}.{p}"] = abs(hit[0]["params"][p]["value"] - v["params"][p]) / abs(v["params"][p])
             # the channel it was found on (a play shows on the tip position where it is recorded, else
@@ -97,11 +100,10 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
                 imps[e] = doc["baseline"]["rmse"][ch] / max(doc["channels"][ch]["rmse_model"], 1e-300)
         row["param_errors"] = errs
         row["params_ok"] = bool(errs) and max(errs.values()) <= PARAM_TOL and len(errs) == sum(
-            len(PRIMARY[e]) for e in truth)
+            len(get_effect(e).rules.primary) for e in truth)
         row["improvement"] = min(imps.values()) if imps else 1.0
         row["improved_2x"] = row["improvement"] >= 2.0
         if sindy:
-            from teleop.diagnosis.scoring import peer_row
             chans = sorted({f["channel"] for f in findings if f["effect"] in truth})
             row["peer"] = [peer_row(doc, ch) for ch in chans]
     return row

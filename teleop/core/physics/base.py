@@ -256,7 +256,10 @@ class Rules:
     channel: the recording channel the effect shows on in a generated rig ("tip_pos", "motor_force",
     "force"; a sensor effect: the sensor it sits on by default).
     primary: the parameters a diagnosis is scored on (the others are nuisance or shape parameters).
-    alike: effects it cannot be told apart from: beside one of them in the baseline it is not a candidate.
+    alike: effects it cannot be told apart from on one channel where the load follows the drive (a
+    spring-loaded tip: loading and pulling coincide); generators do not conceal the two together.
+    not_beside: baseline effects whose law it is by another name on the data a link carries: beside one of
+    them in the baseline it is not a candidate.
     finding: False for a law that is only ever a baseline, or a change with no physical cause to name.
     position_only: a function of the drive position alone (told apart from a load that follows the
     position, and from a periodic force, by its shape only).
@@ -274,6 +277,7 @@ class Rules:
     channel: str = ""
     primary: tuple[str, ...] = ()
     alike: tuple[str, ...] = ()
+    not_beside: tuple[str, ...] = ()
     finding: bool = True
     position_only: bool = False
     starts: int = 1
@@ -384,6 +388,11 @@ def register(effect: Effect) -> Effect:
 def unregister(name: str) -> None:
     """Take effect `name` out of REGISTRY (a throwaway effect registered by a test)."""
     REGISTRY.pop(name, None)
+
+
+def alike(a: str, b: str) -> bool:
+    """True when registered effects `a` and `b` cannot be told apart (either lists the other in Rules.alike)."""
+    return b in get_effect(a).rules.alike or a in get_effect(b).rules.alike
 
 
 def get_effect(name: str) -> Effect:

@@ -184,7 +184,9 @@ COULOMB_FRICTION = register(Effect(
     name="coulomb_friction", link="force", doc="constant, direction-dependent: load + Fc sign(v)",
     params=(_FC,), inputs=("v", "load"), output="load",
     simulate=_coulomb_sim, guess=_coulomb_guess, step_class=CoulombStep,
-    rules=Rules(channel="motor_force", primary=("Fc",), draw=lambda rng, s: {"Fc": s.friction})))
+    # constant-magnitude frictions on one channel are one effect to any data
+    rules=Rules(channel="motor_force", primary=("Fc",), alike=("stribeck_friction", "dahl_hysteresis"),
+                draw=lambda rng, s: {"Fc": s.friction})))
 
 VISCOUS_FRICTION = register(Effect(
     name="viscous_friction", link="force", doc="velocity-proportional: load + b v",
@@ -204,7 +206,8 @@ STRIBECK_FRICTION = register(Effect(
     simulate=_stribeck_sim, guess=_stribeck_guess, step_class=StribeckStep,
     # the peak and its velocity scale have basins of their own (a sine's low-speed stretches are short:
     # from its data-driven guess a fit can settle on half the peak at twice the speed)
-    rules=Rules(channel="motor_force", primary=("Fc", "Fs"), starts=6, wrong_form=_stribeck_wrong,
+    rules=Rules(channel="motor_force", primary=("Fc", "Fs"), alike=("dahl_hysteresis",), starts=6,
+                wrong_form=_stribeck_wrong,
                 draw=lambda rng, s: {"Fc": s.friction, "Fs": s.friction * rng.uniform(1.8, 3.0),
                                      "vs": s.v_slow * rng.uniform(0.6, 1.2)})))
 

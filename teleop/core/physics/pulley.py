@@ -209,7 +209,7 @@ PULLEY_FRICTION = register(Effect(
     step_class=PulleyFrictionStep,
     # on force data alone the capstan law plus a constant bending loss: beside a capstan baseline it would
     # rename a Coulomb friction, not find the pulleys
-    rules=Rules(channel="motor_force", primary=("mu",), alike=("capstan_friction",), hold=_hold_wrap),
+    rules=Rules(channel="motor_force", primary=("mu",), not_beside=("capstan_friction",), hold=_hold_wrap),
 ))
 
 

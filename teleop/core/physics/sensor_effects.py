@@ -120,7 +120,9 @@ SENSOR_HYSTERESIS = register(Effect(
                       log=True, positive=True)),
     inputs=("force",), output="force",
     simulate=_hyst_sim, guess=_hyst_guess, step_class=SensorHysteresisStep,
+    # on the motor sensor under a spring load, a hysteresis is a constant-magnitude friction's band
     rules=Rules(channel="motor_force", primary=("h",),
+                alike=("coulomb_friction", "stribeck_friction", "dahl_hysteresis"),
                 draw=lambda rng, s: {"h": rng.uniform(0.06, 0.12) * s.force_span,
                                      "delta": rng.uniform(0.02, 0.06) * s.force_span})))
 
