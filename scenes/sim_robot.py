@@ -6,9 +6,9 @@ One reading = `substeps` physics steps of dt. Per reading:
   held on the commanded tip through a series spring (tip_stiffness, the loop's lumped compliance) and meets
   the pad's calibrated contact -> contact wrench f (the Nano17 ground truth, moments about p with the force
   at the tool tip) -> tip tensions t = wrench2tensions(f, A(pose), pretension) (A t + f = 0, eq 8)
-  -> sheath friction between the FSR and the end effector: teleop.core.physics capstan_friction with
-     Theta_i = theta_i (eq 6) + theta0, motor position x = -length (shortening = pulling), stick
-     transitions of stiffness k at reversals
+  -> sheath friction between the FSR and the end effector: the sheath's capstan law with stick transitions
+     (teleop.core.kernels.sheath, parameters `SimRobotParams.sheath`) with Theta_i = theta_i (eq 6) + theta0,
+     motor position x = -length (shortening = pulling)
   -> FSR: hysteresis as friction lag between the calibration's loading and unloading branches
      (teleop.core.sensors.FsrBranchLag), divider -> ADC counts + Gaussian noise, rounded.
 With `backlash` (URL `backlash_mm=W`) each cable's motor-to-cable transmission has play: the realized
@@ -35,7 +35,7 @@ from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry, default_geometry
 from teleop.core.kernels import sim as KS
 from teleop.core.kernels import tension as KT
-from teleop.core.kernels.friction import capstan_play_run, capstan_play_step
+from teleop.core.kernels import sheath as SH
 from teleop.core.kinematics import FREE_AXIAL, check_lengths, poses2lengths
 from teleop.core.physics import get_effect
 from teleop.core.physics.backlash import backlash
@@ -55,8 +55,8 @@ class SimRobotParams:
         substeps: physics steps per reading (1: readings at 1 kHz).
         sensor: the tension sensors read (teleop.core.sensors.SENSOR_KINDS): "fsr" the FSR array; "fbg" also a
             distal FBG on every cable, "one" on cable `fbg_cable` only (scenes.sim_sensors; RobotReading.fbg_pm).
-        pretension: reference cable tension of the tension distribution [N]; seed 000 Fig 9 pre-tensions
-            the cable with 1.96-2.94 N; 2.85 N is the middle of the [0.2, 5.5] N tension range.
+        pretension: reference cable tension of the tension distribution [N] (default the seed robot's,
+            teleop.core.kernels.sheath.Sheath, where its source is given).
         tip_stiffness: series stiffness between the commanded tip and the contact [N/m] (isotropic): the
             robot's own stiffness, lumped at the tip so the end effector stays at its commanded pose
             (moving the end effector instead shifts A(pose) and, in this geometry, puts ~1.6 N of
@@ -83,15 +83,9 @@ class SimRobotParams:
         plant: effects the estimators do not model, switched on in every cable (scenes.rich_plant
             RichPlantParams: Stribeck, Dahl, guide pulley, FSR creep; with the motor play `backlash` the
             sheath's friction travels with the realized lengths); None: the matched plant.
-        capstan_k: stick stiffness of the capstan transition at reversals [N/m]: the sensor tension
-            crosses the friction band [t e^-mu Theta, t e^mu Theta] (~1 N at the pretension) over
-            band / k of cable travel, 0.2 mm at 5e3 N/m, i.e. ~0.7 s at the seed's 0.5 mm/s (cable speed
-            ~0.6 x effector speed along z). Seed 000 Fig 13 shows these turn transitions after single
-            compensation as segments (EF, GH) long enough to be fitted by polynomials at that speed, and
-            §6 reports large shifts when the speed changes; a stiff stick (the physics default, 2e4 N/m:
-            0.17 s) reduces them to blips the direction rule alone handles. The compliance in the cable
-            between the FSR and the effector is the FSR press block's silicone film (seed 000 §2)
-            rather than the 30 mm of steel (~2e5 N/m).
+        capstan_k: stick stiffness of the capstan transition at reversals [N/m] (default the seed robot's,
+            Sheath.stick_k, where its source is given; the catalogue's stiffer default,
+            sheath.STIFF_STICK_K, would reduce the seed's turn transitions to blips).
         noise_counts: RMS ADC noise [counts] (ATmega2560 10-bit ADC, +-2 LSB absolute accuracy).
         backlash: total play (dead band) width of each cable's motor-to-cable transmission (spool, gear)
             [m]; 0: none. The realized cable length is the play operator of the commanded (motor-side)
@@ -105,11 +99,11 @@ class SimRobotParams:
     substeps: int = 1
     sensor: str = "fsr"
     fbg_cable: int = 0
-    pretension: float = 2.85
+    pretension: float = SH.Sheath.pretension
     tip_stiffness: float | None = 1.0e4
     ee_damping_ratio: float = 0.7
     plant: RichPlantParams | None = None
-    capstan_k: float = 5e3
+    capstan_k: float = SH.Sheath.stick_k
     noise_counts: float = 1.0
     backlash: float = 0.0
 
@@ -129,6 +123,12 @@ class SimRobotParams:
     def dt(self) -> float:
         """Time between readings [s]."""
         return self.world.dt * self.substeps
+
+    @property
+    def sheath(self) -> SH.Sheath:
+        """The sheaths of this robot: the geometry's mu and theta0, capstan_k, the pretension."""
+        g = self.geometry
+        return SH.Sheath(mu=g.mu, theta0=g.theta0, stick_k=self.capstan_k, pretension=self.pretension)
 
     @property
     def fk_residual(self) -> float:
@@ -290,15 +290,15 @@ class SimRobot(ContextDevice):
         self.boot_id = (self.seed * 2654435761) % 2 ** 31
         self.stopped = False
         n = len(self.geom.B)
-        self._cap = np.full((2, n), np.nan)  # capstan state per cable: motor-side force [N], motor position [m]
+        self._cap = SH.new_state(n)  # the sheath's state per cable (teleop.core.kernels.sheath)
         self._A, self._theta, self._tip_off, self._target = np.empty((6, n)), np.empty(n), np.empty(3), np.empty(3)
         self._off = np.empty((n, 6))
         self._v, self._tip = np.asarray(self.geom.v, dtype=float), np.asarray(self.geom.tip, dtype=float)
         self._term_out = (self._v, float(self.geom.theta0), self._tip, self._off, self._A, self._theta, self._tip_off,
                           self._target)  # where PoseFollower.follow writes a new pose's terms
-        kc = np.empty(KS.N_READING_CONST)  # the constants of kernel sim.reading
-        kc[[KS.MU, KS.T_MIN, KS.T_MAX, KS.T_REF, KS.CAPSTAN_K, KS.STEPS_PER_M]] = (
-            self.geom.mu, self.geom.t_min, self.geom.t_max, p.pretension, p.capstan_k, self.spec.steps_per_m)
+        kc = np.empty(KS.N_READING_CONST)  # the constants of kernel sim.reading: the sheath's first
+        kc[:SH.N_CONST] = p.sheath.constants()
+        kc[[KS.T_MIN, KS.T_MAX, KS.STEPS_PER_M]] = self.geom.t_min, self.geom.t_max, self.spec.steps_per_m
         self._kc = kc
         self._fbg = FbgArray(p.sensor, n, self.seed, cable=p.fbg_cable) if p.sensor != "fsr" else None
         self._lag = FsrBranchLag(self.cal, n)
@@ -383,11 +383,7 @@ class SimRobot(ContextDevice):
         if status != KT.OK:
             # not the one-dimensional null space, or infeasible: teleop.core.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
-            for i in range(len(x)):
-                F0, x0 = (t_tip[i], x[i]) if np.isnan(self._cap[1, i]) else self._cap[:, i]
-                t_fsr[i] = capstan_play_step(float(F0), float(x[i] - x0), float(t_tip[i]),
-                                             float(g.mu * self._theta[i]), float(p.capstan_k))
-                self._cap[:, i] = t_fsr[i], x[i]
+            SH.motor_forces(self._cap, x, t_tip, self._theta, self._kc, t_fsr)
         if self._added is not None:
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
         if self._rich is not None:
@@ -463,14 +459,9 @@ class SimRobot(ContextDevice):
         if self._rich is not None and self._play is not None:  # the cable moves with its realized length
             x = -Lr
         t_fsr = np.empty((n, 6))
-        for i in range(6):
-            F0, x0 = self._cap[:, i]
-            if np.isnan(x0):  # fresh: starts on the tip tension, as read()
-                F0, x0 = t_tip[0, i], x[0, i]
-            capstan_play_run(np.ascontiguousarray(x[:, i]), np.ascontiguousarray(t_tip[:, i]),
-                             np.ascontiguousarray(g.mu * theta[:, i]), float(p.capstan_k), float(F0), float(x0),
-                             t_fsr[:, i])
-            self._cap[:, i] = t_fsr[-1, i], x[-1, i]
+        for i in range(6):  # each cable's sheath along the run, from its state (as read())
+            SH.motor_force_run(np.ascontiguousarray(x[:, i]), np.ascontiguousarray(t_tip[:, i]),
+                               np.ascontiguousarray(theta[:, i]), self._kc, self._cap, i, t_fsr[:, i])
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr, x, self.t + p.dt * np.arange(1, n + 1))
         u = self._lag.run(t_fsr)

@@ -1,7 +1,7 @@
 """The master-slave tick: READ -> MAP -> ROBOT I/O -> ESTIMATE -> RENDER -> WRITE -> RECORD.
 
-The compute of MAP, ESTIMATE and RENDER is teleop.core.estimation.tick.LoopTick's `map`, `estimate` and `render`
-on plain floats: the code `teleop bench tick` times as one full tick (`LoopTick.compute`); this module adds
+The compute of MAP, ESTIMATE and RENDER is teleop.core.estimation.tick.LoopTick's `map`, `estimate` and `render`:
+the code `teleop bench tick` times as one full tick (`LoopTick.compute`, the three back to back); this module adds
 the device I/O, the state machine, the safety monitors and the numpy arrays the devices and the recorder take.
 A robot's read() may return None while no telemetry frame has arrived yet (counted as missing telemetry).
 `Teleop.tick(now)` runs one tick at host time `now` [s]; it never sleeps and never reads a clock for its
@@ -18,7 +18,6 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from teleop.core.geometry import Geometry, default_geometry
-from teleop.core.kernels.safety import all_finite2
 from teleop.loop.warm import warm_up
 from teleop.core.kinematics import lengths2pose
 from teleop.loop.params import LoopParams
@@ -183,12 +182,9 @@ class Teleop:
         teleop.core.mapping.Follower.step_into (kernel mapping.follow_step): the math of teleop.core.mapping.stylus2target /
         position2lengths / limit_lengths, compiled (this runs every tick).
         """
-        L = np.array(self.L_last, dtype=float)
         # the anchors where anchor() wrote them; the pose's position, a view: the kernel reads the previous
         # target there and writes the new one
-        self.fast.follower.step_into(np.ascontiguousarray(x.sample.measured_cp, dtype=float), self._map_anchor,
-                                     self.pose[:3], L)
-        return L
+        return self.fast.map(x.sample.measured_cp, self._map_anchor, self.pose[:3], self.L_last)
 
     def stop_robot(self) -> None:
         try:
@@ -311,10 +307,7 @@ class Teleop:
                         p.dt * p.robot_every
                     self._est_seq, self._est_t = r.seq, r.t
                     if self.fast_estimate:
-                        t, f = self.estimator.update_arrays(r.fsr_counts, self.pose, dt)  # converts the counts
-                        if not all_finite2(t, f):
-                            raise ValueError("estimated tensions/wrench not finite")
-                        t, f = t.copy(), f.copy()
+                        t, f = self.fast.estimate(r.fsr_counts, self.pose, dt)  # converts the counts; copies
                     else:
                         t, f = self.estimator.update(r, self.pose, dt)
                         if not (np.isfinite(t).all() and np.isfinite(f).all()):
@@ -336,9 +329,9 @@ class Teleop:
             rd = self.renderer
             fx, fy, fz = self.wrench[:3].tolist()
             vx, vy, vz = x.sample.measured_cv.tolist() if x.sample is not None else (0.0, 0.0, 0.0)
-            # Renderer.render_xyz (zero force unless ENABLED) and its mapped force, ramp and fault in one call;
+            # Renderer.render_tick (zero force unless ENABLED) and its mapped force, ramp and fault in one call;
             # mapped: device frame, scaled, -z zeroed, the force that would be rendered
-            x.F, x.F_raw, x.ramp, tripped = rd.render_tick(fx, fy, fz, p.dt, vx, vy, vz)
+            x.F, x.F_raw, x.ramp, tripped = self.fast.render(fx, fy, fz, p.dt, vx, vy, vz)
             if tripped:
                 self.fault(f"render: {rd.fault_reason}")
             if self.state == State.ALIGNING:  # the engage rule, counted on the force that would be rendered

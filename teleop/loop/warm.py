@@ -13,39 +13,45 @@ import time
 
 import numpy as np
 
+from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
+from teleop.core.estimation.kalman import KalmanNoise
+from teleop.core.estimation.reading import ReadingEstimator
+from teleop.core.estimation.tick import LoopTick
+from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation
+from teleop.core.geometry import default_geometry
+from teleop.core.kernels import estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, \
+    sheath, sim, tap, tension, ufuncs
+from teleop.core.kernels import operator as KO
+from teleop.core.kernels import sheath as SH
+from teleop.core.kernels import sim as KS
+from teleop.core.kernels import tap as KTap
+from teleop.core.kernels import tension as KT
+from teleop.core.kernels.geometry import forward_kinematics
+from teleop.core.kernels.safety import all_finite, all_finite2
+from teleop.core.kernels.tap import sim_log_row, tap_row
+from teleop.core.kinematics import FREE_AXIAL, check_lengths, lengths2pose, pose2lengths, poses2lengths, rotation_zyx, \
+    structure_matrix
+from teleop.core.mapping import MappingParams
+from teleop.core.rendering import Renderer, engage_count
+from teleop.core.sensors import FsrBranchLag, default_fsr_calibration
+from teleop.core.tension import TensionSolver
+from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample, tension_monitors
+
 _done = []  # [True] once warmed (the argument types do not depend on the geometry's values)
+_MODULES = (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sheath, sim, tap, tension,
+            ufuncs)
 
 
 def kernels() -> list:
     """Every compiled kernel (numba dispatcher) of teleop.core.kernels."""
-    from teleop.core.kernels import estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, \
-        tap, tension, ufuncs
-
     out = []
-    for mod in (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sim, tap, tension,
-                ufuncs):
+    for mod in _MODULES:
         out += [v for v in vars(mod).values() if hasattr(v, "py_func") and getattr(v, "__module__", "") == mod.__name__]
     return out
 
 
 def warm_up(geom=None) -> float:
     """Run every hot-path kernel once with the loop's argument types (default geometry if None); seconds."""
-    from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
-    from teleop.core.estimation.kalman import KalmanNoise
-    from teleop.core.estimation.reading import ReadingEstimator
-    from teleop.core.estimation.tick import LoopTick
-    from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation
-    from teleop.core.geometry import default_geometry
-    from teleop.core.kernels import sim as KS
-    from teleop.core.kernels import tap as KTap
-    from teleop.core.kernels import tension as KT
-    from teleop.core.kernels.geometry import forward_kinematics
-    from teleop.core.kinematics import FREE_AXIAL, check_lengths, lengths2pose, pose2lengths, poses2lengths, rotation_zyx, structure_matrix
-    from teleop.core.mapping import MappingParams
-    from teleop.core.rendering import Renderer, engage_count
-    from teleop.core.sensors import default_fsr_calibration
-    from teleop.core.tension import TensionSolver
-
     if _done:
         return 0.0
     geom = default_geometry() if geom is None else geom
@@ -66,7 +72,10 @@ def warm_up(geom=None) -> float:
                 lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.0 + k), 1e-3)
                 lt.compute(np.full(3, 1e-4 * k), np.zeros(3), np.full(n, 400.5 + k), 1e-3)  # a non-table count
                 est.update_floats([400.0] * n, [0.0] * 6, 1e-3)
-            lt.map([0.0] * 3, [0.0] * 3, [0.0] * 3, [0.0] * 3, lt.follower.lengths(0.0, 0.0, 0.0))
+            # the loop's own stages (teleop.loop.core.Teleop: its anchors, pose view and lengths)
+            L0 = lt.map(np.zeros(3), np.zeros(6), np.zeros(6)[:3], np.array(lt.follower.lengths(0.0, 0.0, 0.0)))
+            lt.map(np.zeros(3), np.zeros(6), np.zeros(6)[:3], L0)
+            lt.estimate(np.full(n, 400.0), np.zeros(6), 1e-3)
             lt.render(0.1, 0.0, 0.0, 1e-3, 0.0, 0.0, 0.0)
             est.tick.estimate([0.0] * 6, [2.0] * n, 1e-3)
     # the simulated robot's reading: forward kinematics, pose terms, tension distribution, capstan chain
@@ -77,10 +86,12 @@ def warm_up(geom=None) -> float:
     KS.pose_terms(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
                   np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip)
     f = -structure_matrix(q, geom) @ np.full(n, 2.85)
-    cap = np.full((2, n), np.nan)
-    for _ in range(2):
-        KS.cable_sensor(f, A, float(geom.mu), theta, -L, float(geom.t_min), float(geom.t_max), 2.85, 5e3, cap,
-                        np.empty(n), np.empty(n))
+    # the sim robot's sheath (scenes.sim_robot.SimRobotParams.sheath): the seed robot's, on this geometry
+    sc = SH.Sheath(mu=geom.mu, theta0=geom.theta0).constants()
+    cap = SH.new_state(n)
+    for _ in range(2):  # its first reading, then the next
+        KS.cable_sensor(f, A, theta, -L, float(geom.t_min), float(geom.t_max), sc, cap, np.empty(n), np.empty(n))
+    SH.motor_forces(cap, -L, np.full(n, 2.85), theta, sc, np.empty(n))  # the reading when the kernel defers
     KS.contact_moment(tip, np.zeros(3), np.empty(6))
     KS.position_steps(L, L, 1e5, np.empty(n, dtype=np.int64))
     for implicit in (True, False):  # scenes.world.PadWorld.step: pybullet's tuples in, a tuple out
@@ -93,19 +104,17 @@ def warm_up(geom=None) -> float:
                    np.asarray(geom.v, dtype=float), float(geom.theta0), np.asarray(geom.tip, dtype=float),
                    np.empty((n, 6)), A, theta, tip, np.empty(3))
     # the sim robot's reading (scenes.sim_robot.SimRobot.read): the contact force as pybullet's tuple
-    kc = np.array([geom.mu, geom.t_min, geom.t_max, 2.85, 5e3, 1e5])
-    KS.reading(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6), np.empty(n),
+    kc = np.empty(KS.N_READING_CONST)
+    kc[:SH.N_CONST] = sc
+    kc[[KS.T_MIN, KS.T_MAX, KS.STEPS_PER_M]] = geom.t_min, geom.t_max, 1e5
+    KS.reading(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, SH.new_state(n), np.empty(6), np.empty(n),
                np.empty(n), np.empty(n, dtype=np.int64))
-    from teleop.core.sensors import FsrBranchLag
-
     for fsr in (True, False):  # with the FSR chain (the matched plant) and without (effects in between)
-        KS.reading_counts(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, np.full((2, n), np.nan), np.empty(6),
+        KS.reading_counts(tip, (0.0, 0.0, 0.0), A, theta, -L, L, L, kc, SH.new_state(n), np.empty(6),
                           np.empty(n), np.empty(n), np.empty(n, dtype=np.int64), fsr,
                           *FsrBranchLag(default_fsr_calibration(), n).kernel_args(), np.zeros((1, n)), 0,
                           np.empty(n, dtype=np.int64))
     KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
-    from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample, tension_monitors
-
     lag = FsrBranchLag(default_fsr_calibration(), n)
     for _ in range(2):  # the first reading, then the lag
         lag.counts(np.full(n, 2.85), np.zeros(n))
@@ -120,14 +129,10 @@ def warm_up(geom=None) -> float:
     is_finite_sample(check)
     check.fsr_counts, check.position_steps = np.zeros(n), np.zeros(n)  # a ProcessRobot's reading: floats
     is_finite_reading(check)
-    from teleop.core.kernels.safety import all_finite, all_finite2
-
     for a in (np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros((3, n))[1, :6]):  # the loop's estimate check
         all_finite(a)
     all_finite2(np.zeros(n), np.zeros((3, n))[1, :6])  # the loop's estimate check (tensions, wrench)
     # the simulated operator (devices.simulated): one step with and without tremor
-    from teleop.core.kernels import operator as KO
-
     c = np.zeros(KO.N_CONST)
     c[[KO.H, KO.M, KO.K, KO.B, KO.PERIOD, KO.DUTY]] = 1e-3, 0.15, 150.0, 6.0, 2.0, 0.5
     c[KO.HI:KO.HI + 3] = 1.0
@@ -136,8 +141,6 @@ def warm_up(geom=None) -> float:
                           np.zeros((0, 2)))
     KO.script_offset(KO.POKES, 0.1, 0.01, 2.0, 0.5)
     # the recorder's tap: a reading's counts and steps as ints (inline robot) or floats (ProcessRobot)
-    from teleop.core.kernels.tap import tap_row
-
     o, w = np.arange(29, dtype=np.int64) * 16, np.full(29, 6, dtype=np.int64)
     w[[KTap.STAGES, KTap.ORIENT, KTap.CP, KTap.CV, KTap.SETPOINT, KTap.SERVO_CF]] = 7, 9, 3, 3, 3, 3
     for dt in (np.int64, np.float64):
@@ -145,9 +148,7 @@ def warm_up(geom=None) -> float:
         tap_row(np.zeros(29 * 16), o, w, 0, 0.0, 0, 0, 0, np.zeros(7, dtype=np.int64), True, 0.0, np.zeros(3),
                 np.zeros(3), np.eye(3), 1, True, True, np.zeros(6), L, True, 0.0, 0, c6, c6, L, 1, 0, True, L,
                 np.zeros(6), np.zeros(6), 0.0, 0.0, 0.0, 0.0, np.zeros(3))
-    from teleop.core.kernels.tap import sim_log_row  # teleop bench sim's log: a tick with a reading and one without
-
-    for j in (0, -1):
+    for j in (0, -1):  # teleop bench sim's log: a tick with a reading and one without
         sim_log_row(0, np.zeros(7, dtype=np.int64), np.zeros((1, 7), dtype=np.int64), 0, 0, 0, 0,
                     np.zeros((1, 4), dtype=np.int64), np.zeros(3), np.zeros((1, 3)), np.zeros(3), np.zeros((1, 3)), j,
                     L, np.zeros((1, n)), np.zeros(n, dtype=np.int64), np.zeros((1, n), dtype=np.int64), np.zeros(6),

@@ -1,5 +1,6 @@
 """The compiled kernels: warmed before the loop, cached or not, and the same source without numba."""
 
+import importlib
 import json
 import os
 import subprocess
@@ -26,7 +27,7 @@ out = {}
 for name in ("single", "double", "dynamic"):
     fast, _ = make_ticks(name)
     p, v, c = _trajectory(300, 1e-3, 1)
-    out[name] = [fast.compute(p[k], v[k], c[k], 1e-3) for k in range(300)]
+    out[name] = [[np.asarray(a).tolist() for a in fast.compute(p[k], v[k], c[k], 1e-3)] for k in range(300)]
 print(json.dumps(out))
 """
 
@@ -83,12 +84,11 @@ def test_a_writable_numba_cache_dir_keeps_the_compiled_kernels(tmp_path):
     assert second.stdout == first.stdout
 
 
-@pytest.mark.parametrize("fn", ["dahl_step", "capstan_play_step", "direction_step"])
-def test_py_func_is_the_kernel_source(fn):
-    from teleop.core.kernels import friction
-
-    k = getattr(friction, fn)
-    assert k.py_func.__code__.co_filename.endswith("friction.py")
+@pytest.mark.parametrize("mod, fn", [("friction", "dahl_step"), ("sheath", "capstan_play_step"),
+                                     ("friction", "direction_step")])
+def test_py_func_is_the_kernel_source(mod, fn):
+    k = getattr(importlib.import_module(f"teleop.core.kernels.{mod}"), fn)
+    assert k.py_func.__code__.co_filename.endswith(f"{mod}.py")
 
 
 @pytest.mark.skipif(not jit.COMPILED, reason="numba not installed (or TELEOP_NO_JIT)")

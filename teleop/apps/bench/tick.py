@@ -1,13 +1,15 @@
 """`teleop bench tick --json F [--ticks N]`: time one full loop tick without devices.
 
-Project tick: `teleop.core.estimation.tick.LoopTick.compute`, the code the loop (teleop.loop.core.Teleop) runs at
-its MAP, ESTIMATE and RENDER stages: stylus position -> mapping (motion scale, workspace clip, v_max step
-limit; teleop.core.mapping.Follower) -> cable lengths -> FSR counts -> tensions (ReadingEstimator) -> estimation
-with the steady-state Kalman filter (TickComputer.estimate) -> rendered stylus force (Renderer.render_xyz).
+Project tick: `teleop.core.estimation.tick.LoopTick.compute`, its `map`, `estimate` and `render` back to back:
+the stages the loop (teleop.loop.core.Teleop) calls at MAP, ESTIMATE and RENDER: stylus position -> mapping
+(motion scale, workspace clip, v_max step limit; teleop.core.mapping.Follower) -> cable lengths; FSR counts ->
+tensions -> estimation with the steady-state Kalman filter in one compiled call (ReadingEstimator.update_arrays);
+rendered stylus force (Renderer.render_tick).
 Reference tick: `ReferenceLoopTick.compute`, the same path written the obvious way: teleop.core.mapping's numpy
 functions and teleop.core.kinematics.pose2lengths, the FSR branch trigger and calibration tables on numpy arrays,
 then `ReferenceTick` (numpy on (6,) arrays, scipy.spatial.transform.Rotation for R, the physics library's
-array functions, f = -A t with numpy, filterpy KalmanFilter predict/update, the renderer). Both see the
+array functions and the sheath's law (teleop.core.kernels.sheath), f = -A t with numpy, filterpy KalmanFilter
+predict/update, the renderer). Both see the
 same inputs (a stylus trajectory that hits the workspace box and the cable speed limit, FSR counts with
 1 count RMS noise), interleaved tick by tick (alternating which goes first) so machine noise hits both alike;
 garbage collection is off while timing.
@@ -20,7 +22,30 @@ JSON (docs/formats.md): {"ticks", "tick_us": {"p50","p99","max"}, "reference_tic
 
 from __future__ import annotations
 
+import gc
+import os
+import sys
+import time
+
 import numpy as np
+from scipy.spatial.transform import Rotation
+
+from teleop.core.errors import InputError
+from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
+from teleop.core.estimation.kalman import FilterpyWrenchKalman, KalmanNoise, wrench_kalman_params
+from teleop.core.estimation.reading import ReadingEstimator
+from teleop.core.estimation.tick import LoopTick
+from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation, TurnCompensator
+from teleop.core.geometry import default_geometry
+from teleop.core.kernels import sheath as SH
+from teleop.core.kinematics import pose2lengths
+from teleop.core.mapping import MappingParams, limit_lengths, stylus2target
+from teleop.core.physics.capstan import motor2tip
+from teleop.core.physics.friction import viscous
+from teleop.core.rendering import Renderer, RenderParams
+from teleop.core.sensors import LOADING, UNLOADING, default_fsr_calibration, synthesize_fsr_counts
+from teleop.io.outputs import dumps_json, write_json
+from teleop.loop.timing import set_normal, set_realtime
 
 
 def register(subparsers) -> None:
@@ -43,14 +68,11 @@ class ReferenceTick:
     the steady state). Same numbers as TickComputer (tested); deadband 0 cable directions."""
 
     def __init__(self, geom, estimator: str = "dynamic", *, turn=None, dynamic=None, kalman=None, renderer=None):
-        from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
-        from teleop.core.estimation.kalman import FilterpyWrenchKalman, KalmanNoise, wrench_kalman_params
-        from teleop.core.estimation.turn import TurnCompensator
-        from teleop.core.rendering import Renderer
-
         self.geom = geom
         self.mode = ESTIMATOR_NAMES.index(estimator)
         self.dyn = dynamic or DynamicParams()
+        self.sheath = SH.Sheath(mu=geom.mu, theta0=geom.theta0, stick_k=self.dyn.capstan_k)
+        self._sc = self.sheath.constants()
         self.turn = TurnCompensator(turn) if estimator == "double" else None
         self.kf = FilterpyWrenchKalman(wrench_kalman_params(geom, kalman or KalmanNoise()))
         self.renderer = renderer if renderer is not None else Renderer()
@@ -61,7 +83,7 @@ class ReferenceTick:
         self.d = np.zeros(6)
         self.vel = np.zeros(6)
         self.F_dahl = np.zeros(6)
-        self.phi = np.zeros(6)
+        self.sheath_state = SH.new_state(6)
         if self.turn is not None:
             self.turn.reset()
         self.kf.reset()
@@ -69,12 +91,7 @@ class ReferenceTick:
 
     def compute(self, pose, tensions, dt: float, velocity=(0.0, 0.0, 0.0)):
         """(lengths (6,), wrench (6,), force (3,)) like TickComputer.compute."""
-        from scipy.spatial.transform import Rotation
-
-        from teleop.core.physics.capstan import motor2tip
-        from teleop.core.physics.friction import viscous
-
-        g, p = self.geom, self.dyn
+        g, p, sh = self.geom, self.dyn, self.sheath
         q = np.asarray(pose, dtype=float)
         t = np.asarray(tensions, dtype=float)
         R = Rotation.from_euler("ZYX", q[3:]).as_matrix()   # R = Rz(alpha) Ry(beta) Rx(gamma)
@@ -82,11 +99,11 @@ class ReferenceTick:
         l = q[:3] + Rr - g.B                                 # l_i = p + R r_i - B_i
         L = np.linalg.norm(l, axis=1)
         u = l / L[:, None]
-        theta = np.abs(np.arcsin(np.clip(u @ g.v, -1.0, 1.0))) + g.theta0
+        theta = np.abs(np.arcsin(np.clip(u @ g.v, -1.0, 1.0))) + sh.theta0
         dL = np.zeros(6) if self.L_prev is None else L - self.L_prev
         self.d = np.where(dL != 0, np.sign(dL), self.d)     # cable direction, kept while still
         if self.mode in (1, 2):
-            t = motor2tip(t, g.mu, theta, self.d <= 0)
+            t = motor2tip(t, sh.mu, theta, self.d <= 0)
         elif self.mode == 3:
             dx = -dL
             self.vel = self.vel + dt / (p.v_smooth + dt) * (dx / dt - self.vel)
@@ -95,10 +112,7 @@ class ReferenceTick:
                 a = np.exp(-p.dahl_sigma * np.abs(dx) / p.dahl_Fc)
                 self.F_dahl = a * self.F_dahl + np.sign(dx) * p.dahl_Fc * (1 - a)
                 t = t - self.F_dahl
-            # capstan friction state: d phi = k dx / (mu Theta t), clipped to [-1, 1] (slack: slips at once)
-            mT = g.mu * theta
-            self.phi = np.clip(self.phi + p.capstan_k * dx / np.maximum(mT * np.maximum(t, 1e-6), 1e-12), -1.0, 1.0)
-            t = t * np.exp(-self.phi * g.mu * theta)
+            t = SH.tip_tensions(self.sheath_state, dx, t, theta, self._sc, np.empty(6))  # the sheath's inverse
         self.L_prev = L
         A = np.vstack([-u.T, -np.cross(Rr, u).T])
         f = -A @ t                                           # f = -A t
@@ -116,8 +130,6 @@ class ReferenceLoopTick:
 
     def __init__(self, geom, mapping, estimator: str = "dynamic", *, cal=None, deadband_counts: float = 8.0,
                  turn=None, dynamic=None, kalman=None, renderer=None, cmd_dt: float = 1e-3):
-        from teleop.core.sensors import default_fsr_calibration
-
         self.geom, self.mapping = geom, mapping
         self.cal = cal if cal is not None else default_fsr_calibration()
         self.db = float(deadband_counts)
@@ -127,8 +139,6 @@ class ReferenceLoopTick:
         self.reset()
 
     def reset(self) -> None:
-        from teleop.core.kinematics import pose2lengths
-
         self.pose = np.array(self.mapping.home, dtype=float)
         self.anchor_stylus = np.zeros(3)
         self.anchor_robot = self.pose[:3].copy()
@@ -146,9 +156,6 @@ class ReferenceLoopTick:
 
     def compute(self, p_stylus, v_stylus, counts, dt: float):
         """(L (6,), tensions (6,), wrench (6,), force (3,)) like LoopTick.compute."""
-        from teleop.core.mapping import limit_lengths, stylus2target
-        from teleop.core.sensors import LOADING, UNLOADING
-
         g, m = self.geom, self.mapping
         q = self.pose.copy()
         q[:3] = stylus2target(p_stylus, self.anchor_stylus, self.anchor_robot, m)
@@ -179,9 +186,6 @@ def _trajectory(n: int, dt: float, seed: int, mapping=None, cal=None):
     seeded. The robot target the stylus asks for runs past the workspace box in x and faster than the cable
     speed limit around x = 0, so the clip and the step limit both act; tensions rise and fall per cable
     (both FSR branches) with 1 count RMS ADC noise."""
-    from teleop.core.mapping import MappingParams
-    from teleop.core.sensors import LOADING, UNLOADING, default_fsr_calibration, synthesize_fsr_counts
-
     m = mapping if mapping is not None else MappingParams()
     cal = cal if cal is not None else default_fsr_calibration()
     rng = np.random.default_rng(seed)
@@ -213,16 +217,6 @@ def make_ticks(estimator: str = "dynamic", dt: float = 1e-3):
     """(LoopTick, ReferenceLoopTick) with the loop's default mapping and FSR calibration, realistic friction
     states (viscous, Dahl) and a turn fit so every stage does its work, renderers enabled (ramping in at once,
     as in the loop) and the mapping engaged at the stylus origin."""
-    from teleop.core.estimation.estimators import DynamicParams
-    from teleop.core.estimation.kalman import KalmanNoise
-    from teleop.core.estimation.reading import ReadingEstimator
-    from teleop.core.estimation.tick import LoopTick
-    from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation
-    from teleop.core.geometry import default_geometry
-    from teleop.core.mapping import MappingParams
-    from teleop.core.rendering import Renderer, RenderParams
-    from teleop.core.sensors import default_fsr_calibration
-
     geom, mapping, cal = default_geometry(), MappingParams(), default_fsr_calibration()
     dyn = DynamicParams(b=5.0, dahl_sigma=2e4, dahl_Fc=0.05, v_smooth=0.005)
     poly = tuple((0.05, -0.1, 0.05, 0.0, 0.0) for _ in range(6))
@@ -247,9 +241,6 @@ def bench_tick(ticks: int = 20000, estimator: str = "dynamic", seed: int = 0, wa
     clock: "wall" (time.perf_counter_ns) or "cpu" (time.thread_time_ns: CPU time of this thread, so a tick
     preempted by another process is not charged for the wait).
     """
-    import gc
-    import time
-
     dt = 1e-3
     fast, ref = make_ticks(estimator, dt)
     n = warmup + ticks
@@ -284,20 +275,11 @@ def bench_tick(ticks: int = 20000, estimator: str = "dynamic", seed: int = 0, wa
 
 
 def run(args) -> int:
-    from teleop.core.errors import InputError
-    from teleop.core.estimation.estimators import ESTIMATOR_NAMES
-    from teleop.io.outputs import dumps_json, write_json
-
     if args.ticks < 1000:
         raise InputError(f"--ticks: expected an integer >= 1000, got {args.ticks}")
     if args.estimator not in ESTIMATOR_NAMES:
         raise InputError(f"--estimator: expected one of {', '.join(ESTIMATOR_NAMES)}, got '{args.estimator}'")
-    import os
-    import sys
-
     if args.realtime:
-        from teleop.loop.timing import set_normal, set_realtime
-
         print(f"scheduling: {set_realtime(args.realtime)}", file=sys.stderr)
         try:
             result = bench_tick(args.ticks, args.estimator, args.seed, clock=args.clock)

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from teleop.core.kernels.sheath import Sheath
+
 ESTIMATOR_NAMES = ("non_compensated", "single", "double", "dynamic")
 
 
@@ -29,12 +31,12 @@ class DynamicParams:
         b: viscous coefficient [N s/m] (viscous_friction).
         dahl_sigma: Dahl rest stiffness [N/m]; dahl_Fc: Dahl sliding force [N] (dahl_hysteresis; 0 = off).
         v_smooth: time constant of the cable-velocity estimate [s].
-        capstan_k: stick stiffness of the capstan transitions [N/m] (physics.capstan `k`; the simulated
-            robot's 5e3 N/m, scenes.sim_robot, derived there from the seed's Fig 13 turn segments).
+        capstan_k: stick stiffness of the capstan transitions [N/m] (teleop.core.kernels.sheath; default the
+            seed robot's, `Sheath.stick_k`).
     """
 
     b: float = 0.0
     dahl_sigma: float = 1e4
     dahl_Fc: float = 0.0
     v_smooth: float = 0.0
-    capstan_k: float = 5e3
+    capstan_k: float = Sheath.stick_k

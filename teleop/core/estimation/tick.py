@@ -14,8 +14,9 @@ this class holds its arrays. The rotated platform anchors R r_i are cached per o
 the orientation, so R is built once). A non-finite input propagates to a renderer fault (zero force); call
 `reset()` after a fault.
 
-`LoopTick` is the whole device-excluded tick the loop runs: stylus position -> mapping -> lengths -> FSR
-counts -> tensions -> this estimate -> rendered force (`teleop bench tick` times `LoopTick.compute`).
+`LoopTick` is the whole device-excluded tick the loop runs, its MAP, ESTIMATE and RENDER stages: stylus
+position -> mapping -> lengths; FSR counts -> tensions -> this estimate; rendered force. The loop calls the
+stages, `teleop bench tick` times `LoopTick.compute`, the three back to back.
 """
 
 from __future__ import annotations
@@ -30,6 +31,8 @@ from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
 from teleop.core.estimation.turn import TurnCompensation, turn_arrays
 from teleop.core.geometry import Geometry
 from teleop.core.kernels import estimate as K
+from teleop.core.kernels import sheath as SH
+from teleop.core.kernels.safety import all_finite2
 from teleop.core.mapping import Follower
 from teleop.core.rendering import Renderer
 
@@ -60,8 +63,12 @@ class TickComputer:
         n = len(geom.B)
         self.cab = np.zeros((n, 12))
         self.cab[:, 0:3], self.cab[:, 3:6] = geom.r, geom.B
-        self.c = np.array([*map(float, geom.v), geom.mu, geom.theta0, length_deadband, dynamic.b, dynamic.dahl_Fc,
-                           dynamic.dahl_sigma, dynamic.v_smooth, dynamic.capstan_k], dtype=float)
+        self.sheath = SH.Sheath(mu=geom.mu, theta0=geom.theta0, stick_k=dynamic.capstan_k)
+        self.c = np.empty(K.N_CONST)
+        self.c[:SH.N_CONST] = self.sheath.constants()
+        self.c[K.VX:K.VZ + 1] = geom.v
+        self.c[[K.DEADBAND, K.B_VISC, K.DAHL_FC, K.DAHL_SIGMA, K.V_SMOOTH]] = (
+            length_deadband, dynamic.b, dynamic.dahl_Fc, dynamic.dahl_sigma, dynamic.v_smooth)
         self.turn, self.coefs = turn_arrays(turn if estimator == "double" else None)
         self.kalman = SteadyWrenchKalman(wrench_kalman_params(geom, kalman)) if kalman is not None else None
         self.kf = self.kalman.kf if self.kalman is not None else np.zeros((5, 0))
@@ -73,9 +80,10 @@ class TickComputer:
 
     def reset(self) -> None:
         """Forget every state (directions, friction states, turns, Kalman, renderer fault and ramp)."""
-        self.st = np.zeros((7, self.cab.shape[0]))
+        n = self.cab.shape[0]
+        self.st = np.zeros((K.N_ROWS, n))
+        self.st[:SH.N_STATE] = SH.new_state(n)
         self.st[K.EXT] = math.nan
-        self.st[K.L_PREV] = math.nan
         self.turn[:, 3], self.turn[:, 4], self.turn[:, 5] = 0.0, math.nan, math.inf  # direction, extreme, tau
         if self.kalman is not None:
             self.kalman.reset()
@@ -102,23 +110,22 @@ class TickComputer:
 
 
 class LoopTick:
-    """The whole device-excluded tick the loop runs, on plain floats: stylus position -> mapping (motion
-    scale, workspace clip, v_max step limit; teleop.core.mapping.Follower) -> cable lengths (inverse kinematics)
-    -> FSR counts -> tensions -> estimation with the Kalman filter (ReadingEstimator.update_floats) ->
-    rendered stylus force (Renderer.render_xyz).
+    """The device-excluded compute of one loop tick, in three stages: MAP (stylus position -> mapping: motion
+    scale, workspace clip, v_max step limit, teleop.core.mapping.Follower -> cable lengths), ESTIMATE (FSR counts
+    -> tensions -> estimate with the Kalman filter, ReadingEstimator.update_arrays) and RENDER (wrench ->
+    stylus force, Renderer.render_tick).
 
-    teleop.loop.core.Teleop calls `map`, `estimate` and `render` at its MAP, ESTIMATE and RENDER stages
-    (the robot I/O sits between them); `compute` runs the three back to back for `teleop bench tick`, so the
-    benchmark times the code the loop runs.
+    teleop.loop.core.Teleop calls `map`, `estimate` and `render` at its MAP, ESTIMATE and RENDER stages (the
+    robot I/O sits between them); `compute` runs the same three back to back on this object's mapping state,
+    so `teleop bench tick`, which times `compute`, times the code the loop runs.
 
         lt = LoopTick(geom, MappingParams(), ReadingEstimator(geom, "dynamic"), Renderer(rp), cmd_dt=1e-3)
         lt.engage(p_stylus)                                  # anchors (the loop's ENABLED entry)
         L, t, w, F = lt.compute(p_stylus, v_stylus, counts, dt)
 
     Inputs are what the devices give: stylus position (3,) [m] and velocity (3,) [m/s] in the device frame,
-    raw FSR counts (6,), as numpy arrays. Outputs: commanded lengths L [m] (the robot command; the loop makes
-    the device's array), tensions [N] and wrench [N, N m] in {B} as lists of 6 floats, force (3,) tuple [N]
-    in the device frame.
+    raw FSR counts (6,), as numpy arrays. Outputs (arrays, as the loop holds them): commanded lengths L (6,)
+    [m], tensions (6,) [N] and wrench (6,) [N, N m] in {B}, force (3,) [N] in the device frame.
     """
 
     def __init__(self, geom: Geometry, mapping, estimator, renderer: Renderer | None = None, cmd_dt: float = 1e-3):
@@ -147,36 +154,43 @@ class LoopTick:
         self.estimator.reset()
         self.renderer.reset()
 
-    def engage(self, p_stylus) -> None:
-        """Anchor the incremental mapping at the stylus position (3,) [m] and the current robot target."""
+    def engage(self, p_stylus, L_robot=None) -> None:
+        """Anchor the incremental mapping at the stylus position (3,) [m] and the current robot target; at the
+        first engagement the lengths start from L_robot (6,) [m] (where the robot is), default the target's."""
         self._anchor[:3] = p_stylus
         self._anchor[3:] = self._pos
         if not self._engaged_L:
-            self._L[:] = self.follower.lengths(*self._pos)
+            self._L[:] = self.follower.lengths(*self._pos) if L_robot is None else L_robot
             self._engaged_L = True
 
-    def map(self, p_stylus, anchor_stylus, anchor_robot, pos, L_prev) -> tuple[list, list]:
-        """(target position [3] [m], lengths [6] [m]): `Follower.step` (all arguments lists of floats)."""
-        return self.follower.step(p_stylus, anchor_stylus, anchor_robot, pos, L_prev)
+    def map(self, p_stylus, anchor: np.ndarray, pos: np.ndarray, L_prev) -> np.ndarray:
+        """MAP: the commanded lengths (6,) [m] (a new array) for the stylus position p_stylus (3,) [m], from the
+        anchors (6,) (stylus, robot) [m], the previous target pos (3,) [m] (updated in place: float64, contiguous)
+        and lengths L_prev (6,) [m] (Follower.step_into)."""
+        L = np.array(L_prev, dtype=float)
+        self.follower.step_into(np.ascontiguousarray(p_stylus, dtype=float), anchor, pos, L)
+        return L
 
-    def estimate(self, counts: list, pose: list, dt: float) -> tuple[list, list]:
-        """(tensions [6] [N], wrench [6] [N, N m]) from raw FSR counts at the commanded pose [6] (lists)."""
-        return self.estimator.update_floats(counts, pose, dt)
+    def estimate(self, counts, pose: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """ESTIMATE: (tensions (n,) [N], wrench (6,) [N, N m] in {B}), copies, from raw FSR counts (n,) at the
+        commanded pose (6,) float64 (ReadingEstimator.update_arrays); ValueError if either is not finite."""
+        t, w = self.estimator.update_arrays(counts, pose, dt)
+        if not all_finite2(t, w):
+            raise ValueError("estimated tensions/wrench not finite")
+        return t.copy(), w.copy()
 
     def render(self, fx: float, fy: float, fz: float, dt: float, vx: float, vy: float, vz: float) -> tuple:
-        """Stylus force (3,) [N] from the force part of the wrench and the stylus velocity (Renderer.render_xyz)."""
-        return self.renderer.render_xyz(fx, fy, fz, dt, vx, vy, vz)
+        """RENDER: Renderer.render_tick of the force part of the wrench [N] and the stylus velocity [m/s]:
+        (force (3,) [N] device frame, mapped (3 floats), ramp, tripped)."""
+        return self.renderer.render_tick(fx, fy, fz, dt, vx, vy, vz)
 
     def compute(self, p_stylus, v_stylus, counts, dt: float):
-        """One full tick (see the class docstring): (L [6], tensions [6], wrench [6], force (3,)); p_stylus,
-        v_stylus (3,) and counts (6,) float64 arrays. The same kernels as map, estimate and render, on this
-        object's arrays."""
-        self.follower.step_into(p_stylus, self._anchor, self._pos, self._L)
+        """One full tick (see the class docstring): map, estimate, render on this object's mapping state;
+        (L (6,), tensions (6,), wrench (6,), force (3,)); p_stylus, v_stylus (3,) and counts (6,) arrays."""
+        self._L = L = self.map(p_stylus, self._anchor, self._pos, self._L)
         pose = self._pose
         pose[:3] = self._pos
-        est = self.estimator
-        t = est.tensions_into(counts)
-        w = est.tick.estimate_into(pose, t, dt)[1]
+        t, w = self.estimate(counts, pose, dt)
+        fx, fy, fz = w[:3].tolist()
         vx, vy, vz = v_stylus.tolist()
-        F = self.renderer.render_xyz(w[0], w[1], w[2], dt, vx, vy, vz)
-        return self._L.tolist(), t.tolist(), w[:6].tolist(), F
+        return L, t, w, self.render(fx, fy, fz, dt, vx, vy, vz)[0]

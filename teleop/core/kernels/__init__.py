@@ -5,8 +5,9 @@ Where each formula lives (the numpy array forms, the physics Steps, the estimato
 the loop's tick all call these):
 - geometry.py   ZYX rotation (eq 5), platform offsets, cable length and unit vector (eq 4), wrap angle
                 (eq 6 + theta0), structure-matrix column (eq 8), inverse and forward kinematics
-- friction.py   direction (Schmitt) rule, Dahl step, capstan band / stick-transition step / seed compensation
-                (eq 7), the `dynamic` estimator's capstan friction state
+- friction.py   direction (Schmitt) rule, Dahl, Coulomb, viscous, Stribeck, the play (backlash) and its inverse
+- sheath.py     the sheath: its parameters, friction state layout and capstan law (stick transitions, the start
+                on the tip tension, the `dynamic` estimator's inverse, the seed's compensation eq 7)
 - tension.py    the closed-form tension distribution of a one-dimensional null space
 - kalman.py     the steady-state Kalman update
 - estimate.py   the per-tick estimate of each estimator (one compiled call), turn correction, FSR branch

@@ -5,10 +5,12 @@ compensation step; everything else is the shared kernels of teleop.core.kernels.
 Arrays (all float64), held by estimation.tick.TickComputer:
     pose (6,) [m, rad]; t_in (6,) sensor tensions [N]; dt [s]
     cab (n, 12): r_i (0:3), B_i (3:6) [m] and the orientation cache (R r_i - B_i, R r_i) (6:12)
-    c (11,): constants, indices below (v the base-plane normal, mu, theta0, the length dead band [m], and the
-        `dynamic` friction parameters b [N s/m], Dahl Fc [N] and sigma [N/m], v_smooth [s], stick k [N/m])
-    st (7, n): per-cable state rows (direction, extreme, previous length [m] (NaN: none yet), velocity
-        [m/s], Dahl force [N], capstan friction state phi) and the cached orientation (a, b, g, valid)
+    c (N_CONST,): constants, the sheath's first (teleop.core.kernels.sheath: mu, theta0, stick k [N/m]),
+        then those named below (v the base-plane normal, the length dead band [m], and the `dynamic`
+        friction parameters b [N s/m], Dahl Fc [N] and sigma [N/m], v_smooth [s])
+    st (N_ROWS, n): per-cable state rows, the sheath's first (its motor position x = -length [m], NaN: none
+        yet, and friction state phi), then direction, extreme, velocity [m/s], Dahl force [N], and the
+        cached orientation (a, b, g, valid)
     kf (5, 6): Kalman filter array (teleop.core.kernels.kalman), (5, 0) for none
     turn (k, 6): per fitted axis [axis, duration [s], dead band [m], direction, extreme [m], tau [s]]
     coefs (k, 2, 6, deg+1): forward / backward power-series coefficients in s = tau / duration
@@ -21,14 +23,15 @@ import math
 
 import numpy as np
 
-from teleop.core.kernels.friction import capstan_hold, capstan_state_step, dahl_step, direction_step
+from teleop.core.kernels import sheath as SH
+from teleop.core.kernels.friction import dahl_step, direction_step
 from teleop.core.kernels.geometry import cable, platform_offsets, wrap_angle
 from teleop.core.kernels.jit import njit
 from teleop.core.kernels.kalman import kalman_update
 from teleop.core.kernels.linalg import horner
 
-VX, VY, VZ, MU, THETA0, DEADBAND, B_VISC, DAHL_FC, DAHL_SIGMA, V_SMOOTH, STICK_K = range(11)
-DIR, EXT, L_PREV, VEL, F_DAHL, PHI, ORIENT = range(7)
+VX, VY, VZ, DEADBAND, B_VISC, DAHL_FC, DAHL_SIGMA, V_SMOOTH, N_CONST = range(SH.N_CONST, SH.N_CONST + 9)
+DIR, EXT, VEL, F_DAHL, ORIENT, N_ROWS = range(SH.N_STATE, SH.N_STATE + 6)
 
 
 @njit
@@ -77,10 +80,10 @@ def _start(pose, cab, st, out):
 
 @njit
 def _cable(pose, cab, c, out, i):
-    """Cable i at the pose: its length stored in out[0, i]; (L, ux, uy, uz, mu Theta)."""
+    """Cable i at the pose: its length stored in out[0, i]; (L, ux, uy, uz, its wrap Theta [rad])."""
     L, ux, uy, uz = cable(pose[0], pose[1], pose[2], cab[:, 6:12], i)
     out[0, i] = L
-    return L, ux, uy, uz, c[MU] * wrap_angle(ux, uy, uz, c[VX], c[VY], c[VZ], c[THETA0])
+    return L, ux, uy, uz, wrap_angle(ux, uy, uz, c[VX], c[VY], c[VZ], c[SH.THETA0])
 
 
 @njit
@@ -92,9 +95,9 @@ def _put(out, cab, i, t, ux, uy, uz):
 
 @njit
 def _finish(pose, dt, st, kf, turn, coefs, out):
-    """Previous lengths kept; turn correction and Kalman filter on the wrench: the common end of a tick."""
+    """Motor positions kept; turn correction and Kalman filter on the wrench: the common end of a tick."""
     for i in range(st.shape[1]):
-        st[L_PREV, i] = out[0, i]
+        st[SH.X, i] = -out[0, i]
     w = out[1, :6]
     if turn.shape[0] > 0:
         turn_correct(w, pose[0], pose[1], pose[2], dt, turn, coefs)
@@ -118,27 +121,27 @@ def estimate_capstan(pose, t_in, dt, cab, c, st, kf, turn, coefs, out):
     cable length change (Schmitt trigger with the length dead band; shortening or unmoved = pulling)."""
     _start(pose, cab, st, out)
     for i in range(st.shape[1]):
-        L, ux, uy, uz, mu_theta = _cable(pose, cab, c, out, i)
+        L, ux, uy, uz, theta = _cable(pose, cab, c, out, i)
         d, e, _ = direction_step(st[DIR, i], st[EXT, i], L, c[DEADBAND])
         st[DIR, i], st[EXT, i] = d, e
-        _put(out, cab, i, capstan_hold(t_in[i], d <= 0.0, mu_theta), ux, uy, uz)
+        _put(out, cab, i, SH.hold_tension(t_in[i], d <= 0.0, theta, c), ux, uy, uz)
     _finish(pose, dt, st, kf, turn, coefs, out)
 
 
 @njit
 def estimate_dynamic(pose, t_in, dt, cab, c, st, kf, turn, coefs, out):
     """`dynamic`: per cable, the viscous force b v (v: the motor velocity, low-passed with v_smooth) and the
-    Dahl state along the cable's own travel are removed, then the capstan is inverted through its friction
-    state phi (t_tip = t e^(-phi mu Theta)); no direction rule: phi follows the travel."""
+    Dahl state along the cable's own travel are removed, then the sheath's law is inverted through its
+    friction state (sheath.tip_tension); no direction rule: the state follows the travel."""
     _start(pose, cab, st, out)
-    first = st[L_PREV, 0] != st[L_PREV, 0]
+    first = st[SH.X, 0] != st[SH.X, 0]
     Fc, sigma = c[DAHL_FC], c[DAHL_SIGMA]
     dahl = Fc > 0.0 and not first
     a_v = dt / (c[V_SMOOTH] + dt) if dt > 0 else 0.0
     inv_dt = 1.0 / dt if dt > 0 else 0.0
     for i in range(st.shape[1]):
-        L, ux, uy, uz, mu_theta = _cable(pose, cab, c, out, i)
-        dx = 0.0 if first else st[L_PREV, i] - L  # motor travel, + while pulling
+        L, ux, uy, uz, theta = _cable(pose, cab, c, out, i)
+        dx = 0.0 if first else -L - st[SH.X, i]  # motor travel, + while pulling
         v = st[VEL, i]
         v += a_v * (dx * inv_dt - v)
         st[VEL, i] = v
@@ -147,9 +150,7 @@ def estimate_dynamic(pose, t_in, dt, cab, c, st, kf, turn, coefs, out):
             Fd = dahl_step(st[F_DAHL, i], dx, sigma, Fc)
             st[F_DAHL, i] = Fd
             t -= Fd
-        phi = capstan_state_step(st[PHI, i], dx, t, mu_theta, c[STICK_K])
-        st[PHI, i] = phi
-        _put(out, cab, i, t * math.exp(-phi * mu_theta), ux, uy, uz)
+        _put(out, cab, i, SH.tip_tension(st, i, dx, t, theta, c), ux, uy, uz)
     _finish(pose, dt, st, kf, turn, coefs, out)
 
 

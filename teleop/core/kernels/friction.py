@@ -1,4 +1,5 @@
-"""Kernels of the sheath friction and the direction rule, per sample on floats: the one definition of each.
+"""Kernels of the friction laws and the direction rule, per sample on floats: the one definition of each (the
+sheath's capstan law: teleop.core.kernels.sheath).
 
 Conventions of teleop.core.physics: x increasing = the motor hauls its cable in (pulling); a motor travel dx > 0
 pulls. Each returns the new state; the callers (the physics Steps and array forms, the estimators, the
@@ -8,19 +9,11 @@ simulated robot, the loop's tick) keep the state.
   falling, 0 not yet moved) flips only once the value has come back more than the dead band from the
   extreme reached since the last flip.
 - `dahl_step`: Dahl pre-sliding friction, exact over a monotone step: F = s Fc + (F - s Fc) e^(-sigma |dx| / Fc).
-- `capstan_play_step`: the capstan with stick transitions, motor side (physics capstan_friction): the motor
-  force follows the cable stretch, F <- clamp(F + k dx, F_t e^-mu Theta, F_t e^+mu Theta).
-- `capstan_band`: (lo, hi) = (F e^-mu Theta, F e^+mu Theta) sorted.
-- `capstan_hold`: the seed's compensation (seed 000 eq 7, physics.capstan.motor2tip): t e^-mu Theta while
-  pulling (shortening or unmoved), t e^+mu Theta while paying out.
 - `play_inverse_step`: the inverse of the play operator (backlash feed-forward, seed 002): the command
   x = y_d + r s leads the wanted output y_d by up to the half-width r on the side s of its motion,
   rate-limited and kept within limits.
 - `play_mix_step`: the general play (backlash) of a tendon in a sheath: an elastic part, a main play and a
   wide play, the lag scaling with the position (physics.backlash).
-- `capstan_state_step`: the friction state phi in [-1, 1] of the `dynamic` estimator: the sensor tension
-  t e^(phi mu Theta) moves by k dx while the cable sticks, d phi = k dx / (mu Theta t_sensor), clipped at
-  +-1 where it slips (a slack cable, t <= 1e-6 N, slips at once).
 """
 
 from __future__ import annotations
@@ -78,34 +71,6 @@ def play_inverse_step(y_d, r, s, max_step, lo, hi, x_prev):
 
 
 @njit
-def capstan_band(F, mu_theta):
-    """(lo, hi): F e^-mu Theta and F e^+mu Theta, ordered (F may be negative)."""
-    e = math.exp(mu_theta)
-    a, b = F / e, F * e
-    return (a, b) if a <= b else (b, a)
-
-
-@njit
-def capstan_play_step(F, dx, F_tip, mu_theta, k):
-    """Motor force [N] after a motor travel dx [m]: clamp(F + k dx) into the band of the tip force F_tip."""
-    lo, hi = capstan_band(F_tip, mu_theta)
-    return clamp(F + k * dx, lo, hi)
-
-
-@njit
-def capstan_hold(t, pulling, mu_theta):
-    """Tip tension [N] from the sensor tension t [N]: t e^-mu Theta while pulling, t e^+mu Theta releasing."""
-    return t * math.exp(-mu_theta) if pulling else t * math.exp(mu_theta)
-
-
-@njit
-def capstan_state_step(phi, dx, t_sensor, mu_theta, k):
-    """Friction state phi in [-1, 1] after a motor travel dx [m] at sensor tension t_sensor [N]."""
-    den = mu_theta * (t_sensor if t_sensor > 1e-6 else 1e-6)
-    return clamp(phi + k * dx / (den if den > 1e-12 else 1e-12), -1.0, 1.0)
-
-
-@njit
 def coulomb_force(v, Fc):
     """Coulomb friction [N]: Fc sign(v)."""
     return Fc * sgn(v)
@@ -121,14 +86,6 @@ def viscous_force(v, b):
 def stribeck_force(v, Fc, Fs, vs):
     """Stribeck friction [N]: (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v); vs [m/s] the Stribeck velocity."""
     return (Fc + (Fs - Fc) * math.exp(-(v / vs) ** 2)) * sgn(v)
-
-
-@njit
-def capstan_tip_step(F_tip, F_motor, mu_theta):
-    """Tip force [N] estimated from the motor force with flat transitions: the tip force holds while it
-    stays inside the band of the motor force, clamp(F_tip, F_m e^-mu Theta, F_m e^+mu Theta)."""
-    lo, hi = capstan_band(F_motor, mu_theta)
-    return clamp(F_tip, lo, hi)
 
 
 @njit
@@ -180,18 +137,6 @@ def play_mix_run(x, r1, r2, w1, w2, grow, start, out):
 
 
 @njit
-def capstan_play_run(x, F_tip, mu_theta, k, F0, x0, out):
-    """out (n,): motor force [N] with stick transitions for motor positions x (n,) [m], tip forces F_tip
-    (n,) [N] and wraps mu_theta (n,), continuing from motor force F0 at position x0 (x0 = x[0]: F0 clamped
-    into the first band)."""
-    F = F0
-    for j in range(x.shape[0]):
-        F = capstan_play_step(F, x[j] - (x0 if j == 0 else x[j - 1]), F_tip[j], mu_theta[j], k)
-        out[j] = F
-    return out
-
-
-@njit
 def play_inverse_into(y_d, r, v0, alpha, dt, max_step, lo, hi, state, out):
     """out (n,): play_inverse_step on n channels (cables) at one command, the side s = clip(v / v0, -1, 1)
     from the low-passed rate v of y_d (v += alpha ((y_d - y_prev) / dt - v), dt [s] between commands, v0
@@ -216,14 +161,4 @@ def play_inverse_run(y_d, r, max_step, out):
         d, e, _ = direction_step(d, e, y_d[k], 0.0)
         x = play_inverse_step(y_d[k], r, d, max_step, -math.inf, math.inf, x)
         out[k] = x
-    return out
-
-
-@njit
-def capstan_tip_run(F_motor, mu_theta, F0, out):
-    """out (n,): tip force [N] from motor forces F_motor (n,) [N] with flat transitions, from F0."""
-    F = F0
-    for j in range(F_motor.shape[0]):
-        F = capstan_tip_step(F, F_motor[j], mu_theta[j])
-        out[j] = F
     return out

@@ -2,8 +2,9 @@
 the cable chain tip tensions -> FSR-side tensions, built from the shared kernels (one definition each).
 
     pose_terms: structure matrix A (eq 8), wraps Theta_i = |theta_i| (eq 6) + theta0, tool offset R tip
-    cable_sensor: tension distribution at A (A t + f = 0, one-dimensional null space closest to t_ref),
-        then per cable the capstan with stick transitions along the motor position x = -length
+    cable_sensor: tension distribution at A (A t + f = 0, one-dimensional null space closest to the
+        sheath's pretension), then per cable the sheath's law (sheath.motor_forces) at the motor position
+        x = -length
     reading: one reading after the physics steps (contact wrench, motor steps, cable_sensor) in one call:
         every kernel call pays for its argument handling, and several per reading added up in the
         closed-loop simulation's tick
@@ -16,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from teleop.core.kernels.friction import capstan_play_step
+from teleop.core.kernels import sheath as SH
 from teleop.core.kernels.geometry import cable, forward_kinematics, lengths_outside, platform_offsets, rotation_zyx, \
     structure_column, wrap_angle
 from teleop.core.kernels.jit import njit
@@ -60,26 +61,18 @@ def forward_kinematics_batch(L, q0, free, r, B, tol, max_iter, out):
 
 
 @njit
-def cable_sensor(f, A, mu, theta, x, t_min, t_max, t_ref, k, cap, t_tip, t_fsr):
+def cable_sensor(f, A, theta, x, t_min, t_max, c, cap, t_tip, t_fsr):
     """One reading: tip tensions t_tip (n,) [N] balancing the wrench f (6,) at A, then the FSR-side tensions
-    t_fsr (n,) [N] through each cable's capstan (wrap theta (n,) [rad], friction mu, stick stiffness k
-    [N/m]) at motor positions x (n,) [m]; cap (2, n) the capstan state (motor force [N], previous position
-    [m], NaN: none yet). Returns tension.OK, or the tension kernel's status (-1: A is not of rank n - 1),
-    and then changes nothing."""
+    t_fsr (n,) [N] through each cable's sheath (wrap theta (n,) [rad]) at motor positions x (n,) [m]; c the
+    sheath's constants (at the head of the array), cap (sheath.N_STATE, n) its state. Returns tension.OK, or
+    the tension kernel's status (-1: A is not of rank n - 1), and then changes nothing."""
     LU, p, q, nv, ok = null1_terms(A)
     if not ok:
         return -1
-    status = null1_tensions(LU, p, q, A, nv, f, t_min, t_max, t_ref, t_tip)[0]
+    status = null1_tensions(LU, p, q, A, nv, f, t_min, t_max, c[SH.PRETENSION], t_tip)[0]
     if status != OK:
         return status
-    for i in range(t_tip.shape[0]):
-        mt = mu * theta[i]
-        if cap[1, i] != cap[1, i]:  # first reading: starts on the tip tension
-            F = capstan_play_step(t_tip[i], 0.0, t_tip[i], mt, k)
-        else:
-            F = capstan_play_step(cap[0, i], x[i] - cap[1, i], t_tip[i], mt, k)
-        cap[0, i], cap[1, i] = F, x[i]
-        t_fsr[i] = F
+    SH.motor_forces(cap, x, t_tip, theta, c, t_fsr)
     return OK
 
 
@@ -126,9 +119,9 @@ def position_steps(L_home, L, steps_per_m, out):
         out[i] = int(np.rint((L_home[i] - L[i]) * steps_per_m))
 
 
-# constants of `reading` (SimRobot.reading_constants): friction coefficient, tension range and reference,
-# capstan stick stiffness, motor steps per metre
-MU, T_MIN, T_MAX, T_REF, CAPSTAN_K, STEPS_PER_M, N_READING_CONST = 0, 1, 2, 3, 4, 5, 6
+# constants of `reading` (scenes.sim_robot.SimRobot): the sheath's (sheath.N_CONST), then the tension range
+# [N] and the motor steps per metre
+T_MIN, T_MAX, STEPS_PER_M, N_READING_CONST = range(SH.N_CONST, SH.N_CONST + 4)
 
 
 @njit
@@ -136,12 +129,12 @@ def reading(o, F, A, theta, x, L_home, L, c, cap, f, t_tip, t_fsr, steps):
     """The simulated robot's reading after its physics steps, one call (scenes.sim_robot.SimRobot.read):
     f (6,) the contact wrench (contact_moment of the contact force F (3,) [N] at the tool offset o (3,) [m]),
     steps (n,) the motors' positions (position_steps of the commanded lengths L against L_home), then the
-    cable chain (cable_sensor: t_tip, t_fsr (n,) [N] at A, wraps theta, motor positions x, capstan state
+    cable chain (cable_sensor: t_tip, t_fsr (n,) [N] at A, wraps theta, motor positions x, sheath state
     cap). c (N_READING_CONST,): the constants named above. Returns cable_sensor's status (f and steps are
     written whatever it is)."""
     contact_moment(o, F, f)
     position_steps(L_home, L, c[STEPS_PER_M], steps)
-    return cable_sensor(f, A, c[MU], theta, x, c[T_MIN], c[T_MAX], c[T_REF], c[CAPSTAN_K], cap, t_tip, t_fsr)
+    return cable_sensor(f, A, theta, x, c[T_MIN], c[T_MAX], c, cap, t_tip, t_fsr)
 
 
 @njit

@@ -3,8 +3,9 @@ broadcasts their arguments): each applies its kernel, nothing else."""
 
 from __future__ import annotations
 
-from teleop.core.kernels.friction import capstan_hold, capstan_tip_step, coulomb_force, stribeck_force, viscous_force
+from teleop.core.kernels.friction import coulomb_force, stribeck_force, viscous_force
 from teleop.core.kernels.jit import njit
+from teleop.core.kernels.sheath import capstan_hold, capstan_tip_step
 
 
 @njit

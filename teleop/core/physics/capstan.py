@@ -8,7 +8,9 @@ two lines (seed 001 Fig 2b, "flat transitions"). This is modelled as a play oper
 force follows the cable stretch, F_m <- F_m + k dx, clamped to the band
 [F_t exp(-mu Theta), F_t exp(+mu Theta)]; k [N/m] is the stick stiffness seen at the motor. k -> inf
 gives the plain sign(dx) switch. The inverse (compensation) needs no k: the tip force is the play of the
-motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)).
+motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)). The law, its state and its start
+on the tip force are the sheath's kernels (teleop.core.kernels.sheath), shared with the simulated robot and
+the estimators.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.kernels.friction import capstan_play_run, capstan_play_step, capstan_tip_run
+from teleop.core.kernels.sheath import STIFF_STICK_K, Sheath, capstan_tip_run, motor_force, motor_force_run, new_state
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.ufuncs import hold_loop, tip_loop
 from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
@@ -69,15 +71,23 @@ def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
     """(n,) motor force [N] with stick transitions at reversals.
 
     x (n,) motor position [m], F_tip (n,) tip force [N], theta scalar or (n,) [rad], k stick stiffness
-    [N/m]; F0 initial motor force (default F_tip[0], inside the band).
+    [N/m], mu scalar; F0 initial motor force (default: the sheath's start on the tip force).
     F_m,k = clamp(F_m,k-1 + k (x_k - x_k-1), F_t,k e^-mu theta, F_t,k e^+mu theta) (kernel
-    friction.capstan_play_step).
+    sheath.motor_force).
     """
     x = np.ascontiguousarray(x, dtype=float)
     F_tip = np.ascontiguousarray(np.broadcast_to(np.asarray(F_tip, dtype=float), x.shape))
-    mt = np.ascontiguousarray(np.broadcast_to(_mu_theta(mu, theta), x.shape))
-    y0 = float(F_tip.ravel()[0]) if F0 is None else float(F0)
-    return capstan_play_run(x, F_tip, mt, float(k), y0, float(x[0]), np.empty(x.shape[0]))
+    th = np.ascontiguousarray(np.broadcast_to(np.asarray(theta, dtype=float), x.shape))
+    st = new_state(1)
+    if F0 is not None:  # a given motor force at the first position
+        st[:2, 0] = float(x[0]), float(F0)
+    return motor_force_run(x, F_tip, th, _constants(mu, k), st, 0, np.empty(x.shape[0]))
+
+
+def _constants(mu, k) -> np.ndarray:
+    """The sheath's kernel constants for friction mu [-] and stick stiffness k [N/m] (the wrap comes with the
+    signals)."""
+    return Sheath(mu=float(mu), stick_k=float(k)).constants()
 
 
 def motor2tip_transitions(F_motor, mu, theta, F0=None):
@@ -116,11 +126,11 @@ def _guess(signals: Signals, y: np.ndarray) -> dict:
 
 
 PARAMS = (
-    ParamSpec("mu", "1", 0.0, 1.5, 0.056, "sheath friction coefficient"),
-    ParamSpec("theta", "rad", 0.0, 8 * np.pi, np.deg2rad(140.0),
+    ParamSpec("mu", "1", 0.0, 1.5, Sheath.mu, "sheath friction coefficient"),
+    ParamSpec("theta", "rad", 0.0, 8 * np.pi, Sheath.theta0,
               "total wrap angle Theta (ignored when the signals carry a 'theta' channel; "
               "mu and theta are identifiable only as a product: fix one when fitting)"),
-    ParamSpec("k", "N/m", 1.0, 1e8, 2e4, "stick stiffness during reversals (motor force per motor travel)",
+    ParamSpec("k", "N/m", 1.0, 1e8, STIFF_STICK_K, "stick stiffness during reversals (motor force per motor travel)",
               log=True),
     ParamSpec("preload", "N", 0.0, 50.0, 0.0, "pretension the cable carries beside the load (an antagonistic "
               "pair's, or a load sensor zeroed under tension): the sheath grips load + preload, the motor "
@@ -134,20 +144,15 @@ class CapstanStep(Step):
     effect_name = "capstan_friction"
 
     def reset(self) -> None:
-        self.x_prev = None
-        self.F = 0.0
+        self.st = new_state(1)   # the sheath's state (teleop.core.kernels.sheath)
+        self.c = _constants(self.params["mu"], self.params["k"])
 
     def step(self, x: float, load: float, theta: float | None = None) -> float:
         p = self.params
-        mu_theta = p["mu"] * (p["theta"] if theta is None else theta)
         P = p.get("preload", 0.0)
         T = float(load) + P   # the tension the sheath grips
-        if self.x_prev is None:  # starts on the tip force, clamped into its band
-            self.F = capstan_play_step(T, 0.0, T, mu_theta, p["k"])
-        else:
-            self.F = capstan_play_step(self.F, float(x - self.x_prev), T, mu_theta, p["k"])
-        self.x_prev = x
-        return float(self.F) - P
+        F = motor_force(self.st, 0, float(x), T, float(p["theta"] if theta is None else theta), self.c)
+        return float(F) - P
 
 
 class CapstanCompensator:
