@@ -13,8 +13,10 @@ reaching the sentinel with one means it was found only after the work had starte
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 
@@ -37,7 +39,8 @@ WORK = [("teleop.apps.protocols.palpation", "run_test"), ("teleop.apps.protocols
         ("teleop.apps.protocols.blind.rig", "transparency"), ("teleop.apps.protocols.blind.human", "run_human_study"),
         ("teleop.loop.session", "run_session"), ("teleop.diagnosis.diagnose", "diagnose"),
         ("teleop.diagnosis.generator", "case_plan"), ("teleop.apps.bench.tick", "bench_tick"),
-        ("teleop.apps.bench.sim", "bench_sim"), ("devices.arduino.build", "build_firmware"),
+        ("teleop.apps.bench.sim", "bench_sim"), ("teleop.apps.bench.effects", "bench_effects"),
+        ("devices.arduino.build", "build_firmware"),
         ("teleop.apps.bench.cable", "fig9"), ("teleop.apps.bench.cable", "fig11"), ("teleop.apps.bench.cable", "fig13"),
         ("teleop.apps.campaign.runner", "run_campaign")]
 # A new long command: add where its work begins here, or the fuzzer runs that work for real on every valid
@@ -52,12 +55,19 @@ def _sentinel(*args, **kwargs):
     raise WorkStarted("the work started before every argument was checked")
 
 
+def replace_everywhere(monkeypatch, module: str, name: str, value) -> None:
+    """`module.name` replaced by `value`, and so in every module of the project that imported it by name."""
+    real = vars(importlib.import_module(module))[name]
+    for mod in list(sys.modules.values()):
+        if getattr(mod, "__name__", "").split(".")[0] in ("teleop", "devices", "scenes") \
+                and getattr(mod, "__dict__", {}).get(name) is real:
+            monkeypatch.setattr(mod, name, value)
+
+
 @pytest.fixture(autouse=True)
 def no_work(monkeypatch):
-    import importlib
-
     for module, name in WORK:
-        monkeypatch.setattr(importlib.import_module(module), name, _sentinel)
+        replace_everywhere(monkeypatch, module, name, _sentinel)
 
 
 def leaf_parsers(parser: argparse.ArgumentParser, path=()) -> dict:
@@ -247,14 +257,12 @@ def test_fuzz_reaches_every_subcommand():
 ])
 def test_the_issue_cases(tmp_path, monkeypatch, capsys, argv, named):
     """The cases the newcomer met: one line naming the file or flag, exit 2, nothing written."""
-    import teleop.loop.session
-
     (tmp_path / "adir").mkdir()
     (tmp_path / "empty.csv").write_text("")
     (tmp_path / "file.txt").write_text("x")
     monkeypatch.chdir(tmp_path)
     if "serial://" in " ".join(argv):  # the real session code up to opening the port
-        monkeypatch.setattr(teleop.loop.session, "run_session", REAL_RUN_SESSION)
+        replace_everywhere(monkeypatch, "teleop.loop.session", "run_session", REAL_RUN_SESSION)
     if argv[-1] == "/nonexistent-root/x.json" and os.access("/", os.W_OK):
         argv = argv[:-1] + ["file.txt/x.json"]
         named = "file.txt/x.json"

@@ -4,7 +4,7 @@ path (teleop.core.estimation.sensor_reading) recovers the cable tensions within 
 import numpy as np
 import pytest
 
-from devices.base import open_device
+from teleop.loop.devices_by_url import open_device
 from scenes.sim_robot import SimRobot, SimRobotParams, home_pose
 from scenes.sim_sensors import FbgArray, FbgEmulation
 from teleop.core.errors import InputError
@@ -83,9 +83,9 @@ def _trace(kind: str, seed: int = 1):
         a = robot.run(lengths(fit))
         robot.set_pad_offset((0.0, 0.0))
         b = robot.run(lengths(poke))
-    from teleop.apps.protocols.palpation import _concat
+    from teleop.apps.protocols.palpation_estimators import concat_traces
 
-    return _concat([a, b]), len(a.t), dt
+    return concat_traces([a, b]), len(a.t), dt
 
 
 @pytest.fixture(scope="module")
@@ -172,10 +172,10 @@ def test_blind_rig_estimator_per_sensor_kind(kind):
     """`teleop blind-test --sensor K`: the rig's robot carries the kind and its estimator reads it (for one,
     with Kp < 1 < Kr identified on the simulated robot)."""
     from teleop.core.estimation.sensor_reading import FbgReadingEstimator
-    from teleop.apps.protocols.blind.rig import RigOptions, _Station
+    from teleop.apps.protocols.blind.rig import RigOptions, Station
     from scenes.pads import blind_test_pad
 
-    st = _Station(blind_test_pad(), RigOptions(sensor=kind), (1, 2))
+    st = Station(blind_test_pad(), RigOptions(sensor=kind), (1, 2))
     assert st.robot.params.sensor == kind
     assert isinstance(st.estimator, FbgReadingEstimator) and st.estimator.kind == kind
     if kind == "one":
@@ -241,7 +241,7 @@ def test_robot_process_slot_carries_fbg_shifts():
 
 def test_session_estimator_follows_the_robot_url():
     """`teleop session --robot sim://robot?sensor=K`: the loop's estimator reads kind K (None: the FSR one)."""
-    from scenes.sim_sensors import loop_estimator
+    from teleop.loop.session import loop_estimator
 
     assert loop_estimator("sim://robot", 1e-3) is None
     assert loop_estimator("sim://robot?sensor=fsr", 1e-3) is None

@@ -6,6 +6,9 @@ from __future__ import annotations
 import argparse
 import math
 
+from teleop.core.config import input_problem
+from teleop.io.outputs import output_problem
+
 
 def _number(text: str, kind):
     try:
@@ -83,10 +86,29 @@ def rt_priority(text: str) -> int:
     return v
 
 
+# A person's stiffness JND as a Weber fraction: a participant who cannot tell two stiffnesses 2x apart
+# (above 100 %) or who tells 1 % apart is not a person; values outside are a typo (`--jnd 5` for 5 %).
+JND_RANGE = (0.01, 1.0)
+
+
+def jnd_fraction(text: str) -> float:
+    """'0.23' or '23%' -> 0.23 (argparse type for --jnd), within JND_RANGE."""
+    s = str(text).strip()
+    try:
+        v = float(s[:-1]) / 100.0 if s.endswith("%") else float(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a fraction like 0.23 or a percentage like 23%, got '{text}'")
+    lo, hi = JND_RANGE
+    if not (math.isfinite(v) and lo <= v <= hi):
+        hint = f"; for {s} % write {s}%" if math.isfinite(v) and v > hi and not s.endswith("%") else ""
+        raise argparse.ArgumentTypeError(
+            f"expected a stiffness JND a person can have, {lo:g} to {hi:g} as a Weber fraction "
+            f"({lo:.0%} to {hi:.0%}; Jones & Hunter 1990: 0.23), got '{text}'{hint}")
+    return v
+
+
 def input_file(text: str) -> str:
     """A path to an existing, readable file (not a directory)."""
-    from teleop.core.config import input_problem
-
     problem = input_problem(text)
     if problem:
         raise argparse.ArgumentTypeError(f"'{text}': {problem}")
@@ -95,8 +117,6 @@ def input_file(text: str) -> str:
 
 def output_file(text: str) -> str:
     """A path a result file can be written to (checked before any work starts; nothing is created yet)."""
-    from teleop.io.outputs import output_problem
-
     problem = output_problem(text)
     if problem:
         raise argparse.ArgumentTypeError(f"'{text}' {problem}")
@@ -105,8 +125,6 @@ def output_file(text: str) -> str:
 
 def output_dir(text: str) -> str:
     """A path that is, or can be made, a writable directory."""
-    from teleop.io.outputs import output_problem
-
     problem = output_problem(text, directory=True)
     if problem:
         raise argparse.ArgumentTypeError(f"'{text}' {problem}")

@@ -13,6 +13,7 @@ import pkgutil
 import re
 import sys
 
+from devices.base import DeviceError
 from teleop import __version__
 from teleop.apps.argtypes import OUTPUT_OPTIONS, seed_int
 from teleop.core.errors import InputError
@@ -148,8 +149,6 @@ def main(argv: list[str] | None = None) -> int:
 def _device_error(exc: Exception) -> str | None:
     """One line for a device that failed (devices.base.DeviceError: a port that will not open, a lost
     link, an SDK error), or None for any other exception (a bug, shown with its traceback)."""
-    from devices.base import DeviceError
-
     return " ".join(str(exc).split()) if isinstance(exc, DeviceError) else None
 
 

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from teleop.apps.bench.sim import BUDGET_FACTOR, STAGES, _Meter, bench_sim
+from teleop.apps.bench.sim import BUDGET_FACTOR, STAGES, CallTimer, bench_sim
 from teleop.apps.cli import main
 
 KEYS = ["seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wall_s", "cpu_s", "realtime_factor",
@@ -73,7 +73,7 @@ def test_substeps_and_untimed_robot():
 
 
 def test_meter_counts_nested_calls_once():
-    m = _Meter()
+    m = CallTimer()
     inner = m.wrap(lambda: 1)
     outer = m.wrap(lambda: inner() + 1)
     assert outer() == 2 and inner() == 1

@@ -3,7 +3,7 @@ long task runs (the ticker), failures noted as they happen; a tqdm bar on a term
 
 import io
 
-from teleop.apps.campaign.progress import Progress
+from teleop.apps.campaign.task_progress import TaskProgress
 
 
 class Clock:
@@ -15,7 +15,7 @@ class Clock:
 
 def test_plain_lines_also_between_tasks_and_a_last_line():
     clock, out = Clock(), io.StringIO()
-    p = Progress(10, "campaign", out, bar=False, interval=5.0, clock=clock, ticker=False)
+    p = TaskProgress(10, "campaign", out, bar=False, interval=5.0, clock=clock, ticker=False)
     clock.t += 2.0
     p.update()                   # 2 s: too soon for a line
     assert out.getvalue() == ""
@@ -38,7 +38,7 @@ def test_plain_lines_also_between_tasks_and_a_last_line():
 
 def test_bar_on_a_terminal_counts_tasks_and_failures():
     out = io.StringIO()
-    with Progress(3, "campaign", out, bar=True, ticker=False) as p:
+    with TaskProgress(3, "campaign", out, bar=True, ticker=False) as p:
         p.update()
         p.update(ok=False)
         p.note("task failed: x")

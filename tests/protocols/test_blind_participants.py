@@ -119,7 +119,8 @@ def test_larger_jnd_lowers_accuracy_on_close_stiffnesses():
 
 
 def test_jnd_curve_shares_pushes_across_jnds_and_accuracy_falls_with_jnd():
-    from teleop.apps.bench.blind_jnd import jnd_curve, parse_jnds, wilson
+    from teleop.apps.bench.blind_jnd import parse_jnds
+    from teleop.apps.campaign.blind import jnd_curve, wilson
 
     assert parse_jnds("0.4, 23%,0.1") == [0.1, 0.23, 0.4]
     lo, hi = wilson(50, 100)

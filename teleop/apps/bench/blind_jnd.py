@@ -9,19 +9,25 @@ same command run again resumes.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
+import tempfile
 
-from teleop.apps.campaign.blind import curve_points, jnd_curve, wilson  # noqa: F401 - this command's results
+from teleop.apps.argtypes import positive_int
+from teleop.apps.campaign.blind import KIND, PER_TASK, BlindStudy, curve_table, jnd_values, make_point
+from teleop.apps.campaign.plots import jnd_curves_figure
+from teleop.apps.campaign.runner import run_campaign
+from teleop.apps.campaign.spec import Campaign
+from teleop.apps.commands.blind_test import add_rig_options, participant_params, rig_options
+from teleop.apps.commands.campaign import add_scheduler_option
+from teleop.apps.protocols.blind.rig import SimRig
+from teleop.core.errors import InputError
+from teleop.io.outputs import check_output, output_problem, save_figure, write_json
 
 DEFAULT_JNDS = "0.05,0.1,0.15,0.23,0.3,0.4,0.6,0.8"
 
 
 def register(subparsers) -> None:
-    from teleop.apps.argtypes import positive_int
-    from teleop.apps.campaign.blind import PER_TASK
-    from teleop.apps.commands.blind_test import add_rig_options
-    from teleop.apps.commands.campaign import add_scheduler_option
-
     p = subparsers.add_parser("blind-jnd", help="correct-ranking share vs stiffness JND (blind test, simulated)")
     p.add_argument("--participants", type=positive_int, default=100, metavar="N", help="participants per point")
     p.add_argument("--jnd", default=DEFAULT_JNDS, metavar="J1,J2,...",
@@ -40,24 +46,10 @@ def register(subparsers) -> None:
 
 def parse_jnds(text: str) -> list:
     """'0.4, 23%,0.1' -> [0.1, 0.23, 0.4] (sorted, distinct)."""
-    from teleop.apps.campaign.blind import jnd_values
-
     return jnd_values([s.strip() for s in str(text).split(",") if s.strip()], f"--jnd '{text}'")
 
 
 def run(args) -> int:
-    import dataclasses
-    import tempfile
-
-    from teleop.apps.campaign.blind import KIND, BlindStudy, curve_table, make_point
-    from teleop.apps.campaign.plots import jnd_curves_figure
-    from teleop.apps.campaign.runner import run_campaign
-    from teleop.apps.campaign.spec import Campaign
-    from teleop.apps.commands.blind_test import participant_params, rig_options
-    from teleop.core.errors import InputError
-    from teleop.io.outputs import check_output, output_problem, save_figure, write_json
-    from teleop.apps.protocols.blind.rig import SimRig
-
     jnds = parse_jnds(args.jnd)
     args.jnd = None
     base = participant_params(args)

@@ -31,6 +31,14 @@ import math
 
 import numpy as np
 
+from scenes.cable_rig import simulate
+from teleop.core.errors import InputError
+from teleop.core.estimation.turn import TurnCompensation, TurnCompensator, fit_turn_compensation
+from teleop.core.geometry import Geometry
+from teleop.core.physics import motor2tip, motor2tip_transitions
+from teleop.core.sensors import FsrBranchLag, FsrConverter, default_fsr_calibration
+from teleop.io.outputs import check_output, save_figure, write_json
+
 EXPERIMENTS = ("fig9", "fig11", "fig13")
 THETA0 = math.radians(140.0)
 THETA1 = math.radians(360.0)
@@ -51,8 +59,6 @@ SEED = {
 
 def mu_bd() -> float:
     """Sheath friction coefficient of B-D: the project's geometry default (fitted to Fig 9's distal swings)."""
-    from teleop.core.geometry import Geometry
-
     return float(Geometry.__dataclass_fields__["mu"].default)
 
 
@@ -84,8 +90,6 @@ def sheath(seed: int, x: np.ndarray, theta, mu: float, load: dict, noise: float 
     FS_HZ, bend theta [rad], friction mu, load {"tip_force": (n,)} (external) or {"spring_N_per_m",
     "preload_N"}; ideal sensors, force noise `noise` x 0.4 % of the mean load. Stick transitions over 2 %
     of the stroke."""
-    from scenes.cable_rig import simulate
-
     spring = "spring_N_per_m" in load
     F_mean = float(np.mean(load["tip_force"])) if not spring else load["preload_N"]
     A = 0.5 * float(np.ptp(x)) or 1e-3
@@ -101,8 +105,6 @@ def sheath(seed: int, x: np.ndarray, theta, mu: float, load: dict, noise: float 
 def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0) -> np.ndarray:
     """(n,) tension [N] the distal FSR reports for true tension T (n,) [N]: its branch lag, conductance and
     ADC (teleop.core.sensors), then the loop's converter."""
-    from teleop.core.sensors import FsrBranchLag, FsrConverter, default_fsr_calibration
-
     cal = default_fsr_calibration()
     lag = FsrBranchLag(cal, n=1)
     u = lag.run(np.asarray(T, dtype=float)[:, None])[:, 0]
@@ -115,8 +117,6 @@ def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0) -> np.ndarr
 
 def single_compensation(F: np.ndarray, x: np.ndarray, mu: float, theta: float) -> np.ndarray:
     """Seed eq 7: tip tension from the distal reading F (n,) [N], pulling/releasing by the motor's motion."""
-    from teleop.core.physics import motor2tip
-
     v = np.gradient(x)
     pulling = np.where(v != 0, v > 0, True)
     held = np.maximum.accumulate(np.where(v != 0, np.arange(v.size), 0))     # at rest: the last direction
@@ -193,8 +193,6 @@ def _errors(est: np.ndarray, truth: np.ndarray, x: np.ndarray, window_s: float =
 
 def fig11(seed: int = 0, theta_deg: float = 0.0) -> dict:
     """FSR-modelled tension against the F/T truth of a spring at variable motor speed (module docstring)."""
-    from teleop.core.physics import motor2tip_transitions
-
     t = np.arange(int(20 * FS_HZ)) / FS_HZ
     motions = {"b": 4e-3 * np.sin(2 * np.pi * 0.15 * t),
                "c": 2.5e-3 * np.sin(2 * np.pi * 0.12 * t) + 1.5e-3 * np.sin(2 * np.pi * 0.41 * t + 1.0)}
@@ -233,10 +231,6 @@ def fig13(seed: int = 0, pretensions_N=(1.96, 4.9), speed_mm_s: float = 0.5) -> 
 
 
 def _no_load(seed: int, x: np.ndarray, W: float) -> tuple[dict, dict]:
-    from teleop.core.estimation.turn import TurnCompensation, TurnCompensator, fit_turn_compensation
-    from teleop.core.errors import InputError
-    from teleop.core.physics import motor2tip_transitions
-
     t = np.arange(x.size) / FS_HZ
     runs = []
     for r in range(2):                       # run 0 fits the turn polynomials, run 1 is measured
@@ -322,10 +316,10 @@ def table(name: str, res: dict) -> str:
 
 def figure(name: str, res: dict):
     """The figure laid out like the seed's."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     if name == "fig9":
         fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
@@ -400,8 +394,6 @@ def _jsonable(res: dict) -> dict:
 
 
 def run(args) -> int:
-    from teleop.io.outputs import check_output, save_figure, write_json
-
     for flag, path in (("--json", args.json), ("--plot", args.plot)):
         if path:
             check_output(path, flag)

@@ -25,14 +25,22 @@ the client's CPU seconds) / cores + tail, the fixed parts as measured.
 
 from __future__ import annotations
 
+import os
 import sys
+import tempfile
+from pathlib import Path
+
+from teleop.apps.argtypes import positive_int
+from teleop.apps.campaign.runner import run_campaign
+from teleop.apps.campaign.scheduler import parse_scheduler
+from teleop.apps.campaign.spec import Campaign, load_campaign
+from teleop.core.errors import InputError
+from teleop.io.outputs import check_output, write_json
 
 DEFAULT_SCHEDULERS = "none,local:2"
 
 
 def register(subparsers) -> None:
-    from teleop.apps.argtypes import positive_int
-
     p = subparsers.add_parser("campaign", help="campaign wall time per scheduler, overhead per task, cluster estimate")
     p.add_argument("file", metavar="FILE", help="campaign file (e.g. examples/jnd_grid.toml)")
     p.add_argument("--schedulers", default=DEFAULT_SCHEDULERS, metavar="S1,S2",
@@ -50,8 +58,6 @@ def register(subparsers) -> None:
 
 
 def _same_results(a, b) -> bool:
-    from pathlib import Path
-
     def files(root):
         d = Path(root) / "tasks"
         return {p.name: p.read_bytes() for p in d.glob("*.json") if not p.name.startswith(".")}
@@ -60,15 +66,6 @@ def _same_results(a, b) -> bool:
 
 
 def run(args) -> int:
-    import os
-    import tempfile
-
-    from teleop.apps.campaign.runner import run_campaign
-    from teleop.apps.campaign.scheduler import parse_scheduler
-    from teleop.apps.campaign.spec import Campaign, load_campaign
-    from teleop.core.errors import InputError
-    from teleop.io.outputs import check_output, write_json
-
     schedulers = [s.strip() for s in args.schedulers.split(",") if s.strip()]
     for s in schedulers:
         parse_scheduler(s)

@@ -4,6 +4,19 @@ times the diagnosis of a 40 s, 1 kHz recording."""
 
 from __future__ import annotations
 
+import tempfile
+import time
+from pathlib import Path
+
+from teleop.apps.bench.diagnose_rig import rates, rig_plan, rig_text, run_rig_case, summarise_rig
+from teleop.core.errors import InputError
+from teleop.diagnosis.diagnose import diagnose
+from teleop.diagnosis.generator import GenConfig, case_plan, make_case
+from teleop.diagnosis.scoring import confusion_text, run_case, summarise
+from teleop.io.outputs import write_json
+from teleop.io.progress import progress
+from teleop.io.recording_io import read_interchange
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("diagnose", help="diagnosis accuracy on generated concealed-effect recordings")
@@ -24,30 +37,15 @@ def register(subparsers) -> None:
 
 def speed_case(seed: int = 0):
     """A 40 s, 1 kHz rig recording with Dahl friction (for the timing benchmark)."""
-    from teleop.diagnosis.generator import GenConfig, make_case
     return make_case(999, "dahl_hysteresis", "rig", seed, GenConfig(fs_hz=1000.0, duration_s=40.0))
 
 
 def run(args) -> int:
-    import tempfile
-    import time
-    from pathlib import Path
-
-    from teleop.io.progress import progress
-
-    from teleop.diagnosis.diagnose import diagnose
-    from teleop.diagnosis.generator import GenConfig, case_plan, make_case
-    from teleop.io.recording_io import read_interchange
-    from teleop.diagnosis.scoring import confusion_text, run_case, summarise
-    from teleop.core.errors import InputError
-    from teleop.io.outputs import write_json
-
     if args.cases < 1:
         raise InputError("--cases must be >= 1")
     if not (50 <= args.rate <= 20000 and 5 <= args.seconds <= 600 and 0 <= args.noise <= 20):
         raise InputError("--rate must be 50..20000 Hz, --seconds 5..600, --noise 0..20")
     cfg = GenConfig(args.rate, args.seconds, args.noise)
-    from teleop.apps.bench.diagnose_rig import rates, rig_plan, rig_text, run_rig_case, summarise_rig
 
     n_gen = {"all": args.cases // 2, "generator": args.cases, "rig": 0}[args.suite]
     rows, rig_rows = [], []

@@ -1,6 +1,5 @@
-"""Benchmark: apply() time of every registered effect on a 40 000-sample signal, and Step time per sample.
-
-    python -m teleop.apps.bench.effects [--samples N] [--repeat R] [--json PATH]
+"""`teleop bench effects [--samples N] [--repeat R] [--json PATH]`: how fast the effect catalogue runs
+(teleop.core.physics): each registered effect's apply() on a 1 kHz signal of N samples, and its Step per sample.
 
 Prints one JSON object {"samples", "apply_ms": {effect: {"p50", "min"}}, "step_us": {effect: best of R}}.
 Timings are measurements of this machine, never asserted by the tests.
@@ -8,14 +7,14 @@ Timings are measurements of this machine, never asserted by the tests.
 
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 import time
 
 import numpy as np
 
+from teleop.apps.argtypes import positive_int
 from teleop.core.physics.base import REGISTRY, Signals
+from teleop.io.outputs import write_json
 
 
 def bench_signals(n: int, seed: int = 0) -> Signals:
@@ -28,7 +27,16 @@ def bench_signals(n: int, seed: int = 0) -> Signals:
                    theta=2.4 + 0.2 * np.sin(0.3 * t), d=d)
 
 
-def run(samples: int = 40_000, repeat: int = 7, step_samples: int = 2000) -> dict:
+def register(subparsers) -> None:
+    p = subparsers.add_parser("effects", help="speed of the effect catalogue: apply() per signal, Step per sample")
+    p.add_argument("--samples", type=positive_int, default=40_000, help="samples of the signal (default 40000)")
+    p.add_argument("--repeat", type=positive_int, default=7, help="timed runs per effect, best kept (default 7)")
+    p.add_argument("--json", metavar="PATH", help="also write the result to this file")
+    p.set_defaults(func=run)
+
+
+def bench_effects(samples: int = 40_000, repeat: int = 7, step_samples: int = 2000) -> dict:
+    """{"samples", "apply_ms", "step_us"} (module docstring) of every registered effect."""
     sig = bench_signals(samples)
     apply_ms, step_us = {}, {}
     for name, eff in sorted(REGISTRY.items()):
@@ -53,20 +61,9 @@ def run(samples: int = 40_000, repeat: int = 7, step_samples: int = 2000) -> dic
     return {"samples": samples, "apply_ms": apply_ms, "step_us": step_us}
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m teleop.apps.bench.effects", description=__doc__.splitlines()[0])
-    ap.add_argument("--samples", type=int, default=40_000)
-    ap.add_argument("--repeat", type=int, default=7)
-    ap.add_argument("--json", default=None, help="also write the result to this file")
-    args = ap.parse_args(argv)
-    res = run(args.samples, args.repeat)
-    text = json.dumps(res, indent=2)
-    print(text)
+def run(args) -> int:
+    res = bench_effects(args.samples, args.repeat)
+    print(json.dumps(res, indent=2))
     if args.json:
-        from teleop.io.outputs import write_json
         write_json(args.json, res)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

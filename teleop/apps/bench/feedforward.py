@@ -36,12 +36,26 @@ sessions, the robot in its own process) and nothing is simulated: JSON {"settle_
 
 from __future__ import annotations
 
+import gc
 import math
+import sys
 
 import numpy as np
 
+from devices.simulated import OperatorParams, Script, SimulatedStylus
+from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
+from scenes.sim_robot import SimRobot, SimRobotParams
 from teleop.apps.argtypes import input_file
+from teleop.core.control.feedforward import model_backlash_width
 from teleop.core.errors import InputError
+from teleop.core.kinematics import rotation_zyx
+from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
+from teleop.io.model_io import load_model
+from teleop.io.outputs import save_figure, write_json
+from teleop.io.recording import TOPIC_ROBOT, TOPIC_SETPOINT, read_session
+from teleop.loop import LoopParams, State, Teleop
+from teleop.loop.replay import geometry_from
+from teleop.loop.session import default_estimator, frame_period
 
 RATE_HZ = 1000.0      # loop rate [Hz]
 ROBOT_RATE_HZ = 500.0  # robot link rate [Hz] (teleop session's default)
@@ -84,16 +98,6 @@ def run_session(backlash: float, width: float | None, seconds: float, seed: int,
     """One closed-loop session on the manual clock; the plant's play `backlash` [m], the feed-forward's
     `width` [m] (None: off). Returns arrays per robot reading: "t" [s], "err" [m] (tip error), "enabled",
     and "final_state", "fault_reason", "max_command_step" [m]."""
-    import gc
-
-    from devices.simulated import OperatorParams, Script, SimulatedStylus
-    from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
-    from scenes.sim_robot import SimRobot, SimRobotParams
-    from teleop.core.kinematics import rotation_zyx
-    from teleop.loop import LoopParams, State, Teleop
-    from teleop.loop.session import default_estimator, frame_period
-    from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
-
     robot_seed, stylus_seed = _seeds(seed)
     params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=ROBOT_RATE_HZ,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
@@ -138,10 +142,6 @@ def run_session(backlash: float, width: float | None, seconds: float, seed: int,
 def recorded_tip_errors(path: str, settle: float = 1.0) -> tuple[np.ndarray, dict | None]:
     """(tip errors (n,) [m] per robot frame at or after `settle` [s], the session's compensation metadata)
     of a `teleop session` recording on the simulated robot: |setpoint_cp + R(home) tip - x_tip|."""
-    from teleop.core.kinematics import rotation_zyx
-    from teleop.loop.replay import geometry_from
-    from teleop.io.recording import TOPIC_ROBOT, TOPIC_SETPOINT, read_session
-
     s = read_session(path)
     conf = s.metadata.get("session", {}).get("configuration")
     if conf is None:
@@ -229,10 +229,10 @@ def format_report(out: dict) -> str:
 
 def figure(out: dict, runs: dict):
     """Tip tracking error [mm] over time [s], one line per session."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     fig, ax = plt.subplots(figsize=(9, 4))
     labels = {"plain": f"with play {out['backlash_mm']:g} mm, no compensation",
@@ -274,10 +274,6 @@ def _check(args) -> None:
 
 
 def run(args) -> int:
-    import sys
-
-    from teleop.io.outputs import save_figure, write_json
-
     _check(args)
     if args.recordings:
         out = bench_recordings(args.recordings, args.settle_s)
@@ -293,9 +289,6 @@ def run(args) -> int:
         return 0
     width, source = None, "the plant's own width"
     if args.compensation:
-        from teleop.core.control.feedforward import model_backlash_width
-        from teleop.io.model_io import load_model
-
         width = model_backlash_width(load_model(args.compensation), f"--compensation {args.compensation}")
         source = str(args.compensation)
     out, runs = bench_feedforward(args.backlash_mm * 1e-3, width, source, args.seconds, args.settle_s, args.seed,

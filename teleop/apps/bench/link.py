@@ -21,7 +21,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
+from devices.arduino import build, messages as msg
+from devices.arduino.robot import ArduinoRobot
+from devices.arduino.simulator import EmulatedMega
+from devices.arduino.trials import close_trials, kill_trials, round_trips, stream, watchdog_trials
 from teleop.apps.argtypes import positive_float, positive_int
+from teleop.core.errors import InputError
+from teleop.io.outputs import dumps_json, write_json
 
 
 def register(subparsers) -> None:
@@ -40,16 +48,6 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    import numpy as np
-
-    from devices.arduino import build
-    from devices.arduino import messages as msg
-    from devices.arduino.robot import ArduinoRobot
-    from devices.arduino.simulator import EmulatedMega
-    from devices.arduino.trials import close_trials, kill_trials, round_trips, stream, watchdog_trials
-    from teleop.core.errors import InputError
-    from teleop.io.outputs import dumps_json, write_json
-
     if args.roundtrips < 10 or args.trials < 1:
         raise InputError("bench link: --roundtrips must be >= 10 and --trials >= 1")
     try:

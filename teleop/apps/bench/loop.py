@@ -16,9 +16,18 @@ from __future__ import annotations
 import os
 import tempfile
 
+import numpy as np
+
 from teleop.apps.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, nonnegative_float, positive_float,
-                             rt_priority)
+                                  rt_priority)
+from teleop.apps.commands.session import add_live_arguments
 from teleop.core.errors import InputError
+from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
+from teleop.io.outputs import save_figure, write_json
+from teleop.loop.live.server import check_port
+from teleop.loop.params import LoopParams
+from teleop.loop.session import run_session
+from teleop.loop.timing import budget_verdict, default_spin_us, format_histogram
 
 MISS_FRACTION = 0.001  # <= 0.1 % of ticks more than 0.5 ms late (docs/safety.md)
 
@@ -42,7 +51,6 @@ def register(subparsers) -> None:
     p.add_argument("--robot-rate", type=ROBOT_RATE_HZ, default=500.0, help="robot process rate [Hz] (default 500)")
     p.add_argument("--robot-rt", type=rt_priority, default=45,
                    help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
-    from teleop.apps.commands.session import add_live_arguments
 
     add_live_arguments(p)
     p.add_argument("--find-max-rate", action="store_true",
@@ -66,13 +74,8 @@ def rt_throttle() -> float | None:
 
 
 def bench_once(args, rate: float) -> dict:
-    from teleop.loop.params import LoopParams
-    from teleop.loop.session import run_session
-    from teleop.loop.timing import budget_verdict, default_spin_us
-
     with tempfile.TemporaryDirectory() as tmp:
         record = None if args.no_record else (args.record or os.path.join(tmp, "bench.mcap"))
-        from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 
         params = LoopParams(rate_hz=rate, stale_limit=args.stale_ms * 1e-3,
                             mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
@@ -105,13 +108,10 @@ def verdict_line(budget: dict) -> str:
 
 def plot_histogram(out: dict, path: str) -> None:
     """PNG of the period histogram (log count) with the nominal period and the late threshold (half a period)."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from teleop.io.outputs import save_figure
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     h = out["period_histogram"]
     edges = np.asarray(h["edges_us"])
@@ -134,14 +134,9 @@ def plot_histogram(out: dict, path: str) -> None:
 
 
 def run(args) -> int:
-    from teleop.loop.timing import format_histogram
-    from teleop.io.outputs import write_json
-
     if not args.seconds > 0 or not args.rate > 0:
         raise InputError("--seconds and --rate must be > 0")
     if args.live is not None:
-        from teleop.loop.live.server import check_port
-
         check_port(args.live_host, args.live)
     if not args.find_max_rate:
         out = bench_once(args, args.rate)

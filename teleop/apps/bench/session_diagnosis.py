@@ -36,7 +36,16 @@ from pathlib import Path
 
 import numpy as np
 
+from scenes.sim_robot import SimRobotParams
 from teleop.core.errors import InputError
+from teleop.core.physics import get_effect
+from teleop.core.physics.links import Link, LinkModel
+from teleop.diagnosis.diagnose import diagnose
+from teleop.io.model_io import load_model, save_model
+from teleop.io.outputs import write_json
+from teleop.io.recording import TOPIC_ROBOT, read_session
+from teleop.io.recording_io import read_interchange
+from teleop.loop.devices_by_url import open_device
 
 SCRIPT = "sim://?script=pokes&depth_mm=10&period_s=2&seed={seed}"
 # column subsets diagnosed besides the full export: name -> interchange channels dropped
@@ -61,8 +70,6 @@ def register(subparsers) -> None:
 
 def parse_effect(text: str) -> tuple[str, dict]:
     """'coulomb_friction:Fc=0.3' -> ('coulomb_friction', {'Fc': 0.3}); InputError naming the flag otherwise."""
-    from teleop.core.physics import get_effect
-
     name, _, rest = text.partition(":")
     eff = get_effect(name)
     params = {s.name: s.default for s in eff.params}
@@ -88,8 +95,6 @@ def _teleop(*args: str) -> None:
 
 def _recorded(path: Path, cable: int) -> tuple[np.ndarray, np.ndarray]:
     """(commanded lengths (n, 6) [m], simulator's FSR-side tension of `cable` (n,) [N]), one row per reading."""
-    from teleop.io.recording import TOPIC_ROBOT, read_session
-
     L, T, seen = [], [], set()
     for m in read_session(path).messages(TOPIC_ROBOT):
         if m["seq"] in seen:
@@ -102,8 +107,6 @@ def _recorded(path: Path, cable: int) -> tuple[np.ndarray, np.ndarray]:
 
 def replay(url: str, lengths: np.ndarray, cable: int) -> np.ndarray:
     """FSR-side tension of `cable` (n,) [N] of the robot at `url` commanded `lengths` (n, 6), read once each."""
-    from devices.base import open_device
-
     out = np.empty(len(lengths))
     with open_device(url) as robot:
         for k, L in enumerate(lengths):
@@ -115,12 +118,6 @@ def replay(url: str, lengths: np.ndarray, cable: int) -> np.ndarray:
 def bench_session_diagnosis(effects: list, seconds: float, seed: int, cable: int, work: Path,
                             subsets: bool = True) -> dict:
     """The round trip for `effects` [(name, params)] switched on together (see the module docstring)."""
-    from teleop.diagnosis.diagnose import diagnose
-    from teleop.diagnosis.links import Link, LinkModel
-    from teleop.io.model_io import load_model, save_model
-    from teleop.io.recording_io import read_interchange
-    from scenes.sim_robot import SimRobotParams
-
     # the robot's own capstan, as the model's baseline (baseline effects are not added again: the robot has it)
     sim = SimRobotParams()
     force = Link("force", "motor_force", "tip_force", "motor_pos")
@@ -180,8 +177,6 @@ def _subset(label: str, dropped: tuple, found: list, switched_on: list) -> dict:
 
 
 def run(args) -> int:
-    from teleop.io.outputs import write_json
-
     if not 1 <= args.cable <= 6:
         raise InputError(f"--cable must be 1..6, got {args.cable}")
     if not 2.0 <= args.seconds <= 600.0:

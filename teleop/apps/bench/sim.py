@@ -45,13 +45,23 @@ the machine's load; tests check only their consistency.
 from __future__ import annotations
 
 import argparse
+import gc
 import hashlib
 import math
+import os
+import sys
 import time
 
 import numpy as np
 
+from devices.simulated import OperatorParams, Script, SimulatedStylus
 from teleop.core.errors import InputError
+from teleop.core.kernels.tap import sim_log_row
+from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
+from teleop.io.outputs import write_json
+from teleop.loop import LoopParams, State, Teleop
+from teleop.loop.devices_by_url import open_device
+from teleop.loop.session import default_estimator, frame_period
 
 BUDGET_FACTOR = 20.0  # docs/safety.md performance budget: simulation >= 20x real time when not paced
 RATE_HZ = 1000.0  # loop rate [Hz] (the physics step is 1 ms too)
@@ -79,7 +89,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-class _Meter:
+class CallTimer:
     """Wall time [ns] spent in wrapped calls; a call made inside another wrapped call of the same meter
     (PadWorld.step calling contact_force) is counted once."""
 
@@ -109,7 +119,7 @@ class _Meter:
         return timed
 
 
-def _meter_world(world, meter: _Meter, solver: _Meter) -> bool:
+def _meter_world(world, meter: CallTimer, solver: CallTimer) -> bool:
     """Time the pybullet world's public calls with `meter` (instance attributes shadow the methods) and,
     inside them, pybullet's stepSimulation (PadWorld keeps it as `_step`) with `solver`. Only that one call
     is timed inside: a timer costs about as much as one of pybullet's small state queries on a slow
@@ -123,8 +133,6 @@ def _meter_world(world, meter: _Meter, solver: _Meter) -> bool:
 
 
 def _make_robot(pad: str, seed: int, substeps: int):
-    from devices.base import open_device
-
     try:
         return open_device(f"sim://robot?pad={pad}&seed={seed}&substeps={substeps}")
     except InputError as exc:
@@ -158,14 +166,6 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     """Run the unpaced simulation for `seconds` of simulated time [s]; the result dict (module docstring).
 
     depth: stylus poke depth [m]; period: poke period [s]."""
-    import gc
-
-    from devices.simulated import OperatorParams, Script, SimulatedStylus
-    from teleop.core.kernels.tap import sim_log_row
-    from teleop.loop import LoopParams, State, Teleop
-    from teleop.loop.session import default_estimator, frame_period
-    from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
-
     n = int(round(seconds * RATE_HZ))
     robot_seed, stylus_seed = _seeds(seed)
     robot = _make_robot(pad, robot_seed, substeps)
@@ -175,7 +175,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=None if substeps == 1 else RATE_HZ / substeps,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     estimator = default_estimator(frame_period(params, None))
-    kin, phys, solver, rd = _Meter(), _Meter(), _Meter(), _Meter()
+    kin, phys, solver, rd = CallTimer(), CallTimer(), CallTimer(), CallTimer()
     solver_timed = False
     n_read = -(-n // params.robot_every)
     L_log = np.zeros((n_read, 6))
@@ -266,10 +266,8 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
 
 def bench_batch(lengths: np.ndarray, counts: np.ndarray, pad: str, robot_seed: int, substeps: int) -> dict:
     """The same commanded lengths (n, 6) [m] through a fresh SimRobot.run (the palpation path), timed."""
-    import gc
-
     robot = _make_robot(pad, robot_seed, substeps)
-    phys, solver = _Meter(), _Meter()
+    phys, solver = CallTimer(), CallTimer()
     with robot:
         _meter_world(robot.world, phys, solver)
         gc.collect()
@@ -340,11 +338,6 @@ def format_table(out: dict) -> str:
 
 
 def run(args) -> int:
-    import os
-    import sys
-
-    from teleop.io.outputs import write_json
-
     _check(args)
     out = bench_sim(args.seconds, args.seed, args.pad, args.substeps, args.depth_mm * 1e-3, args.period_s,
                     batch=not args.no_batch, stages=args.stages and not args.no_stages)

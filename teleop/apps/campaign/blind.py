@@ -25,16 +25,25 @@ unsure participant are simulated anew.
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from teleop.apps.argtypes import jnd_fraction
 from teleop.apps.campaign.identity import Task, seeds
-from teleop.apps.campaign.spec import coerce, get_int
+from teleop.apps.campaign.plots import jnd_curves_figure
+from teleop.apps.campaign.values import coerce, get_int
+from teleop.apps.protocols.blind.participants import ParticipantParams
+from teleop.apps.protocols.blind.rig import RigOptions, SimRig, blind_areas
+from teleop.apps.protocols.blind.study import (ParticipantRecord, StudyResult, coordinator_draws, record_from,
+                                               run_participant)
 from teleop.core.config import check_keys
 from teleop.core.errors import InputError
+from teleop.io.outputs import save_figure
+from teleop.loop.warm import warm_up
 
 KIND = "blind-jnd"
 PER_TASK = 5  # participants per task by default: a few seconds of work each
@@ -74,29 +83,21 @@ def _fields(cls, leave_out: str) -> dict:
 
 
 def rig_fields() -> dict:
-    from teleop.apps.protocols.blind.rig import RigOptions
-
     return _fields(RigOptions, "seed")
 
 
 def participant_fields() -> dict:
-    from teleop.apps.protocols.blind.participants import ParticipantParams
-
     return _fields(ParticipantParams, "jnd")
 
 
 def jnd_values(items, where: str) -> list:
     """Sorted distinct JNDs (Weber fractions) from numbers or text ('0.23', '23%')."""
-    import argparse
-
-    from teleop.apps.commands.blind_test import parse_fraction
-
     out = []
     for item in items:
         if isinstance(item, bool) or not isinstance(item, (int, float, str)):
             raise InputError(f"{where}: expected JNDs such as 0.1 or \"23%\", got {item!r}")
         try:
-            out.append(parse_fraction(str(item)))
+            out.append(jnd_fraction(str(item)))
         except argparse.ArgumentTypeError as exc:
             raise InputError(f"{where}: {exc}") from None
     if not out:
@@ -106,9 +107,6 @@ def jnd_values(items, where: str) -> list:
 
 def make_point(params: dict, rig: dict, participant: dict, where: str) -> GridPoint:
     """A GridPoint with the options checked by their dataclasses (an InputError names `where`)."""
-    from teleop.apps.protocols.blind.participants import ParticipantParams
-    from teleop.apps.protocols.blind.rig import RigOptions
-
     try:
         options = RigOptions(**rig)
         person = ParticipantParams(**participant)
@@ -183,8 +181,6 @@ def tasks(campaign) -> list:
 def participant_at_jnds(rig, participant: int, seed: int, jnds, base_params) -> list:
     """[ParticipantRecord] of participant `participant` at each JND on `rig` (study.Rig), all on the same
     layout and pushes (a push made at one JND is replayed from its trace at the others)."""
-    from teleop.apps.protocols.blind.study import coordinator_draws, record_from, run_participant
-
     areas = tuple(rig.areas)
     layout, order = coordinator_draws(seed, participant, areas)
     rig.arrange(layout)
@@ -207,8 +203,6 @@ def participant_at_jnds(rig, participant: int, seed: int, jnds, base_params) -> 
 def jnd_curve(rig, jnds, participants: int, seed: int, base_params, progress=None) -> dict:
     """{jnd: StudyResult} of participants 1..`participants` on one `rig` (study seed `seed` for all);
     progress(), optional, is called after each participant."""
-    from teleop.apps.protocols.blind.study import StudyResult
-
     records = {j: [] for j in jnds}
     for p in range(1, participants + 1):
         for j, r in zip(jnds, participant_at_jnds(rig, p, seed, jnds, base_params)):
@@ -219,22 +213,14 @@ def jnd_curve(rig, jnds, participants: int, seed: int, base_params, progress=Non
 
 
 def warm() -> None:
-    """Once per worker process before its tasks: the modules a task imports and the compiled kernels (from
-    numba's on-disk cache; compiled there if the cache is stale), so no task's time holds them."""
-    import scenes.pads  # noqa: F401 - the pad's layouts and meshes
-    import teleop.apps.protocols.blind.rig  # noqa: F401
-    import teleop.apps.protocols.blind.study  # noqa: F401
-    from teleop.loop.warm import warm_up
-
+    """Once per worker process before its tasks: the compiled kernels (from numba's on-disk cache; compiled
+    there if the cache is stale), so no task's time holds them (the modules a task uses come with this one)."""
     warm_up()
 
 
 def execute(identity: dict) -> dict:
     """Run one task (on a worker): each participant of the block at every JND on a fresh simulated rig.
     Returns {"participants": [[record per JND] per participant]}."""
-    from teleop.apps.protocols.blind.participants import ParticipantParams
-    from teleop.apps.protocols.blind.rig import RigOptions, SimRig
-
     options = RigOptions(**identity["rig"])
     base = ParticipantParams(**identity["participant"])
     first, last = identity["participants"]
@@ -256,8 +242,6 @@ def record_to_json(r) -> dict:
 
 
 def record_from_json(d: dict):
-    from teleop.apps.protocols.blind.study import ParticipantRecord
-
     return ParticipantRecord(participant=d["participant"], layout=tuple(d["layout"]), order=tuple(d["order"]),
                              answers=tuple(tuple(a) for a in d["answers"]), ranking=tuple(d["ranking"]),
                              ratings=dict(d["ratings"]), pokes=d["pokes"],
@@ -297,9 +281,6 @@ def summarise(campaign, load) -> dict:
     """The campaign's curves from the finished tasks' results (load(task) -> result, None when not done):
     per grid point its parameters, how many participants are done and the curve (curve_points). One
     point's results are in memory at a time."""
-    from teleop.apps.protocols.blind.rig import blind_areas
-    from teleop.apps.protocols.blind.study import StudyResult
-
     s: BlindStudy = campaign.study
     areas = blind_areas()
     points = []
@@ -343,9 +324,6 @@ def table(summary: dict) -> str:
 
 def write_outputs(summary: dict, out_dir: Path) -> list:
     """curves.png: correct-ranking share against JND per grid point, 95 % Wilson intervals."""
-    from teleop.apps.campaign.plots import jnd_curves_figure
-    from teleop.io.outputs import save_figure
-
     curves = [(point_label(pt["params"]), pt["curve"]) for pt in summary["points"] if pt["curve"]]
     if not curves:
         return []

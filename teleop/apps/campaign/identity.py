@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from teleop import __version__
+
 
 def canonical_json(obj) -> str:
     """Compact JSON with sorted keys (floats as Python's shortest round-trip repr): the text that is hashed."""
@@ -36,8 +38,6 @@ class Task:
         """`<kind>-<first 20 hex digits of sha256 of the canonical kind, package version and identity>`: a file
         name, stable across runs of one version (a new version of the package computes its results afresh;
         while the simulation's code is being edited within a version, use a fresh result directory)."""
-        from teleop import __version__
-
         key = {"kind": self.kind, "teleop_version": __version__, **self.identity}
         return f"{self.kind}-{hashlib.sha256(canonical_json(key).encode()).hexdigest()[:20]}"
 

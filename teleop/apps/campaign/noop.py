@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from teleop.apps.campaign.identity import Task
-from teleop.apps.campaign.spec import get_int
+from teleop.apps.campaign.values import get_int
 from teleop.core.config import check_keys
 from teleop.core.errors import InputError
 

@@ -11,10 +11,10 @@ CURVES_PER_AXES = 6
 
 
 def _pyplot():
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     return plt
 
@@ -61,7 +61,7 @@ def findings_heatmap(recordings: list, columns: list, matrix: np.ndarray, title:
     """Held-out improvement (RMSE before / after the effect is modelled) per recording (rows) and
     effect on a channel (columns); blank where the effect was not found. Colour on a log scale."""
     plt = _pyplot()
-    from matplotlib.colors import LogNorm
+    from matplotlib.colors import LogNorm  # heavy: loaded only to draw
 
     n_r, n_c = matrix.shape
     fig, ax = plt.subplots(figsize=(max(5.0, 1.3 * n_c + 3.5), max(4.0, 0.35 * n_r + 2.5)))
@@ -79,7 +79,7 @@ def findings_heatmap(recordings: list, columns: list, matrix: np.ndarray, title:
     ax.set_yticks(range(n_r), recordings, fontsize=8)
     ax.set_xlabel("effect on channel" + (" (blank: not found on that recording)" if np.isnan(matrix).any() else ""))
     ax.set_ylabel("recording")
-    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator  # heavy: loaded only to draw
 
     cb = fig.colorbar(im, ax=ax, label="RMSE before / after [-]")
     ticks = [t for t in (1, 1.5, 2, 3, 5, 10, 20, 50, 100, 1000) if t <= vmax]

@@ -29,8 +29,14 @@ from pathlib import Path
 import numpy as np
 
 from teleop.apps.campaign.identity import Task
+from teleop.apps.campaign.plots import findings_heatmap
+from teleop.apps.campaign.scheduler import open_scheduler
+from teleop.apps.campaign.task_progress import TaskProgress
 from teleop.core.config import check_keys, get_number
 from teleop.core.errors import InputError
+from teleop.diagnosis.diagnose import HOLDOUT, baseline_effects, diagnose
+from teleop.io.outputs import atomic_write, save_figure
+from teleop.io.recording_io import builtin_map, read_recording
 
 KIND = "diagnose"
 
@@ -59,9 +65,6 @@ def _digest(path: Path) -> str:
 
 def parse(doc: dict, where: str, base_dir: Path) -> tuple:
     """The [[recordings]] tables of the file `where`: a tuple of Recording, in glob order, each file once."""
-    from teleop.diagnosis.diagnose import HOLDOUT, baseline_effects
-    from teleop.io.recording_io import builtin_map
-
     check_keys(doc, ("recordings",), where)
     groups = doc.get("recordings")
     if not isinstance(groups, list) or not groups or not all(isinstance(g, dict) for g in groups):
@@ -122,9 +125,6 @@ def tasks(campaign) -> list:
 
 def execute(identity: dict) -> dict:
     """Diagnose one recording (on a worker): the report of `teleop diagnose` (Diagnosis.as_dict)."""
-    from teleop.diagnosis.diagnose import diagnose
-    from teleop.io.recording_io import read_recording
-
     rec = read_recording(identity["recording"], identity["map"])
     return diagnose(rec, identity["holdout"], seed=identity["seed"], baseline=tuple(identity["baseline"]),
                     sindy=identity["sindy"]).as_dict()
@@ -132,9 +132,6 @@ def execute(identity: dict) -> dict:
 
 def _diagnose_file(item):
     """Read and diagnose one file where the scheduler runs it: item = (path, map, holdout, options)."""
-    from teleop.diagnosis.diagnose import diagnose
-    from teleop.io.recording_io import read_recording
-
     path, cmap, holdout, options = item
     return diagnose(read_recording(path, cmap), holdout, **options)
 
@@ -144,15 +141,12 @@ def diagnose_files(paths: list, column_map, holdout: float, scheduler: str, **op
     tasks (`teleop diagnose REC... --scheduler`), as `diagnose(read_recording(path, column_map), holdout,
     **options)` (seed, baseline, ...) would give here. Workers get absolute paths; each Diagnosis comes
     back with the path as given. The first file that fails is an InputError naming it."""
-    from teleop.apps.campaign.progress import Progress
-    from teleop.apps.campaign.scheduler import open_scheduler
-
     cmap = column_map
     if cmap is not None and str(cmap).endswith(".toml"):
         cmap = str(Path(cmap).absolute())
     items = [(str(Path(p).absolute()), cmap, holdout, options) for p in paths]
     done = {}
-    with open_scheduler(scheduler) as sched, Progress(len(items), "diagnose") as progress:
+    with open_scheduler(scheduler) as sched, TaskProgress(len(items), "diagnose") as progress:
         for item, outcome in sched.run(_diagnose_file, items):
             if not outcome.ok:  # a malformed file's InputError already names it
                 err = outcome.error
@@ -236,9 +230,6 @@ def findings_csv(summary: dict) -> str:
 
 def write_outputs(summary: dict, out_dir: Path) -> list:
     """findings.csv and findings.png (heat map of the held-out improvements)."""
-    from teleop.apps.campaign.plots import findings_heatmap
-    from teleop.io.outputs import atomic_write, save_figure
-
     out_dir = Path(out_dir)
     text = findings_csv(summary)
     paths = [atomic_write(out_dir / "findings.csv", lambda tmp: tmp.write_text(text, encoding="utf-8"))]

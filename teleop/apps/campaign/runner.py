@@ -10,10 +10,10 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
-from teleop.apps.campaign.progress import Progress
 from teleop.apps.campaign.scheduler import open_scheduler
 from teleop.apps.campaign.spec import Campaign, kind_module
 from teleop.apps.campaign.store import ResultStore
+from teleop.apps.campaign.task_progress import TaskProgress
 from teleop.io.outputs import atomic_write, write_json
 
 
@@ -72,7 +72,7 @@ def run_campaign(campaign: Campaign, out_dir: str | Path, scheduler: str = "none
                     report.warm_seconds = sched.warm(kind.warm)
                 report.warm_s = time.perf_counter() - t0 - report.start_s
                 c0 = time.process_time()
-                with Progress(len(todo), "campaign", stream, bar=bar, interval=interval) as progress:
+                with TaskProgress(len(todo), "campaign", stream, bar=bar, interval=interval) as progress:
                     for task, outcome in sched.run(execute_task, todo):
                         if outcome.ok:
                             store.save(task, outcome.value)

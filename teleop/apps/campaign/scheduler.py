@@ -25,12 +25,16 @@ A cluster behind tcp:// keeps its own settings.
 
 from __future__ import annotations
 
+import logging
 import os
 import re
+import socket
 import time
 import traceback
 from dataclasses import dataclass
 from typing import Callable, Iterable, Iterator
+
+from threadpoolctl import threadpool_limits
 
 from teleop.core.errors import InputError
 
@@ -80,9 +84,6 @@ def error_line(exc: BaseException) -> str:
 
 
 def _where() -> str:
-    import os
-    import socket
-
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
@@ -115,8 +116,6 @@ _WORKER_POOLS = []  # holds the limiter of this worker process once set (never r
 def guarded_on_worker(fn: Callable, item) -> Outcome:
     """`guarded` in a Dask worker: the BLAS/OpenMP pools of this process at one thread from its first task."""
     if not _WORKER_POOLS:
-        from threadpoolctl import threadpool_limits
-
         _WORKER_POOLS.append(threadpool_limits(limits=1))
     return guarded(fn, item)
 
@@ -152,8 +151,6 @@ class InProcess:
 
     def run(self, fn: Callable, items: Iterable) -> Iterator[tuple]:
         """(item, Outcome) for each item, as each finishes, the BLAS/OpenMP pools at one thread meanwhile."""
-        from threadpoolctl import threadpool_limits
-
         with threadpool_limits(limits=1):
             for item in items:
                 yield item, guarded(fn, item)
@@ -169,11 +166,8 @@ class DaskScheduler:
         self.cluster = self.client = None
 
     def __enter__(self) -> "DaskScheduler":
-        import logging
-
-        from distributed import Client, LocalCluster
-
-        import dask
+        import dask  # heavy: loaded only to run on Dask
+        from distributed import Client, LocalCluster  # heavy: loaded only to run on Dask
 
         if self.address is None:
             try:
@@ -229,7 +223,7 @@ class DaskScheduler:
     def run(self, fn: Callable, items: Iterable) -> Iterator[tuple]:
         """(item, Outcome) for each item, in the order they finish. A worker that dies under a task (Dask
         retries it elsewhere first) or any other scheduling error is that task's failed Outcome."""
-        from distributed import as_completed
+        from distributed import as_completed  # heavy: loaded only to run on Dask
 
         items = iter(items)
         pending = {}

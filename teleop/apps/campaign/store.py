@@ -22,6 +22,7 @@ import json
 import os
 from pathlib import Path
 
+from teleop import __version__
 from teleop.apps.campaign.identity import Task
 from teleop.core.errors import InputError
 from teleop.io.outputs import dumps_json, write_text_synced
@@ -87,8 +88,6 @@ class ResultStore:
 
     def save(self, task: Task, result) -> None:
         """Write `task`'s result atomically and forget an earlier failure of it."""
-        from teleop import __version__
-
         doc = {"task": task.id, "kind": task.kind, "label": task.label, "identity": task.identity,
                "teleop_version": __version__, "result": result}
         _write_synced(self._path(task), dumps_json(doc, sort_keys=True, compact=True))

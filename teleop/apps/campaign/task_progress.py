@@ -1,6 +1,7 @@
-"""How far a campaign is: teleop.io.progress's reporter (a tqdm bar with tasks done, rate and ETA on a terminal,
-otherwise a plain line every few seconds) counting tasks, plus what a campaign needs on top: failures
-counted and noted as they happen, and a ticker so a plain line comes even while long tasks run."""
+"""How far a campaign is, in tasks (TaskProgress): teleop.io.progress's reporter (a tqdm bar with tasks done,
+rate and ETA on a terminal, otherwise a plain line every few seconds) counting tasks, plus what a campaign
+needs on top: failures counted and noted as they happen, and a ticker so a plain line comes even while long
+tasks run."""
 
 from __future__ import annotations
 
@@ -8,10 +9,12 @@ import sys
 import threading
 import time
 
+from tqdm import tqdm
+
 from teleop.io.progress import PLAIN_INTERVAL_S, PlainProgress
 
 
-class Progress:
+class TaskProgress:
     """Counts finished tasks out of `total` on `stream` (stderr).
 
     bar: tqdm (default: when `stream` is a terminal) or plain lines every `interval` seconds of `clock`;
@@ -26,8 +29,6 @@ class Progress:
         if bar is None:
             bar = bool(getattr(self.stream, "isatty", lambda: False)())
         if bar:
-            from tqdm import tqdm
-
             self.reporter = tqdm(total=total, desc=desc, unit="task", file=self.stream, dynamic_ncols=True)
         else:
             self.reporter = PlainProgress(total, desc, "tasks", stream=self.stream, interval_s=interval, clock=clock)
@@ -40,7 +41,7 @@ class Progress:
         while not self._stop.wait(interval):
             self.tick()
 
-    def __enter__(self) -> "Progress":
+    def __enter__(self) -> "TaskProgress":
         return self
 
     def __exit__(self, *exc) -> None:

@@ -1,2 +1,3 @@
-"""One module per `teleop` subcommand; each defines ``register(subparsers)``. Keep imports light at
-module level (heavy imports inside the handler) so `teleop --help` stays fast."""
+"""One module per `teleop` subcommand; each defines ``register(subparsers)``. Imports are at the top of each
+module (teleop.apps.cli imports every command to build the parser); only matplotlib and dask load where a
+figure is drawn or a campaign runs on Dask."""

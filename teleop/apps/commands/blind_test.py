@@ -8,35 +8,27 @@ answer so an interrupted study resumes where it stopped.
 
 from __future__ import annotations
 
-from teleop.apps.argtypes import positive_int
-
+import socket
 import sys
+from dataclasses import asdict
+
+import numpy as np
+
+from scenes.pads import blind_area_centres
+from teleop.apps.argtypes import jnd_fraction, positive_int
+from teleop.apps.commands.session import add_live_arguments
+from teleop.apps.protocols.blind.human import Coordinator, run_human_study
+from teleop.apps.protocols.blind.participants import ParticipantParams
+from teleop.apps.protocols.blind.probe import PressAborted
+from teleop.apps.protocols.blind.rig import (BackgroundSession, RehearsalStation, RigOptions, SimRig, blind_areas,
+                                             transparency)
+from teleop.apps.protocols.blind.study import run_simulated_study
+from teleop.core.errors import InputError
+from teleop.io.outputs import write_json
+from teleop.io.progress import progress
+from teleop.loop.live.study import StudyLiveView
 
 DEFAULT_STATE = "blind_test_state.json"
-
-
-# A person's stiffness JND as a Weber fraction: a participant who cannot tell two stiffnesses 2x apart
-# (above 100 %) or who tells 1 % apart is not a person; values outside are a typo (`--jnd 5` for 5 %).
-JND_RANGE = (0.01, 1.0)
-
-
-def parse_fraction(text: str) -> float:
-    """'0.23' or '23%' -> 0.23 (argparse type for --jnd), within JND_RANGE."""
-    import argparse
-    import math
-
-    s = str(text).strip()
-    try:
-        v = float(s[:-1]) / 100.0 if s.endswith("%") else float(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a fraction like 0.23 or a percentage like 23%, got '{text}'")
-    lo, hi = JND_RANGE
-    if not (math.isfinite(v) and lo <= v <= hi):
-        hint = f"; for {s} % write {s}%" if math.isfinite(v) and v > hi and not s.endswith("%") else ""
-        raise argparse.ArgumentTypeError(
-            f"expected a stiffness JND a person can have, {lo:g} to {hi:g} as a Weber fraction "
-            f"({lo:.0%} to {hi:.0%}; Jones & Hunter 1990: 0.23), got '{text}'{hint}")
-    return v
 
 
 def add_rig_options(p) -> None:
@@ -72,7 +64,7 @@ def register(subparsers) -> None:
                    help="simulated participants (default) or real ones guided by prompts")
     p.add_argument("--participants", type=positive_int, default=10, metavar="N", help="number of participants")
     p.add_argument("--seed", type=int, default=0, help="seed of layouts, orders and participants (default 0)")
-    p.add_argument("--jnd", type=parse_fraction, default=None, metavar="J",
+    p.add_argument("--jnd", type=jnd_fraction, default=None, metavar="J",
                    help="participants' stiffness JND as a Weber fraction, e.g. 0.23 or 23%% "
                         "(default 0.23, Jones & Hunter 1990)")
     add_rig_options(p)
@@ -87,15 +79,12 @@ def register(subparsers) -> None:
                    help="instead of the study: press each area 3 times at 10, 20 and 30 mm/s and compare the "
                         "stiffness rendered on the stylus with the unfiltered estimate and the robot's "
                         "ground-truth contact force (what limits the rendered ratios)")
-    from teleop.apps.commands.session import add_live_arguments
 
     add_live_arguments(p)  # --operator human: the experimenter's screen (trial, pad, force, answers)
     p.set_defaults(func=run)
 
 
 def participant_params(args):
-    from teleop.apps.protocols.blind.participants import ParticipantParams
-
     kw = {}
     if args.jnd is not None:
         kw["jnd"] = args.jnd
@@ -109,8 +98,6 @@ def participant_params(args):
 
 
 def rig_options(args):
-    from teleop.apps.protocols.blind.rig import RigOptions
-
     kw = {"compensation": not args.no_compensation}
     if args.force_scale is not None:
         kw["force_scale"] = args.force_scale
@@ -126,8 +113,6 @@ def rig_options(args):
 
 def run(args) -> int:
     if args.live is not None and args.operator != "human":
-        from teleop.core.errors import InputError
-
         raise InputError("--live serves the experimenter's screen of --operator human (the simulated study runs "
                          "faster than real time; watch a session with `teleop session --live`)")
     if args.operator == "human":
@@ -143,12 +128,6 @@ TRANSPARENCY_SPEEDS = (0.010, 0.020, 0.030)  # [m/s] stylus press speeds: the pa
 def run_transparency(args) -> int:
     """Each area pressed at TRANSPARENCY_SPEEDS: median loading slopes [N/m] of the rendered force, the
     unfiltered estimate and the ground-truth contact force (x force scale) against the stylus displacement."""
-    import numpy as np
-
-    from teleop.core.errors import InputError
-    from teleop.io.outputs import write_json
-    from teleop.apps.protocols.blind.rig import blind_areas, transparency
-
     if args.haptic != "sim://" or args.robot != "sim://robot":
         raise InputError("blind-test --transparency runs on the simulated stylus and robot only")
     if args.plot:
@@ -180,22 +159,15 @@ def run_transparency(args) -> int:
 
 
 def _progress(total: int, desc: str):
-    from teleop.io.progress import progress
-
     return progress(total, desc, unit="participants")
 
 
 def run_sim(args) -> int:
-    from teleop.core.errors import InputError
-    from teleop.apps.protocols.blind.rig import SimRig
-    from teleop.apps.protocols.blind.study import run_simulated_study
-
     if args.haptic != "sim://" or args.robot != "sim://robot":
         raise InputError("blind-test --operator sim runs on the simulated stylus and robot only "
                          "(--haptic sim:// --robot sim://robot); use --operator human at a real rig")
     params = participant_params(args)
     options = rig_options(args)
-    from teleop.apps.protocols.blind.probe import PressAborted
 
     with SimRig(options) as rig, _progress(args.participants, "blind test") as bar:
         try:
@@ -217,8 +189,6 @@ def run_sim(args) -> int:
 
 def _write_results(args, result) -> None:
     """Write --json and --plot and say where; without either, say what they would write."""
-    from teleop.io.outputs import write_json
-
     if args.json:
         write_json(args.json, result.to_dict())
         print(f"wrote {args.json}")
@@ -231,14 +201,10 @@ def _write_results(args, result) -> None:
 
 
 def _asdict(obj) -> dict:
-    from dataclasses import asdict
-
     return asdict(obj)
 
 
 def _free_port() -> int:
-    import socket
-
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
@@ -246,10 +212,6 @@ def _free_port() -> int:
 
 def _study_live_view(args, areas, relay_port):
     """The experimenter's live screen (teleop.loop.live.study) on --live-host:--live."""
-    from scenes.pads import blind_area_centres
-    from teleop.core.errors import InputError
-    from teleop.loop.live.study import StudyLiveView
-
     try:
         return StudyLiveView(args.live_host, args.live, blind_area_centres(), {a.name: a.label for a in areas},
                              relay_port=relay_port).start()
@@ -258,9 +220,6 @@ def _study_live_view(args, areas, relay_port):
 
 
 def run_human(args) -> int:
-    from teleop.apps.protocols.blind.human import Coordinator, run_human_study
-    from teleop.apps.protocols.blind.rig import blind_areas
-
     def write(text: str) -> None:
         sys.stdout.write(text)
         sys.stdout.flush()
@@ -275,8 +234,6 @@ def run_human(args) -> int:
     station, rig, view, relay_port = None, None, None, None
     try:
         if args.haptic == "sim://" and args.robot == "sim://robot":
-            from teleop.apps.protocols.blind.rig import RehearsalStation
-
             rig = RehearsalStation(rig_options(args), participant_params(args))
             rig.open()
             station = rig.poke_and_describe
@@ -284,8 +241,6 @@ def run_human(args) -> int:
         elif args.haptic == "none":
             areas = blind_areas()
         else:
-            from teleop.apps.protocols.blind.rig import BackgroundSession
-
             rig = BackgroundSession(args.haptic, args.robot, rig_options(args))
             if args.live is not None:  # the loop's own live view, relayed to the experimenter's screen
                 relay_port = _free_port()

@@ -21,7 +21,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from teleop import __version__
 from teleop.apps.argtypes import input_file, output_file
+from teleop.core.calibration.fbg import fit_fbg, plot_fbg_fit
+from teleop.core.calibration.fsr import BRANCHES, fit_fsr, plot_fsr_fit
+from teleop.core.calibration.one_sensor import fit_one_sensor, plot_one_sensor_fit
+from teleop.core.errors import InputError
+from teleop.core.sensors import eq2_roots
+from teleop.io import calfile
+from teleop.io.calibration_csv import read_fbg_steps, read_fsr_steps, read_one_sensor
+from teleop.io.outputs import check_output, save_figure, write_json
 
 KINDS = ("fsr", "fbg", "one-sensor")
 
@@ -43,11 +52,6 @@ def _fmt(value: float, err: float | None = None, unit: str = "") -> str:
 
 
 def run(args) -> int:
-    from teleop import __version__
-    from teleop.io import calfile
-    from teleop.core.errors import InputError
-    from teleop.io.outputs import check_output, save_figure, write_json
-
     plot_path = Path(args.plot) if args.plot else Path(args.out).with_suffix(".png")
     check_output(plot_path, "--plot")
     if args.map and args.kind != "one-sensor":
@@ -55,9 +59,6 @@ def run(args) -> int:
     comment = f"written by teleop calibrate {args.kind} {args.csv} (cdpr-teleop {__version__})"
     lines = []
     if args.kind == "fsr":
-        from teleop.core.calibration.fsr import BRANCHES, fit_fsr, plot_fsr_fit, read_fsr_steps
-        from teleop.core.sensors import eq2_roots
-
         fit = fit_fsr(read_fsr_steps(args.csv))
         summary = fit.summary()
         values = {"loading_S": list(fit.cal.loading), "unloading_S": list(fit.cal.unloading),
@@ -78,8 +79,6 @@ def run(args) -> int:
                          f"{summary[name]['rms_residual_N']:.4f} N over {summary[name]['rows']} rows")
         source = fit.data.source
     elif args.kind == "fbg":
-        from teleop.core.calibration.fbg import fit_fbg, plot_fbg_fit, read_fbg_steps
-
         fit = fit_fbg(read_fbg_steps(args.csv))
         summary = fit.summary()
         p = fit.params
@@ -100,8 +99,6 @@ def run(args) -> int:
                   f"{v['force_error_N']:.3f} N   (seed: 12.59 pm = 0.37 N)"]
         source = fit.data.source
     else:
-        from teleop.core.calibration.one_sensor import fit_one_sensor, plot_one_sensor_fit, read_one_sensor
-
         Fp, Fd, unit, source = read_one_sensor(args.csv, args.map)
         fit = fit_one_sensor(Fp, Fd, unit, source)
         summary = fit.summary()

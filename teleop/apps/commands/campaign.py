@@ -3,15 +3,19 @@ recordings to diagnose) run in this process, on a Dask LocalCluster or on a Dask
 
 from __future__ import annotations
 
+import argparse
 import sys
+from pathlib import Path
+
+from teleop.apps.campaign.runner import run_campaign, summarise, summary_text
+from teleop.apps.campaign.scheduler import FORMS, parse_scheduler
+from teleop.apps.campaign.spec import load_campaign
+from teleop.apps.campaign.store import ResultStore
+from teleop.core.errors import InputError
+from teleop.io.outputs import check_output, output_problem, write_json
 
 
 def _scheduler(text: str) -> str:
-    import argparse
-
-    from teleop.apps.campaign.scheduler import parse_scheduler
-    from teleop.core.errors import InputError
-
     try:
         parse_scheduler(text)
     except InputError as exc:
@@ -21,8 +25,6 @@ def _scheduler(text: str) -> str:
 
 def add_scheduler_option(p) -> None:
     """--scheduler, shared by every command that runs tasks through teleop.apps.campaign."""
-    from teleop.apps.campaign.scheduler import FORMS
-
     p.add_argument("--scheduler", type=_scheduler, default="none", metavar="WHERE",
                    help=f"where tasks run: {FORMS}; default none (in this process)")
 
@@ -47,12 +49,6 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from teleop.apps.campaign.runner import run_campaign, summarise, summary_text
-    from teleop.apps.campaign.spec import load_campaign
-    from teleop.apps.campaign.store import ResultStore
-    from teleop.core.errors import InputError
-    from teleop.io.outputs import check_output, output_problem, write_json
-
     problem = output_problem(args.out, directory=True)
     if problem:
         raise InputError(f"--out {args.out}: {problem}")
@@ -68,8 +64,6 @@ def run(args) -> int:
                   f"{report.start_s:.1f} s, set-up {report.warm_s:.1f} s; {sum(secs) / len(secs):.2f} s per task "
                   "where it ran)", file=sys.stderr)
     else:
-        from pathlib import Path
-
         if not (Path(args.out) / "tasks").is_dir():
             raise InputError(f"--out {args.out}: holds no campaign results (run `teleop campaign run` first)")
         with ResultStore(args.out) as store:

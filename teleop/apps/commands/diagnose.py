@@ -3,9 +3,21 @@ once it is modelled (JSON keys: docs/formats.md)."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from teleop.apps.argtypes import input_file
+from teleop.apps.campaign.recordings import diagnose_files
+from teleop.apps.commands.campaign import add_scheduler_option
+from teleop.diagnosis.crossfile import cross_file
+from teleop.diagnosis.diagnose import baseline_effects, diagnose
+from teleop.diagnosis.identify import applicable
+from teleop.diagnosis.links import find_links, link_data
+from teleop.diagnosis.plot import figure
+from teleop.io.model_io import save_model
+from teleop.io.outputs import save_figure, write_json
+from teleop.io.progress import progress
+from teleop.io.recording_io import read_recording
 
 
 def register(subparsers) -> None:
@@ -26,7 +38,6 @@ def register(subparsers) -> None:
     p.add_argument("--sindy", action="store_true",
                    help="also fit the PySINDy peer (polynomial + Fourier library, STLSQ; static and free-run "
                         "forms) on the same held-out split")
-    from teleop.apps.commands.campaign import add_scheduler_option
 
     add_scheduler_option(p)  # several files: each diagnosed where the scheduler runs tasks (teleop.apps.campaign)
     p.set_defaults(func=run)
@@ -53,24 +64,10 @@ def _summary(doc: dict) -> str:
 
 
 def run(args) -> int:
-    import sys
-
-    from teleop.io.progress import progress
-
-    from teleop.diagnosis.diagnose import baseline_effects, diagnose
-    from teleop.diagnosis.identify import applicable
-    from teleop.diagnosis.links import find_links, link_data
-    from teleop.io.model_io import save_model
-    from teleop.diagnosis.plot import figure
-    from teleop.io.recording_io import read_recording
-    from teleop.io.outputs import save_figure, write_json
-
     baseline = baseline_effects(args.baseline)
     recs = [read_recording(p, args.map) for p in args.recordings]
     docs, diags = [], []
     if args.scheduler != "none":  # each file read again and diagnosed on the scheduler's workers
-        from teleop.apps.campaign.recordings import diagnose_files
-
         diags = diagnose_files(args.recordings, args.map, args.holdout, args.scheduler, seed=args.seed,
                                baseline=baseline, sindy=args.sindy)
         docs, recs = [d.as_dict() for d in diags], []  # nothing left for the in-process loop below
@@ -85,7 +82,6 @@ def run(args) -> int:
         print(_summary(doc))
     result = docs[0]
     if len(docs) > 1:
-        from teleop.diagnosis.crossfile import cross_file
         cross = cross_file(diags)
         result = {"recordings": docs, "cross_file": cross}
         for ch, s in cross["summary"].items():

@@ -22,9 +22,15 @@ from __future__ import annotations
 
 import sys
 
+import numpy as np
+
+from devices.base import RobotSpec
 from teleop.apps.argtypes import input_file
 from teleop.core.errors import InputError
-from teleop.io.recording import TOPIC_ROBOT, TOPIC_SETPOINT
+from teleop.core.kinematics import bending_angles, pose2cables, pose2lengths, rotation_zyx
+from teleop.io.outputs import atomic_write
+from teleop.io.recording import TOPIC_ROBOT, TOPIC_SETPOINT, read_session
+from teleop.loop.replay import geometry_from
 
 
 def register(subparsers) -> None:
@@ -41,12 +47,6 @@ def register(subparsers) -> None:
 def export_rows(session, cable: int, truth: bool = False):
     """(header, rows) of the interchange CSV for `cable` (1-based); truth: motor_force_N from the simulator's
     FSR-side tension (InputError when the recording has none)."""
-    import numpy as np
-
-    from devices.base import RobotSpec
-    from teleop.core.kinematics import bending_angles, pose2cables, pose2lengths
-    from teleop.loop.replay import geometry_from
-
     meta = session.metadata.get("session", {})
     conf = meta.get("configuration", {})
     geom = geometry_from(conf.get("geometry"))
@@ -70,8 +70,6 @@ def export_rows(session, cable: int, truth: bool = False):
         tip_pos = tip_force = float("nan")
         if "x_tip" in m:  # simulator truth: actual tip -> actual pose -> actual lengths
             actual = np.array(m.get("x_pose", pose), dtype=float)
-            from teleop.core.kinematics import rotation_zyx
-
             actual[:3] = np.array(m["x_tip"]) - rotation_zyx(*actual[3:]) @ geom.tip
             tip_pos = (L_home[i] - pose2lengths(actual, geom)[i]) * 1e3
         if "x_t_tip" in m:
@@ -94,9 +92,6 @@ def export_rows(session, cable: int, truth: bool = False):
 
 
 def run(args) -> int:
-    from teleop.io.outputs import atomic_write
-    from teleop.io.recording import read_session
-
     if not 1 <= args.cable <= 6:
         raise InputError(f"--cable must be 1..6, got {args.cable}")
     s = read_session(args.file)

@@ -5,6 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from teleop.apps.argtypes import finite_float, input_file
+from teleop.core.errors import InputError
+from teleop.core.geometry import default_geometry, load_geometry
+from teleop.core.kinematics import bending_angles, pose2cables, pose2lengths_checked, structure_matrix
+from teleop.core.tension import wrench2tensions
+from teleop.io.outputs import write_json
 
 
 def register(subparsers) -> None:
@@ -17,12 +22,6 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from teleop.core.errors import InputError
-    from teleop.core.geometry import default_geometry, load_geometry
-    from teleop.core.kinematics import bending_angles, pose2cables, pose2lengths_checked, structure_matrix
-    from teleop.io.outputs import write_json
-    from teleop.core.tension import wrench2tensions
-
     geom = load_geometry(args.geometry) if args.geometry else default_geometry()
     v = np.asarray(args.pose_mm_deg, dtype=float)
     pose = np.r_[v[:3] * 1e-3, np.deg2rad(v[3:])]

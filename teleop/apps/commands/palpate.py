@@ -2,10 +2,17 @@
 
 from __future__ import annotations
 
+import dataclasses
+import sys
+
+from teleop.apps.argtypes import input_file
+from teleop.apps.protocols import palpation
+from teleop.apps.protocols.palpation_sensors import sensor_calibration
+from teleop.core.errors import InputError
+from teleop.io.outputs import save_figure, write_json
+
 
 def register(subparsers) -> None:
-    from teleop.apps.argtypes import input_file
-
     p = subparsers.add_parser(
         "palpate", help="palpation tests on the simulated robot: stiffness (Table 1), z / xy (Fig 16), scan (Fig 17)",
         description="Run a palpation test of seed 000 on the simulated CDPR and pybullet pads; print a table, "
@@ -33,17 +40,8 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    import dataclasses
-    import sys
-
-    from teleop.core.errors import InputError
-    from teleop.io.outputs import save_figure, write_json
-    from teleop.apps.protocols.palpation import PalpationParams, run_test
-
-    params = dataclasses.replace(PalpationParams(), sensor=args.sensor, calibration=args.calibration)
+    params = dataclasses.replace(palpation.PalpationParams(), sensor=args.sensor, calibration=args.calibration)
     if args.calibration is not None:  # a file that does not fit the sensor is refused before the run
-        from teleop.apps.protocols.palpation_sensors import sensor_calibration
-
         sensor_calibration(args.calibration, args.sensor)
     if args.repeats is not None:
         if args.repeats < 1:
@@ -51,7 +49,7 @@ def run(args) -> int:
         params = dataclasses.replace(params, repeats_z=args.repeats)
     if args.limit is not None and args.limit < 1:
         raise InputError(f"--limit must be >= 1, got {args.limit}")
-    res = run_test(args.test, args.speed_profile, args.seed, params, limit=args.limit, progress=True,
+    res = palpation.run_test(args.test, args.speed_profile, args.seed, params, limit=args.limit, progress=True,
                    plant=args.plant)
     print(res.table())
     if args.json:

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import asdict
 
 from teleop.apps.argtypes import input_file
+from teleop.io.outputs import write_json
+from teleop.loop.replay import replay_session
 
 
 def register(subparsers) -> None:
@@ -15,11 +18,6 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from dataclasses import asdict
-
-    from teleop.loop.replay import replay_session
-    from teleop.io.outputs import write_json
-
     rep = replay_session(args.file)
     if rep.damage:
         print(f"teleop: warning: {args.file}: {rep.damage}; replaying the intact prefix", file=sys.stderr)

@@ -2,12 +2,24 @@
 
 from __future__ import annotations
 
+import argparse
+import os
+import signal
 import sys
+from dataclasses import replace
 
-from teleop.apps.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, input_file, positive_float,
-                             rt_priority)
-
+from devices.wrappers import BacklashCompensatedRobot
+from teleop.apps.argtypes import LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, input_file, positive_float, rt_priority
+from teleop.core.control.feedforward import model_backlash_width
 from teleop.core.errors import InputError
+from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
+from teleop.io.calfile import load_fsr
+from teleop.io.calibration_csv import load_fsr_calibration
+from teleop.io.model_io import load_model
+from teleop.io.outputs import write_json
+from teleop.loop.live.server import check_port
+from teleop.loop.params import LOOP_RENDER, LoopParams
+from teleop.loop.session import default_estimator, frame_period, is_simulated_stylus, loop_estimator, run_session
 
 
 def register(subparsers) -> None:
@@ -61,8 +73,6 @@ def add_live_arguments(p) -> None:
 
 def port_number(text: str) -> int:
     """A TCP port 0..65535 (argparse type)."""
-    import argparse
-
     try:
         v = int(text)
     except ValueError:
@@ -73,28 +83,17 @@ def port_number(text: str) -> int:
 
 
 def run(args) -> int:
-    from dataclasses import replace
-
-    from teleop.loop.params import LoopParams
-    from teleop.loop.session import run_session
-    from teleop.io.outputs import write_json
-
     if not args.seconds > 0:
         raise InputError(f"--seconds must be > 0, got {args.seconds}")
     if args.record and not args.record.endswith(".mcap"):
         raise InputError(f"--record {args.record}: expected a file name ending in .mcap")
     if args.sim_clock and not args.robot_inline:
         raise InputError("--sim-clock needs --robot-inline (a robot process runs on the wall clock)")
-    from teleop.loop.session import is_simulated_stylus
 
     if args.sim_clock and not is_simulated_stylus(args.haptic):
         raise InputError(f"--sim-clock needs a simulated stylus (--haptic sim://...), got {args.haptic}")
     if args.live is not None:
-        from teleop.loop.live.server import check_port
-
         check_port(args.live_host, args.live)
-    from teleop.loop.params import LOOP_RENDER
-    from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 
     render = replace(LOOP_RENDER, scale=args.force_scale, zero_negative_z=args.zero_neg_z,
                      alpha_max=args.passivity_damping)
@@ -102,13 +101,9 @@ def run(args) -> int:
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     if args.motion_scale is not None:
         params = replace(params, mapping=replace(params.mapping, motion_scale=args.motion_scale))
-    from teleop.loop.session import default_estimator, frame_period
-    from teleop.core.sensors import load_fsr_calibration
 
     # read before any device is opened or file written: a bad file leaves nothing
     if args.fsr_calibration and str(args.fsr_calibration).endswith(".toml"):
-        from teleop.io.calfile import load_fsr
-
         cal = load_fsr(args.fsr_calibration)
     else:
         cal = load_fsr_calibration(args.fsr_calibration) if args.fsr_calibration else None
@@ -118,8 +113,6 @@ def run(args) -> int:
     robot_hz = None if args.robot_inline else args.robot_rate
     estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
     if "sensor=" in args.robot:  # sim://robot?sensor=fbg|one: the estimator reads that kind (scenes.sim_sensors)
-        from scenes.sim_sensors import loop_estimator
-
         estimator = loop_estimator(args.robot, frame_period(params, robot_hz), cal) or estimator
     with _CtrlC() as ctrl_c:
         res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
@@ -164,10 +157,6 @@ def run(args) -> int:
 def compensation_wrapper(path, period: float):
     """robot -> devices.wrappers.BacklashCompensatedRobot with the backlash width of the link model at `path`
     (read now: a bad file is one line, before any device opens); `period` [s] between commands."""
-    from devices.wrappers import BacklashCompensatedRobot
-    from teleop.core.control.feedforward import model_backlash_width
-    from teleop.io.model_io import load_model
-
     width = model_backlash_width(load_model(path), f"--compensation {path}")
 
     def wrap(robot, clock=None):
@@ -187,28 +176,20 @@ class _CtrlC:
     """
 
     def __init__(self):
-        import os
-
         self.pressed = False
         self._old = None
         self._pid = os.getpid()
 
     def _handler(self, signum, frame):
-        import os
-
         if os.getpid() != self._pid:  # a forked child: the parent shuts it down
             return
         self.pressed = True
         raise KeyboardInterrupt
 
     def __enter__(self):
-        import signal
-
         self._old = signal.signal(signal.SIGINT, self._handler)
         return self
 
     def __exit__(self, *exc):
-        import signal
-
         signal.signal(signal.SIGINT, self._old)
         return False

@@ -8,23 +8,36 @@ direction at its deepest commanded point (the seed reads its results there). Spe
 (0.5 mm/s, seed 000 test 1) or `variable` (random speeds 0.25-2 mm/s with short reversals on the way in
 and out: the condition seed 000 §6 says its strategy handles badly).
 
-The estimators share the FSR counts -> tension conversion (teleop.core.sensors.FsrConverter) and run the fast
-per-tick estimate (teleop.core.estimation.tick.TickComputer) at the commanded pose, each with the same Kalman
-noise model. The pybullet scene, cable and sensor physics live in scenes/ (imported inside `run_test`).
+The estimators share the FSR counts -> tension conversion and run the per-tick estimate at the commanded pose,
+each with the same Kalman noise model (palpation_estimators.py). The pybullet scene, cable and sensor physics
+live in scenes/.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+import time
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
+from scenes import pads
+from scenes.materials import ATTRIBUTION
+from scenes.pads import SCAN_COLS, SCAN_ROWS, letter_mask
+from scenes.rich_plant import RichPlant, plant_params, with_plant
+from scenes.sim_robot import SimRobot, SimRobotParams, home_pose
+from scenes.world import PadWorld, WorldParams
+from teleop.apps.protocols.palpation_estimators import ESTIMATORS, concat_traces, estimate, fsr_tensions, slice_trace
+from teleop.apps.protocols.palpation_plots import plot_result
+from teleop.apps.protocols.palpation_sensors import sensor_estimates, sensor_lines
 from teleop.core.errors import InputError
+from teleop.core.estimation.calibrate import fit_dynamic_params
+from teleop.core.estimation.turn import TurnCompensation, fit_turn_compensation
+from teleop.core.kinematics import poses2lengths
+from teleop.io.progress import progress
 
 TESTS = ("stiffness", "z", "xy", "scan")
 PROFILES = ("uniform", "variable")
-ESTIMATORS = ("non_compensated", "single", "double", "dynamic")
 FIT_PAD_AWAY = 0.2  # [m] where the pad stage parks the pad during the no-load runs
 AXES = {"+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0), "+z": (2, 1.0)}
 # seed 000 Table 1 [N], pokes 1-6 (regions black, black, red, red, yellow, yellow)
@@ -227,48 +240,6 @@ def fit_path(start_tip, axis: int, p: PalpationParams, dt: float, direction: flo
     return np.vstack(parts)
 
 
-# --------------------------------------------------------------------------------------------------------
-# estimators over a trace
-# --------------------------------------------------------------------------------------------------------
-
-def fsr_tensions(trace, cal=None, deadband_counts: float = 8.0) -> np.ndarray:
-    """(n, 6) FSR tensions [N] from a trace's counts (teleop.core.sensors.FsrConverter, branch dead band)."""
-    from teleop.core.sensors import FsrConverter, default_fsr_calibration
-
-    conv = FsrConverter(cal if cal is not None else default_fsr_calibration(), deadband_counts=deadband_counts)
-    return np.array([conv.update(c) for c in trace.counts])
-
-
-def estimate(trace, geom, dt: float, turn=None, names=ESTIMATORS,
-             kalman: bool = True, cal=None, progress=None, deadband_counts: float = 8.0, dynamic=None) -> dict:
-    """{name: (n, 6) wrench} of each estimator over a SimTrace's counts at its commanded poses.
-
-    The FSR branch dead band (8 counts, about 0.4 N at mid range) matches the sensor's own loading-state
-    switch (sensor_hysteresis delta 0.2 N, i.e. 0.4 N of reversal): with the default 3 counts and 1 count
-    RMS ADC noise the branch chattered during slow pokes and each flip moved a tension by ~0.9 N (measured).
-    """
-    from teleop.core.estimation.kalman import KalmanNoise
-    from teleop.core.estimation.tick import TickComputer
-    from teleop.core.sensors import FsrConverter, default_fsr_calibration
-
-    conv = FsrConverter(cal if cal is not None else default_fsr_calibration(), deadband_counts=deadband_counts)
-    noise = KalmanNoise(dt=dt) if kalman else None
-    from teleop.core.estimation.estimators import DynamicParams
-
-    dyn = dynamic if dynamic is not None else DynamicParams()
-    ticks = {n: TickComputer(geom, n, turn=turn if n == "double" else None, kalman=noise, dynamic=dyn)
-             for n in names}
-    out = {n: np.empty((len(trace.t), 6)) for n in names}
-    poses = trace.poses.tolist()
-    for k, counts in enumerate(trace.counts):
-        t = conv.update(counts).tolist()
-        for n, tc in ticks.items():
-            out[n][k] = tc.estimate(poses[k], t, dt)[1]
-        if progress is not None and k % 1000 == 999:
-            progress(1000)
-    return out
-
-
 def _num(x) -> float:
     return float(round(float(x), 6))
 
@@ -301,8 +272,6 @@ def sessions_for(test: str, p: PalpationParams, limit: int | None = None, tip_st
                  tip_radius: float = 0.0015) -> list:
     """The robot runs of a test (scan: one per letter). `limit` keeps the first pokes of each (short runs).
     `tip_stiffness` [N/m] and `tip_radius` [m] of the simulated robot set the stiffness test's depths."""
-    from scenes import pads
-
     if test == "stiffness":
         pad = pads.three_region_pad()
         loads = dict(p.stiffness_loads)
@@ -386,8 +355,6 @@ class PalpationResult:
 
     def to_json(self) -> dict:
         """The JSON object of docs/formats.md (wall time left out: same seed, same bytes)."""
-        from scenes.materials import ATTRIBUTION
-
         return {"test": self.test, "speed_profile": self.profile, "seed": self.seed,
                 "estimators": list(ESTIMATORS), "pokes": self.pokes, "summary": self.summary, **self.extra,
                 "simulated_s": _num(self.simulated_s), "params": self.params, "attribution": ATTRIBUTION}
@@ -410,8 +377,6 @@ class PalpationResult:
             s = self.summary[n]
             lines.append(f"{n:<16} {s['mean_abs_error_N']:8.3f} {s['rmse_N']:9.3f}")
         if self.params.get("sensor", "fsr") != "fsr":
-            from teleop.apps.protocols.palpation_sensors import sensor_lines
-
             lines += sensor_lines(self)
         for key in ("ranks_correctly", "contrast"):
             if key in self.extra:
@@ -430,8 +395,6 @@ class PalpationResult:
 
     def plot(self):
         """A matplotlib figure (Fig 15/16-like bars, or Fig 17-like images for the scan)."""
-        from teleop.apps.protocols.palpation_plots import plot_result
-
         return plot_result(self)
 
 
@@ -440,22 +403,13 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     """Run a palpation test on the simulated robot (see the module docstring). `plant`: "matched" (the
     robot's physics is the estimators' model) or "rich" (scenes.rich_plant's effects on top, drawn from
     `seed`)."""
-    import time
-
-    from scenes.rich_plant import RichPlant, plant_params, with_plant
-    from scenes.sim_robot import SimRobot, SimRobotParams, home_pose
-    from teleop.core.estimation.turn import TurnCompensation, fit_turn_compensation
-    from teleop.core.kinematics import poses2lengths
-
     if profile not in PROFILES:
         raise InputError(f"unknown speed profile '{profile}' (expected one of: {', '.join(PROFILES)})")
-    from scenes.world import WorldParams
 
     sim = with_plant(SimRobotParams(substeps=params.substeps,
                                     world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt)),
                      plant_params(plant, seed))
     sessions = sessions_for(test, params, limit, sim.tip_stiffness, sim.world.tip_radius)
-    from dataclasses import replace
 
     sim = replace(sim, sensor=params.sensor)  # the robot's sensor kind (scenes.sim_sensors)
     t_wall, t_cpu = time.perf_counter(), time.process_time()
@@ -470,8 +424,6 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
         rng = np.random.default_rng(int(seeds[2 * i + 1]))
         hole = None
         if s.pad.hole_radius > 0:
-            from scenes.world import PadWorld
-
             proxy = PadWorld(s.pad, sim.world).proxy_radius
             hole = {"z": surface + s.pad.thickness / 2 + proxy, "contact": s.pad.hole_radius - proxy}
         fit_tips, spans = _fit_plan(home_tip, s.fit_axes, params, dt, surface, hole)
@@ -492,7 +444,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
                     robot.set_pad_offset(((scale - 1.0) * pk.xy[0], (scale - 1.0) * pk.xy[1]))
                     seg = plan.tips[bounds[j]:bounds[j + 1]]
                     parts.append(robot.run(_tips2lengths(seg, tool, geom), progress=bar.update))
-            poke_trace = _concat(parts)
+            poke_trace = concat_traces(parts)
             # the seed's step 3 fit on the no-load runs (single-compensated, unfiltered wrench)
             single = estimate(fit_trace, geom, dt, names=("single",), kalman=False, progress=bar.update)["single"]
             fits = tuple(fit_turn_compensation(fit_trace.t[a:b], fit_trace.poses[a:b], single[a:b], axis=axis,
@@ -500,16 +452,12 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
                          for axis, (a, b) in spans.items())
             dyn = None
             if params.fit_dynamic:  # the project's estimator calibrated on the same no-load runs
-                from teleop.core.estimation.calibrate import fit_dynamic_params
-
                 a, b = min(v[0] for v in spans.values()), max(v[1] for v in spans.values())
-                dyn = fit_dynamic_params(geom, fit_trace.poses[a:b], fsr_tensions(_slice(fit_trace, a, b)), dt)
+                dyn = fit_dynamic_params(geom, fit_trace.poses[a:b], fsr_tensions(slice_trace(fit_trace, a, b)), dt)
             w = estimate(poke_trace, geom, dt, turn=TurnCompensation(axes=fits), progress=bar.update, dynamic=dyn)
             calib[s.name] = {"turn_duration_s": {"xyz"[f.axis]: _num(f.duration) for f in fits},
                              "dynamic": None if dyn is None else {k: _num(v) for k, v in asdict(dyn).items()}}
             if params.sensor != "fsr":  # the FBG kinds' estimate replaces the FSR array's
-                from teleop.apps.protocols.palpation_sensors import sensor_estimates
-
                 w, calib[s.name]["sensor"] = sensor_estimates(params.sensor, fit_trace, spans, poke_trace, geom, dt,
                                                               sim.fbg_cable, progress=bar.update,
                                                               calibration=params.calibration)
@@ -549,23 +497,9 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
 
 
 def _tips2lengths(tips, tool, geom):
-    from teleop.core.kinematics import poses2lengths
-
     poses = np.zeros((len(tips), 6))
     poses[:, :3] = tips - tool
     return poses2lengths(poses, geom)
-
-
-def _concat(traces):
-    from scenes.sim_robot import SimTrace
-
-    return SimTrace(**{k: np.concatenate([getattr(t, k) for t in traces]) for k in SimTrace.__dataclass_fields__})
-
-
-def _slice(trace, a: int, b: int):
-    from scenes.sim_robot import SimTrace
-
-    return SimTrace(**{k: getattr(trace, k)[a:b] for k in SimTrace.__dataclass_fields__})
 
 
 class _NoBar:
@@ -579,7 +513,6 @@ class _NoBar:
 def _progress_bar(enabled: bool, total: int, desc: str):
     if not enabled:
         return _NoBar()
-    from teleop.io.progress import progress
 
     return progress(total, desc, unit="ticks", mininterval=0.5)
 
@@ -641,8 +574,6 @@ def load_response(truth, estimate) -> dict:
 
 
 def _grid(session: Session, rows) -> dict:
-    from scenes.pads import SCAN_COLS, SCAN_ROWS, letter_mask
-
     mine = [r for r in rows if r["session"] == session.name]
     g = {"mask": letter_mask(session.name[-1]).tolist()}
     for key in ["ground_truth_N"] + [f"{n}_N" for n in ESTIMATORS]:

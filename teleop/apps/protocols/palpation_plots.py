@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from scenes.materials import ATTRIBUTION
+
 COLOURS = {"ground_truth": "black", "non_compensated": "tab:red", "single": "tab:orange", "double": "tab:blue",
            "dynamic": "tab:green"}
 
 
 def plot_result(res):
     """A matplotlib Figure for a PalpationResult (Agg backend)."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    from scenes.materials import ATTRIBUTION
 
     if res.test == "scan":
         fig = _scan_figure(res)
@@ -25,7 +26,7 @@ def plot_result(res):
 
 def _bars_figure(res):
     """Per poke label (Fig 16a: the 25 points) the mean over repeats, with the spread as error bars."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     keys = ["ground_truth"] + list(res.summary)
     labels = list(dict.fromkeys(p["label"] for p in res.pokes))
@@ -56,7 +57,7 @@ def _bars_figure(res):
 
 
 def _scan_figure(res):
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     grids = res.extra["grids"]
     keys = ["ground_truth", "non_compensated", "double", "dynamic"]

@@ -10,7 +10,15 @@ they are read against.
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import numpy as np
+
+from teleop.apps.protocols.palpation_estimators import ESTIMATORS, fsr_tensions, slice_trace
+from teleop.core.errors import InputError
+from teleop.core.estimation.sensor_reading import estimate_trace, identify_one_sensor
+from teleop.core.sensors import FbgParams
+from teleop.io.calfile import load_calibration
 
 #: the sources' figures, for the side-by-side tables (N)
 SEED_FIGURES = {
@@ -32,8 +40,6 @@ def sensor_calibration(path: str | None, kind: str) -> dict:
     InputError naming the file."""
     if path is None:
         return {}
-    from teleop.io.calfile import load_calibration
-    from teleop.core.errors import InputError
 
     file_kind, value = load_calibration(path)
     if file_kind == "fbg" and kind in ("fbg", "one"):
@@ -54,12 +60,6 @@ def sensor_estimates(kind: str, fit_trace, spans: dict, poke_trace, geom, dt: fl
     spans: {axis: (a, b)} sample ranges of `fit_trace` holding the no-load runs; calibration: a `teleop
     calibrate` file (`sensor_calibration`). The record holds `tension_rmse_N`: per cable, the RMSE of the
     tip tensions read against the simulation's over the poke runs."""
-    from dataclasses import asdict
-
-    from teleop.core.estimation.sensor_reading import estimate_trace, identify_one_sensor
-    from teleop.apps.protocols.palpation import ESTIMATORS, _slice, fsr_tensions
-    from teleop.core.sensors import FbgParams
-
     cal = sensor_calibration(calibration, kind)
     fbg, model, calib = cal.get("fbg", FbgParams()), cal.get("model"), {"sensor": kind}
     if calibration is not None:
@@ -70,7 +70,7 @@ def sensor_estimates(kind: str, fit_trace, spans: dict, poke_trace, geom, dt: fl
     elif kind == "one":
         a, b = min(v[0] for v in spans.values()), max(v[1] for v in spans.values())
         sl = slice(a, b)
-        Fp = fsr_tensions(_slice(fit_trace, a, b))
+        Fp = fsr_tensions(slice_trace(fit_trace, a, b))
         model = identify_one_sensor(Fp[:, cable], fit_trace.fbg_pm[sl], fit_trace.lengths[sl, cable], cable, fbg)
         # what the sheath's capstan law gives the instrumented cable over the run (exp(-+mu Theta))
         mt = geom.mu * fit_trace.theta[sl, cable]

@@ -12,11 +12,11 @@ import json
 from pathlib import Path
 from typing import Callable
 
+from teleop.apps.protocols.blind.protocol import (ANSWERS, HARDER, SOFTER, UNSURE, Compare, Rate, check_ratings,
+                                                  next_step)
+from teleop.apps.protocols.blind.study import ParticipantRecord, StudyResult, coordinator_draws
 from teleop.core.errors import InputError
 from teleop.io.outputs import dumps_json, write_text_synced
-from teleop.apps.protocols.blind.protocol import (ANSWERS, HARDER, SOFTER, UNSURE, Compare, Rate, check_ratings,
-                                             next_step)
-from teleop.apps.protocols.blind.study import ParticipantRecord, StudyResult, coordinator_draws
 
 STATE_FORMAT = 1
 SLOT_NAMES = "ABCDEFGH"

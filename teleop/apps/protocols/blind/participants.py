@@ -24,10 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.core.errors import InputError
 from teleop.apps.protocols.blind.probe import Poke, PokeRequest, PressAborted
 from teleop.apps.protocols.blind.protocol import HARDER, SOFTER, UNSURE, Compare, ratings_from_positions
 from teleop.apps.protocols.blind.stats import loading_slope
+from teleop.core.errors import InputError
 
 Z75 = 0.6744897501960817  # standard normal quantile at 0.75
 K_FLOOR = 1.0              # [N/m] what "nothing felt" is perceived as (log of zero is undefined)

@@ -31,19 +31,34 @@ its lag dominates instead: see RigOptions.kalman_bandwidth.
 from __future__ import annotations
 
 import dataclasses
+import subprocess
+import sys
 from dataclasses import dataclass
 
 import numpy as np
 
+from devices.base import DeviceError
+from devices.simulated import Script, SimulatedStylus
+from scenes.materials import ATTRIBUTION, contact_stiffness, get_material
+from scenes.pads import BLIND_LABELS, BLIND_MATERIALS, blind_area_centres, blind_test_pad
+from scenes.sensor_identification import identify_one_sensor_on
+from scenes.sim_robot import SimRobot, SimRobotParams
+from scenes.world import WorldParams
 from teleop.apps.protocols.blind.probe import Poke, PokeRequest, PressAborted
+from teleop.apps.protocols.blind.stats import loading_slope
 from teleop.apps.protocols.blind.study import Area
+from teleop.core.errors import InputError
+from teleop.core.estimation.kalman import KalmanNoise
+from teleop.core.estimation.sensor_reading import make_estimator
+from teleop.core.geometry import default_geometry
+from teleop.core.mapping import MappingParams
+from teleop.loop import LoopParams, State, Teleop
+from teleop.loop.devices_by_url import open_device
+from teleop.loop.params import LOOP_RENDER
 
 
 def blind_areas() -> tuple:
     """The four areas hardest first with their target contact stiffness [N/m] (scenes.materials)."""
-    from scenes.materials import contact_stiffness, get_material
-    from scenes.pads import BLIND_LABELS, BLIND_MATERIALS
-
     return tuple(Area(name, BLIND_LABELS[name], contact_stiffness(get_material(name))) for name in BLIND_MATERIALS)
 
 
@@ -109,8 +124,6 @@ class RigOptions:
     sensor: str = "fsr"
 
     def __post_init__(self):
-        from teleop.core.errors import InputError
-
         for name in ("force_scale", "motion_scale", "gap", "release_speed"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -130,12 +143,8 @@ class RigOptions:
 def _sensor_estimator(geom, o, robot_params, name: str, noise):
     """The estimator of the rig's sensor kind (teleop.core.estimation.sensor_reading.make_estimator); for "one" the
     eq 7 model is identified once on the simulated robot (scenes.sim_sensors.identify_one_sensor_on)."""
-    from teleop.core.estimation.sensor_reading import make_estimator
-
     kw = {}
     if o.sensor == "one":
-        from scenes.sim_sensors import identify_one_sensor_on
-
         kw = {"model": identify_one_sensor_on(robot_params, 0, 0), "cable": 0}
     return make_estimator(geom, o.sensor, name, kalman=noise, **kw)
 
@@ -150,19 +159,10 @@ class _ManualClock:
         return self.t
 
 
-class _Station:
+class Station:
     """One participant's rig: the simulated robot over the arranged pad, the stylus and the loop."""
 
     def __init__(self, pad, options: RigOptions, seed: tuple):
-        from devices.simulated import Script, SimulatedStylus
-        from scenes.sim_robot import SimRobot, SimRobotParams
-        from scenes.world import WorldParams
-        from teleop.core.geometry import default_geometry
-        from teleop.core.estimation.kalman import KalmanNoise
-        from teleop.loop import LoopParams
-        from teleop.loop.params import LOOP_RENDER
-        from teleop.core.mapping import MappingParams
-
         o = options
         geom = default_geometry()
         self.options = o
@@ -195,8 +195,6 @@ class _Station:
         self.monitor = None  # optional callable(TickData) after every tick (diagnostics, never the participant)
 
     def open(self) -> None:
-        from teleop.loop import Teleop
-
         self.robot.open()
         self.stylus.open()
         self.tp = Teleop(self.stylus, self.robot, self.params, self.geom, estimator=self.estimator)
@@ -210,8 +208,6 @@ class _Station:
             self.tp = None
 
     def _run(self, seconds: float, record: bool):
-        from teleop.loop import State
-
         dt = self.params.dt
         n = int(round(seconds / dt))
         t = np.empty(n)
@@ -229,15 +225,11 @@ class _Station:
                 z[k] = stylus.p[2]
                 f[k] = x.F[2]
         if tp.state == State.FAULT:
-            from devices.base import DeviceError
-
             raise DeviceError(f"blind-test rig: the loop faulted ({tp.fault_reason})")
         return t, z, f
 
     def settle(self) -> None:
         """Run until teleoperation is engaged and the force ramp-in is over."""
-        from devices.simulated import Script
-
         self.stylus.script = Script(kind="hold", center=tuple(self.rest))
         self._run(self.options.settle, record=False)
 
@@ -257,8 +249,6 @@ class _Station:
         Holding the target where it had run to instead keeps pressing on by the distance the target ran
         while the lagging force built up (~0.6 N more on rigid's tip at 20 mm/s and ~7 ms; with a 12 ms
         lag a 0.37 N press that held its target faulted the loop with 6 N on the tip)."""
-        from devices.simulated import Script
-
         o = self.options
         t0 = self.clock.t
         c = self.rest
@@ -290,8 +280,6 @@ class _Station:
     def _run_until(self, seconds: float, force: float):
         """Like _run(seconds, record=True) but stops after the tick whose stylus force (+z) reaches `force`.
         Returns (t, z, f, reached)."""
-        from teleop.loop import State
-
         dt = self.params.dt
         n = int(round(seconds / dt))
         t, z, f = np.empty(n), np.empty(n), np.empty(n)
@@ -309,8 +297,6 @@ class _Station:
                 reached = True
                 break
         if tp.state == State.FAULT:
-            from devices.base import DeviceError
-
             raise DeviceError(f"blind-test rig: the loop faulted ({tp.fault_reason})")
         return t[:k], z[:k], f[:k], reached
 
@@ -346,21 +332,14 @@ class SimRig:
 
     def arrange(self, layout) -> None:
         """Lay out the pad: area name per slot (a permutation of the four areas)."""
-        from scenes.pads import blind_test_pad
-
         self.close()
         self.pad = blind_test_pad(tuple(layout))  # validates the layout
         self.layout = tuple(layout)
         self.n_arranged += 1
 
     def poke(self, slot: int, request: PokeRequest) -> Poke:
-        from scenes.pads import blind_area_centres
-
         if self.layout is None:
-            from teleop.core.errors import InputError
-
             raise InputError("blind-test rig: arrange(layout) before poking")
-        from devices.base import DeviceError
 
         self._open_station(slot)
         self.station.move_to(int(slot), blind_area_centres()[int(slot)])
@@ -373,10 +352,8 @@ class SimRig:
 
     def _open_station(self, slot: int) -> None:
         """The participant's station, opened over `slot` and settled, on the first poke after `arrange`."""
-        from scenes.pads import blind_area_centres
-
         if self.station is None:
-            self.station = _Station(self.pad, self.options, (self.options.seed, self.n_arranged))
+            self.station = Station(self.pad, self.options, (self.options.seed, self.n_arranged))
             self.station.open()
             self.station.move_to(int(slot), blind_area_centres()[int(slot)])
             self.station.settle()
@@ -388,8 +365,6 @@ class SimRig:
         and force_scale x the estimator's wrench without its Kalman filter (same friction compensation;
         None when the chain renders the raw FSR wrench, which has no filter anyway)."""
         if self.layout is None:
-            from teleop.core.errors import InputError
-
             raise InputError("blind-test rig: arrange(layout) before poking")
         self._open_station(slot)
         st = self.station
@@ -425,8 +400,6 @@ class SimRig:
 
     def tip_stiffness(self) -> float | None:
         """The simulated robot's series compliance [N/m] (None: rigid tip)."""
-        from scenes.sim_robot import SimRobotParams
-
         o = self.options
         return float(o.tip_stiffness) if o.tip_stiffness is not None else SimRobotParams().tip_stiffness
 
@@ -442,8 +415,6 @@ class SimRig:
 
     @property
     def attribution(self) -> str:
-        from scenes.materials import ATTRIBUTION
-
         return ATTRIBUTION
 
 
@@ -454,8 +425,6 @@ def transparency(options: RigOptions, speeds, repeats: int = 3, force: float = 0
     and the ground-truth contact force (both x force_scale; see SimRig.poke_traced).
 
     Returns [{"speed", "area", "rendered", "unfiltered", "contact", "expected"}] with per-poke lists."""
-    from teleop.apps.protocols.blind.stats import loading_slope
-
     out = []
     for v in speeds:
         with SimRig(options) as rig:
@@ -491,8 +460,6 @@ class RehearsalStation:
         self.rig.close()
 
     def poke_and_describe(self, layout, slot: int) -> str:
-        from teleop.apps.protocols.blind.stats import loading_slope
-
         if self.rig.layout != tuple(layout):
             self.rig.arrange(layout)
         try:
@@ -517,11 +484,6 @@ class BackgroundSession:
         self.startup_check = 3.0  # [s] the session must still be running after this long
 
     def open(self) -> None:
-        import subprocess
-        import sys
-
-        from devices.base import open_device
-
         for url in (self.argv[2], self.argv[4]):  # a bad URL or a missing SDK fails here with one clear line
             device = open_device(url)
             device.open()
@@ -539,7 +501,6 @@ class BackgroundSession:
         with open(self.log_path, "rb") as fh:
             fh.seek(start)
             lines = fh.read().decode(errors="replace").strip().splitlines()
-        from teleop.core.errors import InputError
 
         raise InputError(f"teleop session stopped at once: {lines[-1] if lines else 'no output'} "
                          f"(log: {self.log_path})")

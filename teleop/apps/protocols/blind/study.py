@@ -16,6 +16,7 @@ from teleop.apps.protocols.blind.participants import ParticipantParams, Simulate
 from teleop.apps.protocols.blind.probe import Poke, PokeRequest
 from teleop.apps.protocols.blind.protocol import Compare, next_step, presentation
 from teleop.apps.protocols.blind.stats import SEED_TABLE3, kendall_tau, kendall_w, mean_std
+from teleop.io.outputs import save_figure
 
 _LAYOUT = 100  # random stream of the coordinator (layout and presentation), apart from the participant's
 
@@ -262,12 +263,10 @@ class StudyResult:
 
     def plot(self, path) -> None:
         """PNG: ratings per area (box plot, seed's means marked) and rendered vs true stiffness (log-log)."""
-        import matplotlib
+        import matplotlib  # heavy: loaded only to draw
 
         matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        from teleop.io.outputs import save_figure
+        import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
         R = self.ratings()
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
