@@ -17,7 +17,8 @@ positive, tension T_j in element j between nodes j and j+1):
 In steady sliding every node's phi is +-g and the tension falls along the sheath by the capstan law, the
 discrete product ((1 + a) / (1 - a))^N = exp(mu Theta) (1 + O(a^2)), a = mu Theta / (2 N), for a uniform
 bend (Kaneko et al., "Basic considerations on transmission characteristics for tendon drive robots", ICAR
-1991; Agrawal et al., "Dynamic modeling of cable-conduit transmission", ASME J Dyn Syst Meas Control 2010).
+1991; Agrawal, Peine and Yao, "Modeling of transmission characteristics across a cable-conduit system",
+IEEE Trans Robot 2010).
 After a reversal the motor travels through a dead zone while the tension profile turns over; its width and
 the transmission's apparent stiffness follow in closed form for a uniform bend (`dead_zone_uniform`,
 `apparent_stiffness`). The load on the tip is a spring with an external force, or the tip's travel is
@@ -32,13 +33,16 @@ Tjahjowidodo, Lau and Phee ("Nonlinear friction modelling and compensation contr
 for a pair of tendon-sheath actuated surgical robots", Mech Syst Signal Process 2015) use a Dahl-type state
 for the same purpose.
 
-Integration: backward Euler, all of it implicit (tensions, normal forces, bristle states), solved by Newton's
-method on the tridiagonal Jacobian (scenes.tendon_sheath_kernels). Why implicit: with the cable's real mass
-the element's axial mode sits near 2 sqrt(k / m_i) ~ 1e5 rad/s and the stuck bristles are stiffer still, so
-an explicit step would need ~1e-5 s (100 sub-steps a tick); backward Euler is stable at any step and damps
-the axial waves (the cable's first mode, (pi / 2) sqrt(EA / rho_l) / L, lies above the loop's rate), so at
-the loop's tick the cable is quasi-static with its real mass, which only regularizes nodes between slack
-elements. The Newton solve is O(N) a step. Mass per length: the real one (`mass_per_length`).
+Integration: backward Euler, all of it implicit (tensions, normal forces, bristle states; the Stribeck curve
+at the last step's velocity), solved by Newton's method on the tridiagonal Jacobian, O(N) a step
+(scenes.tendon_sheath_kernels). Why implicit: with the cable's real mass the highest axial mode of an element,
+2 sqrt(k / m_i), is of order 1e5 rad/s at N = 20, so an explicit step would need ~1e-5 s (about 100 sub-steps a
+1 kHz tick, more with stiff bristles), where backward Euler is stable at any step. Its price: modes the tick
+does not resolve are damped, not reproduced, i.e. the cable's first axial mode, (pi / 2) sqrt(EA / rho_l) / L,
+about the loop's rate, and the cable's mass on a soft load spring, sqrt(k_load / (rho_l L)); below them the
+cable is quasi-static, as the real one is. Mass per length: the real one (`mass_per_length`), not a
+relaxation: it costs nothing in an implicit step and keeps nodes between slack elements determined.
+Sub-steps: a tick runs in ceil(tick / max_step) steps, the motor and tip inputs interpolated linearly.
 
 `TendonSheath` holds the state of c cables; its `step` (the loop's tick) and `run` (a whole trajectory)
 call the same compiled per-tick step.
@@ -338,19 +342,18 @@ class TendonSheath:
         self.tensions = np.repeat(self.pretension[:, None], N, axis=1)
         self.t = 0.0
 
-    def initial_tip_input(self) -> np.ndarray:
-        """(c,) the tip input that holds the initial configuration (f_ext 0 on a spring, the pretension as a
-        force, tip travel 0)."""
-        return self.tip_prev.copy() if self.load.kind == "force" else np.zeros(self.n_cables)
+    def held_tip_input(self) -> np.ndarray:
+        """(c,) the last tick's tip input, the default of the next (at the start the one that holds the initial
+        configuration: f_ext 0 on a spring, the pretension as a force, tip travel 0)."""
+        return self.tip_prev.copy()
 
-    def _inputs(self, x_motor, tip_input, theta, m=None):
-        """Inputs as contiguous (c,) (one tick) or (m, c) (m ticks; a 1-D input is per tick, the same for
-        every cable)."""
-        shape = (self.n_cables,) if m is None else (m, self.n_cables)
+    def _inputs(self, x_motor, tip_input, theta, m):
+        """Inputs of m ticks as contiguous (m, c) (a 1-D input is per tick, the same for every cable)."""
+        shape = (m, self.n_cables)
 
         def arr(a):
             a = np.asarray(a, dtype=float)
-            if m is not None and a.ndim == 1:
+            if a.ndim == 1:
                 a = a[:, None]
             try:
                 return np.ascontiguousarray(np.broadcast_to(a, shape))
@@ -358,18 +361,33 @@ class TendonSheath:
                 raise InputError(f"tendon sheath: an input of shape {a.shape} does not fit {shape}") from None
 
         X, TH = arr(x_motor), arr(theta)
-        if tip_input is None:  # the initial one, per cable
-            tip_input = self.initial_tip_input() if m is None else self.initial_tip_input()[None]
+        if tip_input is None:  # held from the last tick
+            tip_input = self.held_tip_input()[None]
         TIP = arr(tip_input)
         if not (np.all(np.isfinite(X)) and np.all(np.isfinite(TIP)) and np.all(np.isfinite(TH))):
             raise InputError("tendon sheath: motor, tip and theta inputs must be finite")
         return X, TIP, TH
 
+    def _tick_input(self, a, tip=False) -> np.ndarray:
+        """One tick's input as a (c,) float array (the loop's path: no copies when it already is one)."""
+        if a is None and tip:
+            return self.held_tip_input()
+        if type(a) is np.ndarray and a.shape == (self.n_cables,) and a.dtype == np.float64 and a.flags.c_contiguous:
+            return a
+        a = np.asarray(a, dtype=float)
+        if a.ndim == 0:
+            return np.full(self.n_cables, float(a))
+        if a.shape != (self.n_cables,):
+            raise InputError(f"tendon sheath: an input of shape {a.shape} does not fit ({self.n_cables},)")
+        return np.ascontiguousarray(a)
+
     def step(self, x_motor, tip_input=None, theta=0.0) -> np.ndarray:
         """One tick to motor travel x_motor [m] (scalar or (c,)): tip_input f_ext [N] ("spring", "force") or
-        tip travel [m] ("position"), default `initial_tip_input`; theta the kinematic bend [rad]. Returns
+        tip travel [m] ("position"), default `held_tip_input`; theta the kinematic bend [rad]. Returns
         (c, 3): motor force [N], tip load force [N], tip travel [m]."""
-        X, TIP, TH = self._inputs(x_motor, tip_input, theta)
+        X, TIP, TH = self._tick_input(x_motor), self._tick_input(tip_input, True), self._tick_input(theta)
+        if not math.isfinite(float(X.sum() + TIP.sum() + TH.sum())):
+            raise InputError("tendon sheath: motor, tip and theta inputs must be finite")
         out = np.empty((self.n_cables, 4))
         K.step(self.u, self.v, self.z, self.pretension, self.tip_prev, X, TIP, TH, self._fixed, self._W, self._p,
                self.load.mode, self.tick, self.n_sub, self.tensions, out, self._w, self._b)

@@ -139,6 +139,25 @@ def test_frictionless_sheath_under_a_force_and_under_a_held_tip():
     assert np.allclose(run.f_motor[:, 0], run.f_tip[:, 0], rtol=0, atol=1e-5)
 
 
+def test_a_held_tip_reacts_the_cable_s_tension_less_the_sheath_friction():
+    params = uniform(sigma0=0.2 / 1e-6)  # near Coulomb: the nodes by the tip move less than the default's 36 um
+    held = TendonSheath(params, SheathLoad("position"), pretension=PRETENSION)
+    run = held.run(ramp(0.0, 1e-3), tip_input=0.0)
+    ratio = run.f_motor[-1, 0] / run.f_tip[-1, 0]
+    # every node slides but the held tip node, whose half element's bend carries no friction
+    mu_Theta = params.mu_c * params.theta1
+    assert capstan_ratio(mu_Theta * (1 - 1 / params.n_elements)) < ratio < capstan_ratio(mu_Theta)
+    assert np.all(run.x_tip == 0.0)
+
+
+def test_the_tip_input_is_held_when_none_is_given():
+    sheath = TendonSheath(uniform(), SheathLoad("force"), pretension=PRETENSION)
+    sheath.step(0.0, PRETENSION + 1.0)
+    assert np.array_equal(sheath.held_tip_input(), [PRETENSION + 1.0])
+    a = sheath.run(np.zeros(50))
+    assert np.all(a.f_tip == PRETENSION + 1.0)
+
+
 # ---- energy ------------------------------------------------------------------------------------------------
 
 def cycle_dissipation(params) -> np.ndarray:
