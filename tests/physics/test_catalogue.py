@@ -159,3 +159,18 @@ def test_parameter_values_outside_physics_are_refused():
         get_effect("cable_compliance").apply(Signals(t=t, x=t, load=t), {"k": 0.0})
     # zero play is physical: the tip follows the motor exactly
     np.testing.assert_array_equal(get_effect("backlash").apply(Signals(t=t, x=t), {"width": 0.0}), t)
+
+
+def test_the_docs_catalogue_table_is_the_registry():
+    # docs/diagnosis.md's catalogue table is the registry's listing; regenerate it with
+    # `python -m teleop.core.physics.catalogue docs/diagnosis.md`
+    from pathlib import Path
+
+    from teleop.core.physics.catalogue import catalogue_rows, with_table
+
+    doc = Path(__file__).resolve().parents[2] / "docs" / "diagnosis.md"
+    text = doc.read_text(encoding="utf-8")
+    assert with_table(text) == text, "docs/diagnosis.md's catalogue table differs from the registry"
+    assert [r["effect"] for r in catalogue_rows()] == list(REGISTRY)
+    for name in REGISTRY:
+        assert f"\n| {name} | {get_effect(name).link} |" in text

@@ -13,6 +13,11 @@ Every effect is registered under its canonical name and used three ways:
               fixed={"theta": 2.44}, mask=train)        # fixed parameters, residual on `train` only
     pad = chain("hertz_contact", "viscoelasticity", "contact_damping")   # one effect, params "hertz_contact.k", ...
 
+Each effect registers with its own rules (`Rules`: the channel it shows on, primary parameters, what it
+cannot be told apart from, fit starts, held parameters, a wrong-form test, a generator draw), which the
+diagnosis, the generators and the docs read: a new effect is one module that registers it (imported below)
+plus its test scenario. `catalogue.catalogue_rows()` lists the registry.
+
 Conventions: x increasing = the motor hauls its cable in (pulling phase); force-link effects turn the
 tip load into the motor-side force (their `output` is "load": the load seen by the next element towards
 the motor); sensor effects turn the true force into the reading; contact effects give the pad force,
@@ -47,8 +52,8 @@ signals without Python loops (`scan.py`: compiled clamp loops for the play opera
 first-order recurrences).
 """
 
-from teleop.core.physics.base import (CHANNELS, REGISTRY, Effect, ParamSpec, Signals, Step, chain, get_effect,
-                                 register)
+from teleop.core.physics.base import (CHANNELS, REGISTRY, Effect, LinkRecord, ParamSpec, Rules, Scale, Signals,
+                                      Step, alike, chain, get_effect, register, unregister)
 from teleop.core.physics.capstan import (CapstanCompensator, capstan_band, capstan_in, capstan_out, motor2tip,
                                     motor2tip_transitions, tip2motor, tip2motor_transitions)
 from teleop.core.physics.backlash import backlash
@@ -61,7 +66,8 @@ from teleop.core.physics.contact import damped_force, hertz_force, linear_force,
 from teleop.core.physics.fit import FitResult, fit, rmse
 
 __all__ = [
-    "CHANNELS", "REGISTRY", "Effect", "ParamSpec", "Signals", "Step", "chain", "get_effect", "register",
+    "CHANNELS", "REGISTRY", "Effect", "LinkRecord", "ParamSpec", "Rules", "Scale", "Signals", "Step", "alike",
+    "chain", "get_effect", "register", "unregister",
     "CapstanCompensator", "capstan_band", "capstan_in", "capstan_out", "motor2tip", "motor2tip_transitions",
     "tip2motor", "tip2motor_transitions", "backlash", "cable_stretch", "spring_force", "coulomb", "dahl", "stribeck",
     "viscous", "hysteresis_offset", "thermal_offset", "damped_force", "hertz_force", "linear_force",

@@ -14,7 +14,6 @@ Steps call it per sample.
 
 from __future__ import annotations
 
-import math
 from typing import Mapping
 
 import numpy as np
