@@ -2,18 +2,15 @@
 
 A device follows one protocol with a context manager: ``__init__`` only stores validated settings,
 ``open()`` touches hardware, ``close()`` releases it, and ``with`` is idempotent (pyserial style). Limits
-are SI in a spec that renderers clip to (CHAI3D cHapticDeviceInfo). A URL picks the backend
-(``open_device``): ``sim://``, ``sim://robot``, ``touch://``, ``omega://``, ``serial:///dev/ttyACM0?baud=1000000``,
-``replay://session.mcap``. Backends register themselves in ``BACKENDS`` by scheme (and optional host).
+are SI in a spec that renderers clip to (CHAI3D cHapticDeviceInfo). Each backend has a
+``from_url(parsed_url, options)`` factory; only the wiring picks one by URL (teleop.loop.devices_by_url).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import importlib
 from dataclasses import dataclass, field
-from typing import Callable, Protocol, runtime_checkable
-from urllib.parse import parse_qs, urlparse
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -208,38 +205,3 @@ class ContextDevice:
     def __exit__(self, *exc) -> None:
         if self.is_open:
             self.close()
-
-
-# scheme[/host] -> "module:factory"; factory(parsed_url, options: dict[str, str]) -> device
-BACKENDS: dict[str, str] = {
-    "sim": "devices.simulated:from_url",
-    "sim/robot": "scenes.sim_robot:from_url",
-    "touch": "devices.touch:from_url",
-    "omega": "devices.omega:from_url",
-    "serial": "devices.arduino.robot:from_url",
-    "replay": "devices.replay:from_url",
-}
-
-
-def open_device(url: str, **overrides):
-    """Build (not open) the device a URL names; use it as a context manager to open it.
-
-    Raises InputError for an unknown scheme or malformed URL, DeviceUnavailable when the backend cannot
-    be used on this machine.
-    """
-    parsed = urlparse(url)
-    if not parsed.scheme:
-        raise InputError(f"device URL '{url}': expected scheme://..., e.g. sim://, sim://robot, touch://")
-    key = f"{parsed.scheme}/{parsed.netloc}" if f"{parsed.scheme}/{parsed.netloc}" in BACKENDS else parsed.scheme
-    if key not in BACKENDS:
-        raise InputError(f"device URL '{url}': unknown scheme '{parsed.scheme}' "
-                         f"(expected one of: {', '.join(sorted(BACKENDS))})")
-    module_name, factory_name = BACKENDS[key].split(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as exc:
-        raise DeviceUnavailable(f"device URL '{url}': backend module {module_name} missing ({exc})") from None
-    factory: Callable = getattr(module, factory_name)
-    options = {k: v[-1] for k, v in parse_qs(parsed.query).items()}
-    options.update(overrides)
-    return factory(parsed, options)

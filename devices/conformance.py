@@ -1,8 +1,8 @@
 """One conformance check per interface, run over every implementation (Gymnasium's check_env idea).
 
-    from devices.conformance import check_haptic, check_robot
-    check_haptic(SimulatedStylus())            # raises ConformanceError naming the first broken rule
-    check_robot(open_device("sim://robot"))
+    >>> from devices.conformance import check_haptic, check_robot
+    >>> check_haptic(SimulatedStylus())            # raises ConformanceError naming the first broken rule
+    >>> check_robot(open_device("sim://robot"))    # open_device: teleop.loop.devices_by_url
 
 The device must be closed when given; the checks open and close it themselves.
 """

@@ -16,12 +16,10 @@ import numpy as np
 
 from devices.base import TOUCH_SPEC, ContextDevice, DeviceError, DeviceSpec, HapticSample, RobotReading, RobotSpec
 from teleop.core.errors import InputError
-from teleop.io.recording import TOPIC_ROBOT
+from teleop.io.recording import TOPIC_ROBOT, read_session
 
 
 def _load(path: str):
-    from teleop.io.recording import read_session
-
     s = read_session(path)
     if not s.records:
         raise InputError(f"{path}: no messages could be read ({s.damage or 'empty recording'})")

@@ -30,6 +30,7 @@ from teleop.core.errors import InputError
 from teleop.core.kernels import operator as KO
 from teleop.core.kernels.operator import operator_steps, script_offset
 from teleop.core.kinematics import rotation_zyx
+from teleop.io.recording import read_session
 
 SCRIPTS = ("hold", "sine", "pokes", "recorded")
 
@@ -304,8 +305,6 @@ def from_url(parsed, options: dict) -> SimulatedStylus:
 def load_points(path: str) -> np.ndarray:
     """(N, 4) t, x, y, z [s, m] from a CSV (header t_s,x_m,y_m,z_m) or a session recording's stylus track."""
     if path.endswith(".mcap"):
-        from teleop.io.recording import read_session
-
         s = read_session(path)
         rows = [(m["t"], *m["measured_cp"]) for m in s.messages("/stylus")]
         if not rows:

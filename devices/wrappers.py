@@ -1,8 +1,8 @@
 """Device wrappers (Gymnasium style: behaviour added around a device, not flags inside it).
 
-- `ProcessRobot`: runs any Robot (built from its URL) in its own process at its own rate; the loop exchanges
-  the latest command and the latest reading through shared memory (a seqlock), so a slow robot link or a
-  physics step never stalls the haptic tick and shares no interpreter lock with it.
+- `ProcessRobot`: runs any Robot (built in the child by a factory the wiring passes) in its own process at its
+  own rate; the loop exchanges the latest command and the latest reading through shared memory (a seqlock), so
+  a slow robot link or a physics step never stalls the haptic tick and shares no interpreter lock with it.
 - `DelayedRobot`: readings arrive `delay` reads late (link latency).
 - `BacklashCompensatedRobot`: the inverse of each cable's play added to the commanded lengths (backlash
   feed-forward, teleop.core.control.feedforward), within the robot's length and speed limits.
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import gc
 import multiprocessing as mp
 import os
 import pickle
@@ -22,6 +23,7 @@ import time
 import numpy as np
 
 from devices.base import ContextDevice, DeviceError, HapticSample, RobotReading
+from teleop.core.control.feedforward import TAU_S, V0_M_S, BacklashFeedforward
 from teleop.core.kernels.safety import all_finite
 
 # ------------------------------------------------------------------------------------------------------------
@@ -102,14 +104,10 @@ class BacklashCompensatedRobot(Wrapper):
     def compensation(self) -> dict:
         """What is added to the commands (stored in the session metadata)."""
         w = np.broadcast_to(np.asarray(self.width, dtype=float), (6,))
-        from teleop.core.control.feedforward import TAU_S, V0_M_S
-
         return {"kind": "backlash_feedforward", "width_mm": (w * 1e3).tolist(), "period_s": self.period,
                 "v0_mm_s": V0_M_S * 1e3, "tau_s": TAU_S}
 
     def open(self):
-        from teleop.core.control.feedforward import BacklashFeedforward
-
         self.device.open()
         self.wanted = self._src = self._out = self._t = None
         s = self.device.spec
@@ -229,11 +227,9 @@ def _unpack(v: np.ndarray, keys: list) -> RobotReading:
                         fbg_pm=v[30:42].reshape(2, 6).copy() if v[29] else None)
 
 
-def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, parent_pid: int,
-            rt_priority: int | None = None) -> None:
-    """Child: own the device, apply the latest command, read, publish, at rate_hz (sleeping, not spinning)."""
-    from devices.base import open_device
-
+def _worker(build, rate_hz: float, shm_read, shm_cmd, conn, parent_pid: int, rt_priority: int | None = None) -> None:
+    """Child: build the robot (`build()`), own it, apply the latest command, read, publish, at rate_hz (sleeping,
+    not spinning)."""
     try:
         if rt_priority:
             os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(rt_priority)))
@@ -246,7 +242,7 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
     pub = np.frombuffer(shm_read, dtype=np.float64)  # [version, slot...]
     cmd = np.frombuffer(shm_cmd, dtype=np.float64)
     try:
-        dev = open_device(url, **options)
+        dev = build()
         dev.open()
         first = dev.read()
         keys = []
@@ -261,8 +257,6 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
     except Exception as exc:  # noqa: BLE001 - reported to the parent as one line
         conn.send_bytes(pickle.dumps(("error", f"{type(exc).__name__}: {exc}", None, None)))
         return
-    import gc
-
     gc.collect()
     gc.freeze()  # long-lived objects out of the collector's way
     gc.disable()  # a full collection would stall the link for many milliseconds
@@ -312,20 +306,27 @@ def _worker(url: str, options: dict, rate_hz: float, shm_read, shm_cmd, conn, pa
 class ProcessRobot(ContextDevice):
     """A Robot run in a child process at `rate_hz`; read() returns the latest published reading (same
     seq when nothing new arrived, so the loop's staleness watchdog works), command_lengths() posts the
-    latest command. Errors in the child come back as DeviceError on the next read()."""
+    latest command. Errors in the child come back as DeviceError on the next read().
 
-    def __init__(self, url: str, rate_hz: float = 1000.0, start_timeout: float = 30.0, rt_priority: int | None = None,
-                 **options):
-        self.url, self.rate_hz, self.options, self.start_timeout = url, float(rate_hz), options, start_timeout
+    Args:
+        build: () -> Robot, called in the child (forked: it need not pickle) to build the robot it runs.
+        name: the robot's name in error messages (its URL).
+        before_fork: () -> None, run in the parent at open() before the fork (e.g. the loop's kernel warm-up:
+            the child inherits what it loaded).
+    """
+
+    def __init__(self, build, name: str = "robot", rate_hz: float = 1000.0, start_timeout: float = 30.0,
+                 rt_priority: int | None = None, before_fork=None):
+        self.build, self.name, self.rate_hz, self.start_timeout = build, name, float(rate_hz), start_timeout
         self.rt_priority = rt_priority
+        self.before_fork = before_fork
         self.is_open = False
         self.spec = None
         self.firmware_version = None
 
     def open(self) -> None:
-        from teleop.loop.warm import warm_up
-
-        warm_up()   # compiled (cold cache) or loaded here, before the fork: the child inherits them ready
+        if self.before_fork is not None:
+            self.before_fork()
         ctx = mp.get_context("fork")
         self.shm_read = ctx.RawArray("d", 1 + _SLOT)
         self.shm_cmd = ctx.RawArray("d", _CMD_N)
@@ -333,17 +334,17 @@ class ProcessRobot(ContextDevice):
         self.cmd = np.frombuffer(self.shm_cmd, dtype=np.float64)
         rx, tx = ctx.Pipe(duplex=False)
         self.proc = ctx.Process(target=_worker, name="teleop-robot", daemon=True,
-                                args=(self.url, self.options, self.rate_hz, self.shm_read, self.shm_cmd, tx,
-                                      os.getpid(), self.rt_priority))
+                                args=(self.build, self.rate_hz, self.shm_read, self.shm_cmd, tx, os.getpid(),
+                                      self.rt_priority))
         self.proc.start()
         self.rx = rx
         if not rx.poll(self.start_timeout):
             self._kill()
-            raise DeviceError(f"{self.url}: robot process did not start within {self.start_timeout:g} s")
+            raise DeviceError(f"{self.name}: robot process did not start within {self.start_timeout:g} s")
         status, spec, keys, fw = pickle.loads(rx.recv_bytes())
         if status != "ok":
             self._kill()
-            raise DeviceError(f"{self.url}: {spec}")
+            raise DeviceError(f"{self.name}: {spec}")
         self.spec, self.keys, self.firmware_version = spec, keys, fw
         self.buf = np.zeros(1 + _SLOT)
         self.n_reads = 0
@@ -371,7 +372,7 @@ class ProcessRobot(ContextDevice):
     def command_lengths(self, lengths) -> None:
         L = np.asarray(lengths, dtype=float)
         if L.shape != (6,) or not all_finite(L):
-            raise DeviceError(f"{self.url}: lengths must be 6 finite numbers")
+            raise DeviceError(f"{self.name}: lengths must be 6 finite numbers")
         self.cmd[1:7] = L
         self.cmd[0] += 1
 
@@ -381,12 +382,12 @@ class ProcessRobot(ContextDevice):
 
     def read(self) -> RobotReading:
         if not self.is_open:
-            raise DeviceError(f"{self.url}: read() before open()")
+            raise DeviceError(f"{self.name}: read() before open()")
         self.n_reads += 1
         # the pipe (a syscall) only after the child flagged an error, and every 64th read (a killed child: EOF)
         if (self.cmd[_ERR] or not self.n_reads & 63) and self.rx.poll():
             status, msg, _, _ = pickle.loads(self.rx.recv_bytes())
-            raise DeviceError(f"{self.url} (robot process): {msg}")
+            raise DeviceError(f"{self.name} (robot process): {msg}")
         for _ in range(100):  # seqlock: retry while the writer is mid-update
             v1 = self.pub[0]
             if self.last is not None and v1 == self.last_version:
@@ -397,5 +398,5 @@ class ProcessRobot(ContextDevice):
                 self.last_version = v1
                 break
         if self.last is None:
-            raise DeviceError(f"{self.url}: no reading published yet")
+            raise DeviceError(f"{self.name}: no reading published yet")
         return self.last

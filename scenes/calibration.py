@@ -7,7 +7,8 @@ virtual indentation (the tip pushed quasi-statically to several depths by a stif
 slope dF/dd against the tip's *actual* indentation, and K is corrected by target/measured until they agree
 to 0.2 %. The correction gain is measured on a log-spaced grid of targets spanning every pad (Ecoflex 00-10
 to the rigid cap) and interpolated in log space. `indent` is the same measurement on any pad of a world,
-used by the tests to check every pad against its material's target.
+used by the tests to check every pad against its material's target. The measurement runs on the world class
+it is handed (scenes.world.PadWorld, which asks for its default calibration here when it opens).
 """
 
 from __future__ import annotations
@@ -97,33 +98,33 @@ def slope(d: np.ndarray, F: np.ndarray) -> float:
     return float(np.polyfit(d, F, 1)[0])
 
 
-def measure(K: float, params) -> float:
-    """Slope [N/m] measured on a uniform probe pad whose contactStiffness is K."""
-    from scenes.world import PadWorld
-
-    with PadWorld(_uniform_probe_pad(), params, calibration=_FixedStiffness(K)) as w:
+def measure(K: float, params, world_cls) -> float:
+    """Slope [N/m] measured on a uniform probe pad whose contactStiffness is K, in a `world_cls` world
+    (scenes.world.PadWorld) with WorldParams `params`."""
+    with world_cls(_uniform_probe_pad(), params, calibration=_FixedStiffness(K)) as w:
         return slope(*indent(w))
 
 
-def calibrate(params, k_targets=None, tol: float = 2e-3, max_iter: int = 6) -> ContactCalibration:
-    """Measure the gain contactStiffness/target for each target slope (fixed-point on the ratio)."""
+def calibrate(params, world_cls, k_targets=None, tol: float = 2e-3, max_iter: int = 6) -> ContactCalibration:
+    """Measure the gain contactStiffness/target for each target slope (fixed-point on the ratio) in
+    `world_cls` worlds (`measure`)."""
     if k_targets is None:
         k_targets = np.geomspace(100.0, RIGID_CONTACT_STIFFNESS, 7)
     gains, meas = [], []
     for k in k_targets:
         g = 1.0
-        s = measure(k * g, params)
+        s = measure(k * g, params, world_cls)
         for _ in range(max_iter):
             if abs(s / k - 1.0) <= tol:
                 break
             g *= k / s
-            s = measure(k * g, params)
+            s = measure(k * g, params, world_cls)
         gains.append(g)
         meas.append(s)
     return ContactCalibration(tuple(float(k) for k in k_targets), tuple(gains), tuple(meas))
 
 
 @functools.lru_cache(maxsize=8)
-def default_calibration(params) -> ContactCalibration:
-    """The calibration for these WorldParams (measured once per process)."""
-    return calibrate(params)
+def default_calibration(params, world_cls) -> ContactCalibration:
+    """The calibration for these WorldParams, measured in `world_cls` worlds (once per process)."""
+    return calibrate(params, world_cls)

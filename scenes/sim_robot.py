@@ -21,14 +21,15 @@ their per-sample Step forms; both give the same counts for the same seed (tested
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from devices.base import ContextDevice, RobotReading, RobotSpec
+from scenes import pads as pads_mod
 from scenes.pads import Pad, z_test_pad
 from scenes.pose_follow import PoseFollower
-from scenes.rich_plant import RichPlant, RichPlantParams
+from scenes.rich_plant import RichPlant, RichPlantParams, plant_params, with_plant
 from scenes.sim_sensors import FbgArray, fbg_cables
 from scenes.world import PadWorld, WorldParams
 from teleop.core.errors import InputError
@@ -42,6 +43,7 @@ from teleop.core.physics.backlash import backlash
 from teleop.core.robot_status import robot_status
 from teleop.core.sensors import FsrBranchLag, FsrCalibration, adc_counts, default_fsr_calibration
 from teleop.core.tension import TensionSolver, wrench2tensions
+from teleop.io.model_io import load_model
 
 
 @dataclass(frozen=True)
@@ -499,7 +501,6 @@ class _AddedEffects:
             if kind not in model.links:
                 return [[] for _ in range(n)]
             m = model.links[kind]
-            from teleop.core.physics import get_effect
             return [[(get_effect(name), get_effect(name).make_step(p)) for name, p in m.effects[m.base:]]
                     for _ in range(n)]
         self.force = steps("force")
@@ -527,8 +528,6 @@ def from_url(parsed, options: dict) -> SimRobot:
     `model`: an identified link model (teleop diagnose --save-model) whose findings are switched on in every
     cable; `backlash_mm`: each cable's play width [mm] (SimRobotParams.backlash); `plant=rich`: effects the
     estimators do not model (scenes.rich_plant, drawn from `seed`; `matched`, the default: none)."""
-    from scenes import pads as pads_mod
-
     known = {"pad", "seed", "substeps", "letter", "model", "backlash_mm", "sensor", "cable", "plant"}
     for k in options:
         if k not in known:
@@ -554,13 +553,9 @@ def from_url(parsed, options: dict) -> SimRobot:
         raise InputError(f"sim://robot: cable must be a cable index, got {options['cable']!r}") from None
     model = None
     if "model" in options:
-        from teleop.io.model_io import load_model
         model = load_model(str(options["model"]))
     params = SimRobotParams(substeps=substeps, backlash=play_w, **sensing)
     if "plant" in options:  # plant=matched|rich, the rich plant's cables drawn from the seed; backlash_mm wins
-        from dataclasses import replace
-
-        from scenes.rich_plant import plant_params, with_plant
         params = with_plant(params, plant_params(str(options["plant"]), seed))
         if "backlash_mm" in options:
             params = replace(params, backlash=play_w)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scenes.calibration import default_calibration
 from scenes.pads import Pad
 from teleop.core.kernels.sim import series_spring_force
 
@@ -146,13 +147,10 @@ class PadWorld:
             import pybullet as pb
             from pybullet_utils.bullet_client import BulletClient
         _silence_banner_at_exit()
-
-        from scenes.calibration import default_calibration
-
         if self.is_open:
             return
         p = self.params
-        self.calibration = self._calibration or default_calibration(p)
+        self.calibration = self._calibration or default_calibration(p, PadWorld)
         with _quiet_stdout():
             c = BulletClient(connection_mode=pb.DIRECT)
         self.client, self._pb = c, pb

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from teleop.apps.bench.tick import ReferenceTick
 from teleop.core.errors import InputError
 from teleop.core.estimation.calibrate import fit_dynamic_params, no_load_forces
-from teleop.core.estimation.direction import DirectionTracker
+from teleop.core.direction import DirectionTracker
 from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
 from teleop.core.estimation.kalman import (FilterpyWrenchKalman, KalmanNoise, SteadyWrenchKalman, _dare_gain,
                                       bandwidth_hz, make_filterpy, wrench_kalman_params)

@@ -10,7 +10,8 @@ from teleop.apps.cli import main
 from teleop.core.estimation.reading import ReadingEstimator
 from teleop.core.geometry import default_geometry
 from teleop.io.recording import read_session
-from teleop.core.sensors import default_fsr_calibration_data, load_fsr_calibration, write_fsr_calibration_csv
+from teleop.core.sensors import default_fsr_calibration_data
+from teleop.io.calibration_csv import load_fsr_calibration, write_fsr_calibration_csv
 
 
 def test_calibration_with_a_missing_column_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys):

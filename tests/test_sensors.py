@@ -10,8 +10,9 @@ from teleop.core.geometry import default_geometry
 from teleop.core.physics.capstan import tip2motor_transitions
 from teleop.core.sensors import (LOADING, UNLOADING, FbgParams, FsrBranchLag, FsrConverter, default_fsr_calibration,
                             default_fsr_calibration_data, eq2_roots, fbg2force, fbg2force_uncompensated,
-                            fit_fsr_calibration, fit_proximal_distal, load_fsr_calibration_csv, lowpass2,
-                            synthesize_fbg, synthesize_fsr_counts, write_fsr_calibration_csv)
+                            fit_fsr_calibration, fit_proximal_distal, lowpass2, synthesize_fbg,
+                            synthesize_fsr_counts)
+from teleop.io.calibration_csv import load_fsr_calibration, load_fsr_calibration_csv, write_fsr_calibration_csv
 
 CAL = default_fsr_calibration()
 
@@ -218,7 +219,7 @@ def test_calibration_figure_is_written(tmp_path):
 
 def test_tension_noise_matches_the_kalman_noise_model_and_load_helper(tmp_path):
     from teleop.core.estimation.kalman import KalmanNoise
-    from teleop.core.sensors import load_fsr_calibration, tension_noise
+    from teleop.core.sensors import tension_noise
 
     assert tension_noise(CAL, 1.0, 2.85) == pytest.approx(KalmanNoise().sigma_t, rel=0.25)
     # simulated: the spread of tensions read back from noisy counts

@@ -10,18 +10,18 @@ from the direction of change of the reading (with a dead band so noise does not 
 
 from __future__ import annotations
 
-import csv
 from bisect import bisect_right
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from numpy.polynomial import Polynomial
 
+from teleop.core.direction import DirectionTracker
 from teleop.core.errors import InputError
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.sensor import (adc_round_loop, branch_lag_loop, conductance2counts_loop, conductance_loop,
                                    fbg_force_loop, fsr_counts, polynomial_loop)
+from teleop.core.physics.scan import clamp_scan
 
 G = 9.80665  # standard gravity [m/s^2], converts the seed's calibration weights to newtons
 LOADING, UNLOADING = 1, -1
@@ -73,60 +73,6 @@ def default_fsr_calibration_data(seed: int = 0, repeats: int = 3, noise_S: float
         branch.append(np.full(tt.shape, b))
     return FsrCalibrationData(np.concatenate(tension), np.concatenate(reading), np.concatenate(branch),
                               source="synthetic, shaped after seed 000 Fig 7")
-
-
-_CSV_COLUMNS = ("tension_N", "conductance_uS", "branch")
-
-
-def load_fsr_calibration_csv(path: str | Path) -> FsrCalibrationData:
-    """Read a calibration CSV: columns `tension_N`, `conductance_uS`, `branch` (loading|unloading or +1|-1).
-
-    `#` lines are comments. Missing columns or bad values raise a one-line InputError naming file and column.
-    """
-    path = Path(path)
-    try:
-        lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip() and not ln.startswith("#")]
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    if not lines:
-        raise InputError(f"{path}: empty calibration file (expected columns {', '.join(_CSV_COLUMNS)})")
-    rows = list(csv.reader(lines))
-    header = [h.strip() for h in rows[0]]
-    for col in _CSV_COLUMNS:
-        if col not in header:
-            raise InputError(f"{path}: missing column '{col}' (expected columns {', '.join(_CSV_COLUMNS)})")
-    idx = {c: header.index(c) for c in _CSV_COLUMNS}
-    tension, reading, branch = [], [], []
-    for lineno, row in enumerate(rows[1:], start=2):
-        try:
-            t = float(row[idx["tension_N"]])
-            g = float(row[idx["conductance_uS"]]) * 1e-6
-        except (ValueError, IndexError):
-            raise InputError(f"{path}: data row {lineno}: tension_N and conductance_uS must be numbers") from None
-        raw = row[idx["branch"]].strip().lower() if idx["branch"] < len(row) else ""
-        b = {"loading": LOADING, "unloading": UNLOADING, "+1": LOADING, "1": LOADING, "-1": UNLOADING}.get(raw)
-        if b is None or not (np.isfinite(t) and np.isfinite(g)):
-            raise InputError(f"{path}: data row {lineno}: column 'branch' must be loading or unloading "
-                             f"and values finite, got {row}")
-        tension.append(t)
-        reading.append(g)
-        branch.append(b)
-    data = FsrCalibrationData(np.array(tension), np.array(reading), np.array(branch), source=str(path))
-    for b, name in ((LOADING, "loading"), (UNLOADING, "unloading")):
-        if np.count_nonzero(data.branch == b) < 6:
-            raise InputError(f"{path}: column 'branch' needs at least 6 {name} rows for a quintic fit")
-    return data
-
-
-def write_fsr_calibration_csv(path: str | Path, data: FsrCalibrationData) -> Path:
-    """Write calibration data in the format `load_fsr_calibration_csv` reads (atomically)."""
-    from teleop.io.outputs import atomic_write
-
-    lines = [f"# source = {data.source}", ",".join(_CSV_COLUMNS)]
-    for t, g, b in zip(data.tension, data.reading, data.branch):
-        lines.append(f"{t:.6f},{g * 1e6:.6f},{'loading' if b == LOADING else 'unloading'}")
-    text = "\n".join(lines) + "\n"
-    return atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
 @dataclass(frozen=True)
@@ -298,11 +244,6 @@ def fit_fsr_calibration(data: FsrCalibrationData, degree: int = 5, **kwargs) -> 
                           t_max=float(np.max(data.tension)), **kwargs)
 
 
-def load_fsr_calibration(path: str | Path, **kwargs) -> FsrCalibration:
-    """Read a calibration CSV (`load_fsr_calibration_csv`) and fit its two quintics."""
-    return fit_fsr_calibration(load_fsr_calibration_csv(path), **kwargs)
-
-
 def tension_noise(cal: FsrCalibration, noise_counts: float = 1.0, t: float = 2.85, branch: int = LOADING) -> float:
     """RMS tension noise [N] that `noise_counts` RMS ADC noise makes at tension t [N]: noise / (dcounts/dt)."""
     h = 1e-3
@@ -371,8 +312,6 @@ class FsrConverter:
     """
 
     def __init__(self, cal: FsrCalibration, n: int = 6, deadband_counts: float = 8.0):
-        from teleop.core.estimation.direction import DirectionTracker
-
         self.cal = cal
         self.tracker = DirectionTracker(n, deadband_counts)
 
@@ -519,8 +458,6 @@ class ProximalDistalModel:
 
         Fd0: the initial distal tension (default: on the pulling line at Fp[0]).
         """
-        from teleop.core.physics.scan import clamp_scan
-
         lo, hi = self.bounds(Fp)
         y0 = float(lo[0]) if Fd0 is None else float(Fd0)
         return clamp_scan(y0, lo, hi)

@@ -14,7 +14,7 @@ import numpy as np
 
 from teleop.diagnosis.diagnose import Diagnosis, split
 from teleop.diagnosis.identify import fit_chain
-from teleop.diagnosis.links import LinkModel
+from teleop.core.physics.links import LinkModel
 
 
 def cross_file(diags: list[Diagnosis]) -> dict:

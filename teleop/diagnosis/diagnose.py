@@ -16,9 +16,11 @@ import numpy as np
 
 from teleop.diagnosis.identify import (Fit, LinkResult, added, fit_chain, identify_link, rms, simulation_baseline,
                                       with_plain)
-from teleop.diagnosis.links import LinkData, find_links, is_exact, link_data, predict
+from teleop.core.physics.links import LinkData, is_exact, predict
+from teleop.diagnosis.links import find_links, link_data
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
+from teleop.diagnosis.sindy_peer import sindy_rmse
 from teleop.io.recording_io import Recording
 from teleop.core.errors import InputError
 from teleop.core.physics import get_effect
@@ -316,7 +318,6 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
         peer[link.output] = {"arx_rmse": arx_rmse(d, fit_idx, hold_idx),
                              "baseline_rmse": res.baseline.rmse_hold, "model_rmse": res.final.rmse_hold}
         if sindy:   # the generic sparse-regression peer (PySINDy), same split
-            from teleop.diagnosis.sindy_peer import sindy_rmse
             s = sindy_rmse(d, fit_idx, hold_idx)
             peer[link.output].update({"sindy_static_rmse": s["static"], "sindy_free_run_rmse": s["free_run"],
                                       "sindy_rmse": s["best"]})

@@ -25,8 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from teleop.diagnosis.links import (LinkData, LinkModel, effect_signals, fast_replace, fit_baseline,
-                                   is_contact_law, predict)
+from teleop.core.physics.links import (LinkData, LinkModel, effect_signals, fast_replace, is_contact_law,
+                                      predict)
+from teleop.diagnosis.links import fit_baseline
+from teleop.diagnosis.locate import locate, periodic_features, r2, travel_phase
 from teleop.core.physics import REGISTRY, get_effect
 from teleop.core.physics.base import LinkRecord
 
@@ -567,8 +569,6 @@ FOREIGN = ("periodic in position",)
 def foreign(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
     """True when the effect `pick` adds to `current` acts where no catalogue effect does (FOREIGN), or is a
     position-only effect that a sinusoid in position beats (`periodic_beats`)."""
-    from teleop.diagnosis.locate import locate
-
     new = _new(current, pick)
     if periodic_beats(d, current, pick, fit_idx, hold_idx):
         return True
@@ -600,8 +600,6 @@ def periodic_rmse(d: LinkData, model: LinkModel, fit_idx: slice, hold_idx: slice
     """Held-out RMSE of `model` plus the sinusoid in the drive position (the harmonic over the travel that
     projects most of the fit part's residual, locate.periodic_features; amplitude, phase and a constant by
     least squares on the fit part): the uncatalogued alternative a position-only effect must beat."""
-    from teleop.diagnosis.locate import periodic_features, travel_phase
-
     r = d.y - predict(d, model)
     A = np.column_stack([np.ones(d.n), periodic_features(travel_phase(d.x), r, fit_idx)])
     coef, *_ = np.linalg.lstsq(A[fit_idx], r[fit_idx], rcond=None)
@@ -625,8 +623,6 @@ def load_alike(d: LinkData, current: Fit, pick: Fit, hold_idx: slice) -> bool:
     sensor), not a spring beside the transmission. In its general form the test is on the part no gain
     can take, the contribution of the general form's parameters (a spring's curvature): the linear part
     trades freely with the gain wherever the load follows the position, whatever its size."""
-    from teleop.diagnosis.locate import r2
-
     new = _new(current, pick)
     if d.link.kind != "force" or not any(position_only(n) for n in new):
         return False

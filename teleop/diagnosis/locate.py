@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.diagnosis.links import LinkData, smooth
+from teleop.core.physics.links import LinkData
+from teleop.diagnosis.links import smooth
 
 SWITCHING = ("after motion reversals", "loading vs unloading", "at low speed", "during holds")
 

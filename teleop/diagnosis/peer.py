@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from teleop.diagnosis.links import LinkData
+from teleop.core.physics.links import LinkData
 
 PEER_HZ = 100.0
 NA, NB = 2, 3

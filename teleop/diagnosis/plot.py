@@ -3,7 +3,7 @@ held-out part with the located windows shaded; plus the input-output loop (hyste
 
 from __future__ import annotations
 
-from teleop.diagnosis.links import predict
+from teleop.core.physics.links import predict
 
 ATTRIBUTION = "Contains data from the MRDLab mis-tool-characterization dataset, ODbL 1.0."
 

@@ -19,7 +19,7 @@ import warnings
 
 import numpy as np
 
-from teleop.diagnosis.links import LinkData, clean_motion
+from teleop.core.physics.links import LinkData, clean_motion
 
 PEER_HZ = 100.0
 DEGREE = 3

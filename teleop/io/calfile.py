@@ -19,6 +19,7 @@ from pathlib import Path
 
 from teleop.core.config import check_keys, load_toml
 from teleop.core.errors import InputError
+from teleop.core.sensors import FbgParams, FsrCalibration, ProximalDistalModel
 from teleop.io.outputs import atomic_write
 
 FORMAT = "cdpr-teleop calibration 1"
@@ -85,8 +86,6 @@ def load_calibration(path: str | Path):
     """(kind, model) from a calibration file: an FsrCalibration, FbgParams or ProximalDistalModel.
 
     Unknown keys, a missing key or a wrong type raise an InputError naming the file and key."""
-    from teleop.core.sensors import FbgParams, FsrCalibration, ProximalDistalModel
-
     doc = load_toml(path)
     check_keys(doc, ("format", "kind", "source", "fsr", "fbg", "one_sensor", "stderr", "fit"), str(path))
     if doc.get("format") != FORMAT:

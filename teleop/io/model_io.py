@@ -15,14 +15,11 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from teleop.diagnosis.links import Link, LinkModel, link_data, predict
-from teleop.io.recording_io import Recording
 from teleop.core.errors import InputError
-from teleop.io.outputs import dumps_json, atomic_write
 from teleop.core.physics import get_effect
 from teleop.core.physics.base import chain
+from teleop.core.physics.links import Link, LinkModel
+from teleop.io.outputs import atomic_write, dumps_json
 
 FORMAT = "teleop-link-model/1"
 
@@ -81,11 +78,6 @@ class IdentifiedModel:
     def steps(self, kind: str) -> list:
         """Fresh per-sample physics Steps of the link's effects (for a real-time simulator or estimator)."""
         return [get_effect(n).make_step(p) for n, p in self.effects(kind)]
-
-    def predict(self, rec: Recording, kind: str) -> np.ndarray:
-        """The link's output (n,) for recording `rec` under the identified model."""
-        m = self.model(kind)
-        return predict(link_data(rec, m.link), m)
 
 
 def save_model(path: str | Path, models: list, source: str) -> Path:

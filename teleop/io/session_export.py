@@ -14,7 +14,7 @@ import numpy as np
 
 from teleop.io.recording_io import Recording, split_column, UNITS, write_interchange
 from teleop.core.errors import InputError
-from teleop.io.recording import TOPIC_ROBOT
+from teleop.io.recording import TOPIC_ROBOT, read_session
 
 
 def cable_columns(cable: int) -> dict:
@@ -27,8 +27,6 @@ def cable_columns(cable: int) -> dict:
 
 def session2recording(path: str | Path, columns: dict, metadata: dict | None = None) -> Recording:
     """A Recording from session file `path` through `columns` (see the module docstring)."""
-    from teleop.io.recording import read_session
-
     s = read_session(path)
     if not columns:
         raise InputError(f"{path}: no columns to export")

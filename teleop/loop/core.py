@@ -17,6 +17,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from teleop.core.estimation.kalman import KalmanNoise
+from teleop.core.estimation.reading import ReadingEstimator
+from teleop.core.estimation.tick import LoopTick
 from teleop.core.geometry import Geometry, default_geometry
 from teleop.loop.warm import warm_up
 from teleop.core.kinematics import lengths2pose
@@ -81,9 +84,6 @@ class Teleop:
         self.params = params or LoopParams()
         self.geom = geom or default_geometry()
         if estimator is None:
-            from teleop.core.estimation.kalman import KalmanNoise
-            from teleop.core.estimation.reading import ReadingEstimator
-
             # the Kalman gain is designed for the period the estimator runs at: one robot frame
             estimator = ReadingEstimator(self.geom, "dynamic", kalman=KalmanNoise.for_loop(self.params))
         self.estimator = estimator
@@ -93,8 +93,6 @@ class Teleop:
         self.renderer = Renderer(replace(p.render, max_force=float(haptic.spec.max_force_continuous),
                                          engage_ticks=0))
         self.offsets = platform_offsets(self.geom, m.home[3:])
-        from teleop.core.estimation.tick import LoopTick
-
         # the compiled path (mapping, FSR counts -> tensions -> estimate with Kalman, render); estimators
         # without `update_arrays` (e.g. test fakes) go through their numpy `update`
         self.fast = LoopTick(self.geom, m, estimator, self.renderer, cmd_dt=p.dt * p.robot_every)

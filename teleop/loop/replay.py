@@ -10,6 +10,7 @@ import numpy as np
 
 from devices.replay import ReplayRobot, ReplayStylus
 from teleop.core.errors import InputError
+from teleop.core.estimation.reading import ReadingEstimator
 from teleop.core.geometry import Geometry, default_geometry
 from teleop.loop.core import Teleop
 from teleop.loop.params import LoopParams
@@ -62,8 +63,6 @@ def geometry_from(conf: dict | None) -> Geometry:
 
 def estimator_from(desc: dict, geom: Geometry):
     """Rebuild the recorded estimator (by its describe() name)."""
-    from teleop.core.estimation.reading import ReadingEstimator
-
     name = desc.get("estimator")
     if name == "ReadingEstimator":
         return ReadingEstimator.rebuild(desc, geom)

@@ -15,11 +15,21 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from urllib.parse import parse_qs, urlparse
+
 import numpy as np
 
 import teleop
-from devices.base import open_device
+from scenes.sensor_identification import identify_one_sensor_on
+from teleop.core.estimation.kalman import KalmanNoise
+from teleop.core.estimation.reading import ReadingEstimator
+from teleop.core.estimation.sensor_reading import make_estimator
+from teleop.core.geometry import default_geometry
+from teleop.core.kinematics import pose2lengths
+from teleop.io.recording import Recorder, Ring
 from teleop.loop.core import Teleop
+from teleop.loop.devices_by_url import open_device, process_robot
+from teleop.loop.live import LiveView
 from teleop.loop.params import LoopParams
 from teleop.loop.tap import RowTap, numeric_extras, session_layout
 from teleop.loop.timing import SimClock, TimingLog, run_paced, run_stepped, set_normal, set_realtime
@@ -102,16 +112,11 @@ def pad_scene(robot) -> list:
 
 def _start_live(tp, layout, extras, recorder, live: tuple, scene: dict | None):
     """Start the live view on the recorder's ring (or a ring of its own, overwritten when no one records)."""
-    from teleop.loop.live import LiveView
-    from teleop.io.recording import Ring
-
     if recorder is not None:
         ring = recorder.ring
     else:
         ring = Ring(layout.width, 4096, gated=False)
         tp.tap = RowTap(layout, ring.push, extras)
-    from teleop.core.kinematics import pose2lengths
-
     g = tp.geom
     # home lengths and steps per metre turn the motors' steps into the lengths they measure
     spec = getattr(tp.robot, "spec", None)
@@ -149,11 +154,20 @@ def frame_period(params: LoopParams, robot_process_hz: float | None) -> float:
 
 def default_estimator(frame_dt: float, cal=None):
     """The session's estimator: "dynamic" with its Kalman gain designed for `frame_dt` [s]."""
-    from teleop.core.estimation.kalman import KalmanNoise
-    from teleop.core.estimation.reading import ReadingEstimator
-    from teleop.core.geometry import default_geometry
-
     return ReadingEstimator(default_geometry(), "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt))
+
+
+def loop_estimator(robot_url: str, frame_dt: float, cal=None):
+    """The loop's estimator for a `sim://robot?sensor=fbg|one` URL ("dynamic" name, Kalman gain for
+    `frame_dt` [s], FSR calibration `cal` for one's proximal tensions; for one, Kp and Kr identified on the
+    URL's robot, scenes.sensor_identification.identify_one_sensor_on); None for any other URL or sensor=fsr
+    (the FSR estimator serves)."""
+    u = urlparse(robot_url)
+    if (u.scheme, u.netloc) != ("sim", "robot") or parse_qs(u.query).get("sensor", ["fsr"])[-1] == "fsr":
+        return None
+    p = open_device(robot_url).params  # built, not opened: the URL's checked options
+    kw = {"model": identify_one_sensor_on(p, 0, p.fbg_cable), "cable": p.fbg_cable} if p.sensor == "one" else {}
+    return make_estimator(p.geometry, p.sensor, "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt), **kw)
 
 
 def is_simulated_stylus(url: str) -> bool:
@@ -198,11 +212,9 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     built = robot  # the robot as built from its URL (a ProcessRobot runs it elsewhere): its pad for the scene
     if robot is None:
         if robot_process_hz:
-            from devices.wrappers import ProcessRobot
-
             built = open_device(robot_url)  # validates the URL here (one clear line) before forking
-            robot = ProcessRobot(robot_url, rate_hz=robot_process_hz,
-                                 rt_priority=robot_rt_priority if realtime else None)
+            robot = process_robot(robot_url, rate_hz=robot_process_hz,
+                                  rt_priority=robot_rt_priority if realtime else None)
         else:
             robot = built = open_device(robot_url)
     if robot_wrapper is not None:
@@ -217,8 +229,6 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             extras = numeric_extras(first)
             layout = session_layout(extras)
             if record:
-                from teleop.io.recording import Recorder
-
                 meta = session_metadata(tp, haptic_url, robot_url, seconds, seed)
                 recorder = Recorder(record, layout, meta, flush_interval=flush_interval,
                                     t0_ns=meta["start_time_ns"]).start()

@@ -11,9 +11,10 @@ from hypothesis import given, settings, strategies as st
 
 from teleop.core.calibration import generate
 from teleop.io import calfile
-from teleop.core.calibration.fbg import fit_fbg, read_fbg_steps
-from teleop.core.calibration.fsr import fit_fsr, read_fsr_steps
-from teleop.core.calibration.one_sensor import fit_one_sensor, read_one_sensor, transition_width
+from teleop.core.calibration.fbg import fit_fbg
+from teleop.core.calibration.fsr import fit_fsr
+from teleop.core.calibration.one_sensor import fit_one_sensor, transition_width
+from teleop.io.calibration_csv import read_fbg_steps, read_fsr_steps, read_one_sensor
 from teleop.apps.cli import main
 from teleop.core.errors import InputError
 from teleop.core.sensors import LOADING, UNLOADING, FbgParams, FsrCalibration, ProximalDistalModel, default_fsr_calibration

@@ -10,7 +10,8 @@ from _fakes import FakeRobot, record_session
 from devices.conformance import ConformanceError, check_haptic, check_robot
 from devices.replay import ReplayRobot, ReplayStylus
 from devices.simulated import SimulatedStylus
-from devices.wrappers import DelayedRobot, LoggedDevice, NoisyStylus, ProcessRobot
+from devices.wrappers import DelayedRobot, LoggedDevice, NoisyStylus
+from teleop.loop.devices_by_url import open_device, process_robot
 
 
 @pytest.fixture(scope="module")
@@ -25,8 +26,6 @@ HAPTICS = ["sim", "sim_omega_spec", "replay", "touch", "omega", "noisy"]
 
 @pytest.mark.parametrize("kind", HAPTICS)
 def test_haptic_conformance(kind, recording, monkeypatch):
-    from devices.base import open_device
-
     if kind == "sim":
         dev = open_device("sim://?script=sine")
     elif kind == "sim_omega_spec":
@@ -51,12 +50,10 @@ if importlib.util.find_spec("scenes.sim_robot") is not None:
 
 @pytest.mark.parametrize("kind", ROBOTS)
 def test_robot_conformance(kind, recording):
-    from devices.base import open_device
-
     robot = {"fake": lambda: FakeRobot(), "replay": lambda: ReplayRobot(recording),
              "delayed": lambda: DelayedRobot(FakeRobot(), 3), "logged": lambda: LoggedDevice(FakeRobot()),
              "sim_robot": lambda: open_device("sim://robot"),
-             "process_sim_robot": lambda: ProcessRobot("sim://robot", rate_hz=500.0)}[kind]()
+             "process_sim_robot": lambda: process_robot("sim://robot", rate_hz=500.0)}[kind]()
     check_robot(robot)
 
 

@@ -4,16 +4,16 @@ enabled, past the 20 ms stale limit: every default `teleop session` faulted at t
 
 import time
 
-from devices.wrappers import ProcessRobot
 from scenes.sim_robot import home_pose
 from teleop.core.geometry import default_geometry
 from teleop.loop import warm
 from teleop.core.kinematics import poses2lengths
+from teleop.loop.devices_by_url import process_robot
 
 
 def test_kernels_are_warmed_before_the_fork():
     warm._done.clear()   # as in a fresh process: nothing warmed yet
-    with ProcessRobot("sim://robot", rate_hz=500.0) as robot:
+    with process_robot("sim://robot", rate_hz=500.0) as robot:
         assert warm._done == [True]
         first = robot.read()
         pose = home_pose()

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from devices.base import open_device
+from teleop.loop.devices_by_url import open_device
 from devices.simulated import OperatorParams, Script, SimulatedStylus
 from teleop.core.errors import InputError
 

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from _fake_sdks import install_omega, install_touch
 
-from devices.base import DeviceError, DeviceUnavailable, open_device
+from devices.base import DeviceError, DeviceUnavailable
 from teleop.apps.cli import main
+from teleop.loop.devices_by_url import open_device
 
 
 def test_touch_missing_sdk_is_one_clear_line(monkeypatch, capsys):

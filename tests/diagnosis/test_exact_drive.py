@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.links import is_exact, noise_sigma
+from teleop.core.physics.links import is_exact, noise_sigma
 from teleop.io.recording_io import read_interchange, write_interchange
 from teleop.core.physics import coulomb
 

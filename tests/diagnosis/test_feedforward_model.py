@@ -6,7 +6,8 @@ import pytest
 from teleop.diagnosis.diagnose import diagnose
 from teleop.core.control.feedforward import backlash_inverse, precompensate
 from teleop.diagnosis.generator import make_case
-from teleop.diagnosis.links import Link, LinkModel
+from teleop.core.physics.links import Link, LinkModel, predict
+from teleop.diagnosis.links import link_data
 from teleop.io.model_io import load_model, save_model
 from teleop.io.recording_io import read_interchange
 from teleop.core.physics import Signals, get_effect
@@ -63,5 +64,5 @@ def test_identified_backlash_saved_loaded_and_precompensates(tmp_path):
     e_comp = target - _simulated_tip(comp, pos.gain, pos.offset, true_w)
     assert np.sqrt(np.mean(e_comp[500:] ** 2)) < 0.3 * np.sqrt(np.mean(e_plain[500:] ** 2))
     rec = read_interchange(tmp_path / "c.csv")
-    pred = model.predict(rec, "position")
+    pred = predict(link_data(rec, pos.link), pos)
     assert np.sqrt(np.mean((pred - rec.channels["tip_pos"]) ** 2)) < 0.2 * true_w

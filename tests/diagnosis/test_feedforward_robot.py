@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from teleop.core.control.feedforward import BacklashFeedforward, model_backlash_width
-from teleop.diagnosis.links import Link, LinkModel
+from teleop.core.physics.links import Link, LinkModel
 from teleop.io.model_io import IdentifiedModel
 from teleop.core.errors import InputError
 from teleop.core.physics.backlash import backlash

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from teleop.diagnosis.links import Link, LinkData
+from teleop.core.physics.links import Link, LinkData
 from teleop.diagnosis.locate import locate, reversal_times
 
 

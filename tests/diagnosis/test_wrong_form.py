@@ -3,7 +3,7 @@
 import numpy as np
 
 from teleop.diagnosis.identify import wrong_form
-from teleop.diagnosis.links import Link, LinkData
+from teleop.core.physics.links import Link, LinkData
 
 
 def test_a_dahl_transition_shorter_than_one_sample_of_drive_travel_is_coulomb_not_dahl():

@@ -129,7 +129,7 @@ def test_bad_plant_options_say_what_was_expected():
 
 
 def test_url_option_switches_the_rich_plant_on():
-    from devices.base import open_device
+    from teleop.loop.devices_by_url import open_device
 
     with open_device("sim://robot?plant=rich&seed=3") as robot:
         assert robot.params.plant == RichPlantParams(seed=3)

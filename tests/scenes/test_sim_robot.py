@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from devices.base import Robot, RobotReading, open_device
+from devices.base import Robot, RobotReading
 from scenes.pads import three_region_pad, z_test_pad
 from scenes.sim_robot import (SimRobot, SimRobotParams, capstan_angles_batch, lengths2poses, structure_matrices,
                               wrenches2tensions)
@@ -13,6 +13,7 @@ from teleop.core.geometry import default_geometry
 from teleop.core.kinematics import (bending_angles, lengths2pose, pose2cables, poses2lengths, structure_matrix)
 from teleop.core.robot_status import RobotStatus
 from teleop.core.tension import wrench2tensions
+from teleop.loop.devices_by_url import open_device
 
 GEOM = default_geometry()
 PARAMS = SimRobotParams(substeps=2, world=WorldParams(surface_z=0.0235, dt=2e-3))

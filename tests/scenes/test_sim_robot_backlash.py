@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from devices.base import open_device
+from teleop.loop.devices_by_url import open_device
 from scenes.sim_robot import SimRobot, SimRobotParams
 from teleop.core.errors import InputError
 from teleop.core.kinematics import pose2lengths, poses2lengths

@@ -6,8 +6,8 @@ effects, which would give six lengths no pose has, are refused with one line."""
 import numpy as np
 import pytest
 
-from devices.base import open_device
-from teleop.diagnosis.links import Link, LinkModel
+from teleop.loop.devices_by_url import open_device
+from teleop.core.physics.links import Link, LinkModel
 from teleop.io.model_io import load_model, save_model
 from teleop.core.errors import InputError
 from teleop.core.physics import Signals, get_effect

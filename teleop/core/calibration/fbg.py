@@ -29,7 +29,6 @@ from pathlib import Path
 
 import numpy as np
 
-from teleop.io.table import read_table
 from teleop.core.errors import InputError
 from teleop.core.physics import hysteresis_offset
 from teleop.core.sensors import FbgParams
@@ -63,15 +62,6 @@ def loading_state(force: np.ndarray, width: float | None = None) -> np.ndarray:
     # (noise < 2 width): +/-1 once the force has first moved a full width, 0 (neutral) before
     moved = np.maximum.accumulate(np.abs(s) >= 1.0 - 1e-9)
     return np.where(moved, np.sign(s), 0.0)
-
-
-def read_fbg_steps(path: str | Path) -> FbgData:
-    """The load-step CSV at `path` (module docstring)."""
-    cols, meta = read_table(path, ("force_N", "temperature_C", "dl1_pm", "dl2_pm"), ("branch",),
-                            {"branch": BRANCH_WORDS}, min_rows=8)
-    s = cols["branch"] if "branch" in cols else loading_state(cols["force_N"])
-    return FbgData(cols["force_N"], cols["temperature_C"], cols["dl1_pm"], cols["dl2_pm"], s,
-                   source=meta.get("source", str(path)))
 
 
 @dataclass(frozen=True)

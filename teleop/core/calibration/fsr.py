@@ -19,8 +19,6 @@ from pathlib import Path
 import numpy as np
 from numpy.polynomial import polynomial as P
 
-from teleop.io.table import read_table
-from teleop.core.errors import InputError
 from teleop.core.sensors import LOADING, UNLOADING, FsrCalibration, FsrCalibrationData, fit_fsr_calibration
 
 BRANCH_WORDS = {"loading": LOADING, "unloading": UNLOADING, "+1": LOADING, "1": LOADING, "-1": UNLOADING}
@@ -36,19 +34,6 @@ def branches_from_order(tension: np.ndarray) -> np.ndarray:
     for k, s in enumerate(d, start=1):
         b[k] = b[k - 1] if s == 0 else s
     return b
-
-
-def read_fsr_steps(path: str | Path) -> FsrCalibrationData:
-    """The step protocol CSV at `path` (module docstring); >= 6 rows per branch."""
-    cols, meta = read_table(path, ("tension_N", "conductance_uS"), ("branch",), {"branch": BRANCH_WORDS},
-                            min_rows=12)
-    t, g = cols["tension_N"], cols["conductance_uS"] * 1e-6
-    b = cols["branch"] if "branch" in cols else branches_from_order(t)
-    for br, name in BRANCHES:
-        if np.count_nonzero(b == br) < 6:
-            raise InputError(f"{path}: {np.count_nonzero(b == br)} {name} rows, expected at least 6 "
-                             f"(a quintic per branch)")
-    return FsrCalibrationData(t, g, b.astype(int), source=meta.get("source", str(path)))
 
 
 @dataclass(frozen=True)

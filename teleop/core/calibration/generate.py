@@ -1,6 +1,7 @@
 """Calibration recordings made from the sensor physics models, with known parameters (tests, examples).
 
-Each generator runs the physics a real protocol would meet and writes the CSV the calibration reads; it
+Each generator runs the physics a real protocol would meet and gives the CSV text the calibration reads
+(teleop.io.calibration_csv.write_examples writes them to files); it
 imports only the physics models (teleop.core.sensors, teleop.core.physics), never the fits (teleop.core.calibration.fsr,
 fbg, one_sensor), so a test that recovers the parameters checks the fits against the physics.
 
@@ -20,6 +21,8 @@ import math
 
 import numpy as np
 
+from teleop.core.physics import hysteresis_offset
+from teleop.core.physics.capstan import tip2motor_transitions
 from teleop.core.sensors import G, LOADING, UNLOADING, FbgParams, FsrBranchLag, FsrCalibration, synthesize_fbg
 
 
@@ -49,8 +52,6 @@ def fbg_load_steps(p: FbgParams = FbgParams(), hysteresis_N: float = 0.48, tempe
     """CSV text (t_s, force_N, temperature_C, dl1_pm, dl2_pm[, branch]) of load steps 0 -> top -> 0 at each
     temperature; `hysteresis_N` is the catalogue hysteresis h (loading - unloading gap 2h: seed 001's
     4.798 % of 20 N is h = 0.48 N). The reference force carries `force_noise_N` RMS noise."""
-    from teleop.core.physics import hysteresis_offset
-
     rng = np.random.default_rng(seed)
     levels = np.r_[np.arange(0.0, top_N + 1e-9, step_N), np.arange(top_N - step_N, -1e-9, -step_N)]
     F, T = [], []
@@ -82,8 +83,6 @@ def one_cable_cycles(mu: float = 0.08, theta: float = 2 * math.pi, seed: int = 0
                      spring_N_per_m: float = 800.0, preload_N: float = 6.0, noise_N: float = 0.02) -> tuple[str, dict]:
     """(CSV text, truth) of one cable pulling a spring through a sheath bent by theta [rad]: interchange
     columns t_s, motor_pos_mm, motor_force_N, tip_force_N. Truth: Kp = exp(-mu theta), Kr = exp(mu theta)."""
-    from teleop.core.physics.capstan import tip2motor_transitions
-
     rng = np.random.default_rng(seed)
     t = np.arange(int(cycles * period_s * fs_hz)) / fs_hz
     x = amplitude_m * np.sin(2 * np.pi * t / period_s)
@@ -96,29 +95,3 @@ def one_cable_cycles(mu: float = 0.08, theta: float = 2 * math.pi, seed: int = 0
              "t_s,motor_pos_mm,motor_force_N,tip_force_N"]
     lines += [",".join(f"{v:.9g}" for v in row) for row in cols]
     return "\n".join(lines) + "\n", {"Kp": math.exp(-mu * theta), "Kr": math.exp(mu * theta), "bp": 0.0, "br": 0.0}
-
-
-def write_examples(directory, seed: int = 0) -> list:
-    """Write fsr_steps.csv (truth: the built-in FSR calibration), fbg_steps.csv (truth: seed 001's constants,
-    h = 0.48 N) and one_cable.csv (truth: mu 0.08 over 2 pi) into `directory`; returns the paths."""
-    from pathlib import Path
-
-    from teleop.io.outputs import atomic_write
-    from teleop.core.sensors import default_fsr_calibration
-
-    d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
-    texts = {"fsr_steps.csv": fsr_step_protocol(default_fsr_calibration(), seed=seed),
-             "fbg_steps.csv": fbg_load_steps(seed=seed),
-             "one_cable.csv": one_cable_cycles(seed=seed)[0]}
-    return [atomic_write(d / name, lambda tmp, text=text: tmp.write_text(text, encoding="utf-8"))
-            for name, text in texts.items()]
-
-
-if __name__ == "__main__":  # pragma: no cover - `python -m teleop.core.calibration.generate DIR [SEED]`
-    import sys
-
-    if len(sys.argv) not in (2, 3):
-        sys.exit("usage: python -m teleop.core.calibration.generate DIR [SEED]")
-    for path in write_examples(sys.argv[1], int(sys.argv[2]) if len(sys.argv) == 3 else 0):
-        print(path)

@@ -85,19 +85,6 @@ def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
     return OneSensorFit(Fp, Fd, model, stderr, widths, float(np.sqrt(np.mean(r ** 2))), unit, source)
 
 
-def read_one_sensor(path: str | Path, column_map: str | None = None) -> tuple[np.ndarray, np.ndarray, str, str]:
-    """(Fp, Fd, unit, source) from a recording with motor and tip force (interchange CSV or `column_map`)."""
-    from teleop.io.recording_io import read_recording
-
-    rec = read_recording(path, column_map)
-    for name in ("motor_force", "tip_force"):
-        if name not in rec.channels:
-            raise InputError(f"{path}: no {name} column (expected {name}_N or {name}_Nm: one cable's "
-                             f"proximal and distal force)")
-    unit = rec.units.get("motor_force", "N")
-    return rec.channels["motor_force"], rec.channels["tip_force"], unit, rec.metadata.get("source", str(path))
-
-
 def plot_one_sensor_fit(fit: OneSensorFit):
     """Two panels: the proximal-distal profile with the pulling and releasing lines (seed 001 Fig 2b / 5),
     and the distal force and its prediction's residual over the samples."""

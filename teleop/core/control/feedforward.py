@@ -29,9 +29,9 @@ import math
 
 import numpy as np
 
-from teleop.diagnosis.links import LinkModel
-from teleop.core.kernels import friction as KF
 from teleop.core.errors import InputError
+from teleop.core.kernels import friction as KF
+from teleop.core.physics.links import LinkModel
 
 
 def backlash_inverse(y_d: np.ndarray, width: float, max_step: float | None = None) -> np.ndarray:

@@ -27,6 +27,7 @@ import numpy as np
 
 from teleop.core.errors import InputError
 from teleop.core.estimation.kalman import KalmanNoise
+from teleop.core.estimation.reading import ReadingEstimator
 from teleop.core.estimation.tick import TickComputer
 from teleop.core.geometry import Geometry
 from teleop.core.kernels import sensor as KS
@@ -40,8 +41,6 @@ class FbgReadingEstimator:
     def __init__(self, geom: Geometry, kind: str, name: str = "dynamic", *, fbg: FbgParams = FbgParams(),
                  model: ProximalDistalModel | None = None, cable: int = 0, cal: FsrCalibration | None = None,
                  kalman: KalmanNoise | None = KalmanNoise(), deadband_counts: float = 8.0):
-        from teleop.core.estimation.reading import ReadingEstimator
-
         check_sensor_kind(kind, "estimator")
         if kind == "fsr":
             raise InputError("FbgReadingEstimator: sensor kind 'fsr' is ReadingEstimator's (make_estimator)")
@@ -114,8 +113,6 @@ def make_estimator(geom: Geometry, kind: str = "fsr", name: str = "dynamic", **k
     """The loop's estimator for sensor `kind`: ReadingEstimator (fsr; `kw` as its own) or FbgReadingEstimator
     (fbg, one: `fbg`, `model`, `cable`, `cal`, `kalman` accepted; the FSR estimators' `turn` and `dynamic`
     have nothing to act on and are dropped)."""
-    from teleop.core.estimation.reading import ReadingEstimator
-
     check_sensor_kind(kind, "estimator")
     if kind == "fsr":
         return ReadingEstimator(geom, name, **{k: v for k, v in kw.items() if k not in ("fbg", "model", "cable")})

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.polynomial import Polynomial
 
 from teleop.core.errors import InputError
-from teleop.core.estimation.direction import DirectionTracker
+from teleop.core.direction import DirectionTracker
 from teleop.core.kernels.estimate import turn_correct
 
 FORWARD, BACKWARD = 1, -1

@@ -25,6 +25,8 @@ from dataclasses import dataclass, field
 
 import websockets
 
+from teleop.core.errors import InputError
+
 SUBPROTOCOL = "foxglove.websocket.v1"
 MESSAGE_DATA = 0x01
 SEND_BUFFER = 1 << 16  # kernel send buffer per viewer [bytes]: ~0.3 s of the live stream
@@ -32,8 +34,6 @@ SEND_BUFFER = 1 << 16  # kernel send buffer per viewer [bytes]: ~0.3 s of the li
 
 def check_port(host: str, port: int) -> None:
     """Raise InputError (one line naming --live / --live-host) when the live view could not listen there."""
-    from teleop.core.errors import InputError
-
     try:
         with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM) as s:
             s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)

@@ -8,8 +8,9 @@ import pytest
 
 from devices.arduino import messages as msg
 from devices.arduino.robot import ArduinoRobot, from_url
-from devices.base import BACKENDS, DeviceError, open_device
+from devices.base import DeviceError
 from teleop.core.errors import InputError
+from teleop.loop.devices_by_url import BACKENDS, open_device
 
 from .conftest import HOME_LENGTHS
 from .robot_conformance import check_robot
