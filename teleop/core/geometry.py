@@ -20,6 +20,7 @@ import numpy as np
 
 from teleop.core.config import check_keys, get_number, get_vectors, load_toml
 from teleop.core.errors import InputError
+from teleop.core.kernels.sheath import Sheath
 
 N_CABLES = 6
 
@@ -41,8 +42,10 @@ class Geometry:
     Attributes:
         B: (6, 3) base (scaffold) anchors in {B} [m]; all on one circle in the plane z = 0.
         r: (6, 3) platform anchors in {P} [m].
-        theta0: scaffold bend of every cable, segment BC of seed Fig 8a [rad] (seed: 140 deg).
-        mu: sheath friction coefficient of the capstan law T_load = T_hold exp(mu (theta + theta0)) [-].
+        theta0: scaffold bend of every cable, segment BC of seed Fig 8a [rad] (default the seed robot's sheath,
+            teleop.core.kernels.sheath.Sheath, which gathers it with mu, the stick stiffness and the pretension).
+        mu: sheath friction coefficient of the capstan law T_load = T_hold exp(mu (theta + theta0)) [-] (default
+            the seed robot's sheath).
         t_min, t_max: cable tension bounds [N].
         tip: (3,) tool tip in {P} [m] (the point that touches tissue).
         l_min, l_max: admissible cable lengths [m].
@@ -51,8 +54,8 @@ class Geometry:
 
     B: np.ndarray
     r: np.ndarray
-    theta0: float = np.deg2rad(140.0)
-    mu: float = 0.056
+    theta0: float = Sheath.theta0
+    mu: float = Sheath.mu
     t_min: float = 0.2
     t_max: float = 5.5
     tip: np.ndarray = field(default_factory=lambda: _frozen([0.0, 0.0, 0.025]))

@@ -119,10 +119,9 @@ def bench_session_diagnosis(effects: list, seconds: float, seed: int, cable: int
                             subsets: bool = True) -> dict:
     """The round trip for `effects` [(name, params)] switched on together (see the module docstring)."""
     # the robot's own capstan, as the model's baseline (baseline effects are not added again: the robot has it)
-    sim = SimRobotParams()
+    sheath = SimRobotParams().sheath
     force = Link("force", "motor_force", "tip_force", "motor_pos")
-    capstan = ("capstan_friction", {"mu": float(sim.geometry.mu), "theta": float(sim.geometry.theta0),
-                                    "k": float(sim.capstan_k)})
+    capstan = ("capstan_friction", {"mu": float(sheath.mu), "theta": float(sheath.theta0), "k": float(sheath.stick_k)})
     names = [name for name, _ in effects]
     model_a = work / "switched_on.json"
     save_model(model_a, [LinkModel(force, 1.0, 0.0, 1.0, 1.0, (capstan, *((n, dict(p)) for n, p in effects)), 1)],

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from teleop.core.errors import InputError
 from teleop.core.estimation.estimators import DynamicParams
@@ -35,8 +36,6 @@ def fit_dynamic_params(geom: Geometry, poses, tensions, dt: float, init: Dynamic
     poses (n, 6), tensions (n, 6) [N] sensor tensions, dt [s]. Parameters are fitted in log scale; a run
     with a single speed should use fit_b=False (see module docstring).
     """
-    from scipy.optimize import least_squares
-
     poses = np.asarray(poses, dtype=float)
     tensions = np.asarray(tensions, dtype=float)
     if poses.shape != tensions.shape or poses.ndim != 2 or poses.shape[1] != 6 or len(poses) < 50:
