@@ -85,13 +85,14 @@ def warm_up(geom=None) -> float:
     A, theta, tip = np.empty((6, n)), np.empty(n), np.empty(3)
     KS.pose_terms(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
                   np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip)
-    f = -structure_matrix(q, geom) @ np.full(n, 2.85)
     # the sim robot's sheath (scenes.sim_robot.SimRobotParams.sheath): the seed robot's, on this geometry
     sc = SH.Sheath(mu=geom.mu, theta0=geom.theta0).constants()
+    P = float(sc[SH.PRETENSION])  # tensions of the warm-up [N]
+    f = -structure_matrix(q, geom) @ np.full(n, P)
     cap = SH.new_state(n)
     for _ in range(2):  # its first reading, then the next
         KS.cable_sensor(f, A, theta, -L, float(geom.t_min), float(geom.t_max), sc, cap, np.empty(n), np.empty(n))
-    SH.motor_forces(cap, -L, np.full(n, 2.85), theta, sc, np.empty(n))  # the reading when the kernel defers
+    SH.motor_forces(cap, -L, np.full(n, P), theta, sc, np.empty(n))  # the reading when the kernel defers
     KS.contact_moment(tip, np.zeros(3), np.empty(6))
     KS.position_steps(L, L, 1e5, np.empty(n, dtype=np.int64))
     for implicit in (True, False):  # scenes.world.PadWorld.step: pybullet's tuples in, a tuple out
@@ -114,14 +115,14 @@ def warm_up(geom=None) -> float:
                           np.empty(n), np.empty(n), np.empty(n, dtype=np.int64), fsr,
                           *FsrBranchLag(default_fsr_calibration(), n).kernel_args(), np.zeros((1, n)), 0,
                           np.empty(n, dtype=np.int64))
-    KS.conductance_loop(np.full(n, 2.85), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
+    KS.conductance_loop(np.full(n, P), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
     lag = FsrBranchLag(default_fsr_calibration(), n)
     for _ in range(2):  # the first reading, then the lag
-        lag.counts(np.full(n, 2.85), np.zeros(n))
+        lag.counts(np.full(n, P), np.zeros(n))
     # the loop's safety monitors and finiteness checks (float and int arrays)
-    TensionRange(5.5, 0.2, 0.05, n).update(0.0, np.full(n, 2.85))
-    StuckCable(0.05, 0.3, 1e-7, n).update(0.0, np.full(n, 2.85), np.zeros(n))
-    tension_monitors(TensionRange(5.5, 0.2, 0.05, n), StuckCable(0.05, 0.3, 1e-7, n), 0.0, np.full(n, 2.85), np.zeros(n))
+    TensionRange(5.5, 0.2, 0.05, n).update(0.0, np.full(n, P))
+    StuckCable(0.05, 0.3, 1e-7, n).update(0.0, np.full(n, P), np.zeros(n))
+    tension_monitors(TensionRange(5.5, 0.2, 0.05, n), StuckCable(0.05, 0.3, 1e-7, n), 0.0, np.full(n, P), np.zeros(n))
     check = type("R", (), {"fsr_counts": np.zeros(n, dtype=np.int64), "position_steps": np.zeros(n, dtype=np.int64),
                            "commanded_lengths": L, "t": 0.0, "measured_cp": np.zeros(3), "measured_cv": np.zeros(3),
                            "orientation": np.eye(3)})()
@@ -154,7 +155,7 @@ def warm_up(geom=None) -> float:
                     L, np.zeros((1, n)), np.zeros(n, dtype=np.int64), np.zeros((1, n), dtype=np.int64), np.zeros(6),
                     np.zeros(1))
     check_lengths(L, geom)
-    TensionSolver(A, geom.t_min, geom.t_max, 2.85).solve(f)
+    TensionSolver(A, geom.t_min, geom.t_max, P).solve(f)
     # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's
     # first-engagement forward kinematics and its engage rule
     rotation_zyx(0.0, 0.0, 0.0)
