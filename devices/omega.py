@@ -28,7 +28,7 @@ class OmegaStylus(ContextDevice):
         self.is_open = False
 
     def open(self) -> None:
-        try:
+        try:  # the vendor SDK is optional: loaded when an omega opens
             from forcedimension_core import dhd
         except (ImportError, OSError, RuntimeError) as exc:
             raise DeviceUnavailable(f"omega://: Force Dimension SDK unavailable ({type(exc).__name__}: {exc}); "

@@ -35,7 +35,7 @@ class TouchStylus(ContextDevice):
         self._force = (0.0, 0.0, 0.0)
 
     def open(self) -> None:
-        try:
+        try:  # the vendor SDK is optional: loaded when a Touch opens
             import pyOpenHaptics.hd as hd
             from pyOpenHaptics.hd_callback import hd_callback
             from pyOpenHaptics.hd_device import HapticDevice as HdDevice

@@ -144,7 +144,7 @@ class PadWorld:
     # lifecycle -------------------------------------------------------------------------------------
     def open(self) -> None:
         with _quiet_stdout():  # the pybullet C library prints its build time on import, argv on connect
-            import pybullet as pb
+            import pybullet as pb  # heavy: loaded when a world opens (DIRECT, nothing at import)
             from pybullet_utils.bullet_client import BulletClient
         _silence_banner_at_exit()
         if self.is_open:

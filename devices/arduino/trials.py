@@ -9,7 +9,13 @@ Used by the tests (which assert the watchdog bound) and by ``teleop bench link``
 
 from __future__ import annotations
 
+import json
+import mmap
 import os
+import signal
+import subprocess
+import sys
+import tempfile
 import time
 from dataclasses import dataclass, field
 
@@ -186,11 +192,6 @@ def zygote_main() -> None:
     {"port", "home", "target", "stream_s", "state"} on stdin, fork a host running _killed_host with its
     state in the 3 int64 of the file "state" (mmap), and print the host's pid. Hosts are reaped by the
     kernel (SIGCHLD ignored); a host that fails sets state[0] = -1."""
-    import json
-    import mmap
-    import signal
-    import sys
-
     signal.signal(signal.SIGCHLD, signal.SIG_IGN)
     for line in sys.stdin:
         job = json.loads(line)
@@ -218,13 +219,6 @@ def kill_trials(mega: EmulatedMega, home_lengths, n: int = 100, stream_s: float 
     (zygote_main), so each starts in milliseconds. Stop time as in watchdog_trials; `latched[i]` is the
     WATCHDOG_STOP bit in the first telemetry of the next host. An episode whose host saw its own watchdog
     stop before the kill (the host stalled > WATCHDOG_MS) is an early trip and is repeated."""
-    import json
-    import mmap
-    import signal
-    import subprocess
-    import sys
-    import tempfile
-
     rng = np.random.default_rng(seed)
     home = np.asarray(home_lengths, float)
     stop_ms, steps_after, latched, early, attempts = [], [], [], 0, 0

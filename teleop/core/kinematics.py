@@ -10,6 +10,7 @@ pybullet.
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import linprog
 
 from teleop.core.errors import InfeasibleError, InputError
 from teleop.core.geometry import Geometry
@@ -135,8 +136,7 @@ def is_tensionable(pose, geom: Geometry, tol: float = 1e-9) -> bool:
     if null.shape[0] == 1:
         n = null[0]
         return bool((n > tol).all() or (n < -tol).all())
-    from scipy.optimize import linprog  # several null directions: an LP decides positivity
-
+    # several null directions: an LP decides positivity
     k = null.shape[0]
     res = linprog(np.zeros(k), A_ub=-null.T, b_ub=-np.ones(6), bounds=[(None, None)] * k, method="highs")
     return bool(res.status == 0)

@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.polynomial import Polynomial
+from scipy.optimize import least_squares
+from scipy.signal import butter, sosfilt, sosfilt_zi
 
 from teleop.core.direction import DirectionTracker
 from teleop.core.errors import InputError
@@ -258,10 +260,10 @@ def default_fsr_calibration() -> FsrCalibration:
 
 def plot_fsr_calibration(data: FsrCalibrationData, cal: FsrCalibration):
     """Figure like seed 000 Fig 7: calibration points and the two quintic branches (conductance vs tension)."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     fig, ax = plt.subplots(figsize=(6, 4))
     t = np.linspace(0.0, cal.t_max, 200)
@@ -394,10 +396,10 @@ def synthesize_fbg(force_N, dT_C, p: FbgParams = FbgParams(), rng: np.random.Gen
 
 def plot_fbg_compensation(t_s, force_true, dl1_pm, dl2_pm, dT_C, p: FbgParams = FbgParams(), fc_hz: float = 0.1):
     """Figure like seed 001 Fig 4c: uncompensated, compensated and low-passed force, and the temperature."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     t = np.asarray(t_s, dtype=float)
     comp = fbg2force(dl1_pm, dl2_pm, p)
@@ -418,8 +420,6 @@ def plot_fbg_compensation(t_s, force_true, dl1_pm, dl2_pm, dT_C, p: FbgParams = 
 
 def lowpass2(x, fs_hz: float, fc_hz: float) -> np.ndarray:
     """Causal second-order Butterworth low-pass (the seed's filter), started at the first sample's value."""
-    from scipy.signal import butter, sosfilt, sosfilt_zi
-
     x = np.asarray(x, dtype=float)
     sos = butter(2, fc_hz, fs=fs_hz, output="sos")
     y, _ = sosfilt(sos, x, zi=sosfilt_zi(sos) * x[0])
@@ -470,8 +470,6 @@ def fit_proximal_distal(Fp, Fd, min_step: float | None = None) -> ProximalDistal
     (default: 3x the median |dFd|) give line fits; flat samples belong to the transitions. Stage 2 refines the
     four parameters by least squares of the play-operator prediction against Fd.
     """
-    from scipy.optimize import least_squares
-
     Fp = np.asarray(Fp, dtype=float)
     Fd = np.asarray(Fd, dtype=float)
     if Fp.shape != Fd.shape or Fp.ndim != 1 or Fp.size < 20:
@@ -502,8 +500,6 @@ def fit_proximal_distal_origin(Fp, Fd, direction=None) -> ProximalDistalModel:
     direction (`direction` (n,): +1 hauling in, -1 paying out; default from the sign of the change of Fp);
     then least squares of the play-operator prediction (ProximalDistalModel.distal) against Fd.
     """
-    from scipy.optimize import least_squares
-
     Fp = np.asarray(Fp, dtype=float)
     Fd = np.asarray(Fd, dtype=float)
     if Fp.shape != Fd.shape or Fp.ndim != 1 or Fp.size < 20 or not (np.all(np.isfinite(Fp)) and np.all(np.isfinite(Fd))):

@@ -10,6 +10,7 @@ pretension.
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import minimize
 
 from teleop.core.errors import InfeasibleError
 from teleop.core.kernels import tension as K
@@ -58,8 +59,6 @@ class TensionSolver:
         if k == 0:
             t = t_p
         else:
-            from scipy.optimize import minimize
-
             res = minimize(lambda z: np.sum((t_p + N @ z - t_ref) ** 2), np.zeros(k), method="SLSQP",
                            constraints=[{"type": "ineq", "fun": lambda z: t_p + N @ z - t_min},
                                         {"type": "ineq", "fun": lambda z: t_max - (t_p + N @ z)}])

@@ -10,9 +10,9 @@ ATTRIBUTION = "Contains data from the MRDLab mis-tool-characterization dataset, 
 
 def figure(diag, findings: list | None = None):
     """A matplotlib Figure (Agg) of Diagnosis `diag`."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     findings = diag.findings() if findings is None else findings
     links = diag.links

@@ -45,7 +45,7 @@ def _inputs(d: LinkData) -> tuple[np.ndarray, list[str]]:
 
 
 def _library():
-    import pysindy as ps
+    import pysindy as ps  # heavy: loaded only for the sparse-regression peer (diagnose --sindy)
     return ps.PolynomialLibrary(degree=DEGREE) + ps.FourierLibrary(n_frequencies=1)
 
 
@@ -58,7 +58,7 @@ def _standardise(W: np.ndarray, fit: np.ndarray) -> np.ndarray:
 
 def static_rmse(d: LinkData, fit_idx: slice, hold_idx: slice) -> float:
     """Held-out RMSE of the static sparse regression (output units)."""
-    import pysindy as ps
+    import pysindy as ps  # heavy: loaded only for the sparse-regression peer (diagnose --sindy)
 
     W, _ = _inputs(d)
     stride = max(1, int(round(1.0 / (PEER_HZ * float(np.median(np.diff(d.t)))))))
@@ -86,7 +86,7 @@ def static_rmse(d: LinkData, fit_idx: slice, hold_idx: slice) -> float:
 def free_run_rmse(d: LinkData, fit_idx: slice, hold_idx: slice) -> float:
     """Held-out RMSE of dy/dt = Theta(y, w) xi integrated over the held-out part (explicit Euler at the
     decimated rate, clamped to the fit part's range widened by its span); inf if it cannot be fitted."""
-    import pysindy as ps
+    import pysindy as ps  # heavy: loaded only for the sparse-regression peer (diagnose --sindy)
 
     W, _ = _inputs(d)
     dt = float(np.median(np.diff(d.t)))

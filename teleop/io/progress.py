@@ -10,6 +10,8 @@ from __future__ import annotations
 import sys
 import time
 
+from tqdm import tqdm
+
 PLAIN_INTERVAL_S = 5.0  # [s] between plain lines when stderr is not a terminal
 
 
@@ -65,7 +67,5 @@ def progress(total: int | None, desc: str, unit: str = "it", stream=None, **tqdm
     (default stderr) is a terminal, else PlainProgress."""
     stream = stream if stream is not None else sys.stderr
     if stream.isatty():
-        from tqdm import tqdm
-
         return tqdm(total=total, desc=desc, unit=unit, file=stream, **tqdm_kwargs)
     return PlainProgress(total, desc, unit, stream=stream)

@@ -7,6 +7,7 @@ A tick that starts more than one period late skips the missed deadlines (counted
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -28,8 +29,6 @@ def set_realtime(priority: int) -> str:
     Returns what was obtained, e.g. "SCHED_FIFO 50" or "SCHED_OTHER (PermissionError: ...)". The kernel's
     RT throttling (sched_rt_runtime_us) still leaves other processes 5 % of each CPU.
     """
-    import os
-
     try:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(priority)))
         return f"SCHED_FIFO {int(priority)}"
@@ -39,8 +38,6 @@ def set_realtime(priority: int) -> str:
 
 def set_normal() -> None:
     """Back to the default time-sharing policy."""
-    import os
-
     try:
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     except (AttributeError, OSError):

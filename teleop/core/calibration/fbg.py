@@ -137,10 +137,10 @@ def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
 def plot_fbg_fit(fit: FbgFit):
     """Three panels like seed 001 Fig 4a/4b: FBG2's temperature-free shift against force (loading and
     unloading), both shifts against temperature at zero force, and the residuals against force."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     d, v = fit.data, fit.values
     fig, (ax, axT, axr) = plt.subplots(1, 3, figsize=(13, 4.2))

@@ -85,10 +85,10 @@ def fit_fsr(data: FsrCalibrationData, degree: int = 5) -> FsrFit:
 
 def plot_fsr_fit(fit: FsrFit):
     """Two panels: the points and quintics like seed 000 Fig 7, and the residuals [uS] against tension."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     fig, (ax, axr) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.4]})
     t = np.linspace(0.0, fit.cal.t_max, 300)

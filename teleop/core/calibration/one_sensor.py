@@ -88,10 +88,10 @@ def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
 def plot_one_sensor_fit(fit: OneSensorFit):
     """Two panels: the proximal-distal profile with the pulling and releasing lines (seed 001 Fig 2b / 5),
     and the distal force and its prediction's residual over the samples."""
-    import matplotlib
+    import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     m, u = fit.model, fit.unit
     fig, (ax, axr) = plt.subplots(1, 2, figsize=(12, 4.5))

@@ -25,6 +25,7 @@ from functools import lru_cache
 import numpy as np
 from filterpy.common import Q_discrete_white_noise
 from filterpy.kalman import KalmanFilter
+from scipy.linalg import solve_discrete_are
 
 from teleop.core.geometry import Geometry
 from teleop.core.kernels import kalman as KK
@@ -72,8 +73,6 @@ def measurement_variances(geom: Geometry, sigma_t: float, pose=None) -> np.ndarr
 
 
 def _dare_gain(dt: float, ratio: float) -> np.ndarray:
-    from scipy.linalg import solve_discrete_are
-
     F, H, Q, R = axis_matrices(dt, ratio, 1.0)
     P = solve_discrete_are(F.T, H.T, Q, R)  # prior covariance at the fixed point
     return (P @ H.T / (H @ P @ H.T + R)).ravel()

@@ -19,6 +19,9 @@ from __future__ import annotations
 
 import hashlib
 import os
+import sys
+
+import numpy as np
 
 try:  # numba is a dependency (pyproject.toml); TELEOP_NO_JIT=1 runs the same sources as Python
     if os.environ.get("TELEOP_NO_JIT"):
@@ -46,7 +49,7 @@ def _stamp_caches() -> None:
     places: NUMBA_CACHE_DIR, __pycache__, the per-user directory). Leaves numba's default (per-file stamps)
     if its caching internals are not the expected ones."""
     try:
-        from numba.core import caching
+        from numba.core import caching  # numba's internals: another layout keeps numba's own stamps
 
         bases = (caching.UserProvidedCacheLocator, caching.InTreeCacheLocator, caching.UserWideCacheLocator)
         classes = caching.CacheImpl._locator_classes
@@ -86,8 +89,6 @@ def njit(fn):
         return _numba.njit(cache=True, nogil=True)(fn)
     except RuntimeError as exc:  # "cannot cache function ...: no locator available"
         if not _warned:
-            import sys
-
             print(f"teleop: warning: numba cache unavailable ({exc}); set NUMBA_CACHE_DIR to a writable "
                   "directory to keep compiled kernels between runs", file=sys.stderr)
             _warned.append(True)
@@ -99,8 +100,6 @@ def broadcast_call(loop, *args):
     """Array form of a scalar kernel: `loop(a1, ..., ak, out)` is a compiled loop applying the kernel to
     1-D float arrays element by element; the arguments are broadcast against each other (numpy rules) and
     the result has their broadcast shape (a 0-d result comes back as a float)."""
-    import numpy as np
-
     arrs = np.broadcast_arrays(*[np.asarray(a, dtype=float) for a in args])
     shape = arrs[0].shape
     flat = [np.ascontiguousarray(a).reshape(-1) for a in arrs]

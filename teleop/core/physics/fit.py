@@ -39,9 +39,9 @@ class FitResult:
     def plot(self, signals: Signals, y, ax=None):
         """Measured vs fitted output over time on `ax` (a new Agg figure when None); returns the axes."""
         if ax is None:
-            import matplotlib
+            import matplotlib  # heavy: loaded only to draw
             matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
+            import matplotlib.pyplot as plt  # heavy: loaded only to draw
             _, ax = plt.subplots(figsize=(8, 3))
         ax.plot(signals.t, y, ".", ms=2, label="measured")
         ax.plot(signals.t, self.predict(signals), "-", lw=1, label=f"{self.effect} fit (rmse {self.rmse:.3g})")

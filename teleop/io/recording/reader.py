@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import zstandard
 from mcap.records import Channel, Chunk, DataEnd, Footer, Header, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 
@@ -82,8 +83,6 @@ def _check_chunk(c: Chunk) -> None:
     if size > _MAX_CHUNK or size > 2000 * len(c.data) + 4096:
         raise _Damage(f"implausible chunk size {size}")
     if c.compression == "zstd":
-        import zstandard
-
         try:
             declared = zstandard.frame_content_size(c.data)
         except zstandard.ZstdError as exc:

@@ -14,6 +14,8 @@ import multiprocessing as mp
 import os
 import time
 
+from foxglove.messages import FrameTransforms, Log, SceneUpdate
+
 from teleop.io.recording.foxglove import fault_log
 from teleop.loop.live import channels as lc
 from teleop.loop.live.server import ChannelInfo, FoxgloveServer
@@ -29,8 +31,6 @@ MAX_EVENTS = 200  # state changes kept to send a viewer that subscribes late
 
 
 def _channel_list(layout: Layout) -> list:
-    from foxglove.messages import FrameTransforms, Log, SceneUpdate
-
     out = []
 
     def add(topic, encoding, name, schema, schema_encoding):

@@ -15,8 +15,13 @@ from __future__ import annotations
 
 import asyncio
 import json
+import struct
 import threading
 import time
+
+import websockets
+from foxglove.messages import (Color, CylinderPrimitive, Log, LogLevel, Pose, Quaternion, SceneEntity, SceneUpdate,
+                               TextPrimitive, Vector3)
 
 from teleop.io.recording.foxglove import stamp
 from teleop.loop.live.server import SUBPROTOCOL, ChannelInfo, FoxgloveServer
@@ -50,8 +55,6 @@ class StudyLiveView:
         self._ready = threading.Event()
 
     def start(self, timeout: float = 10.0) -> "StudyLiveView":
-        from foxglove.messages import Log, SceneUpdate
-
         chans = [ChannelInfo(1, TOPIC_TRIAL, "json", "blind.trial", b'{"type": "object"}', "jsonschema"),
                  ChannelInfo(2, TOPIC_ANSWERS, "protobuf", Log.get_schema().name, bytes(Log.get_schema().data),
                              "protobuf"),
@@ -94,8 +97,6 @@ class StudyLiveView:
         self.loop.call_soon_threadsafe(self._step, dict(event))
 
     def _step(self, ev: dict) -> None:
-        from foxglove.messages import Log, LogLevel
-
         now = time.time_ns()
         kind = ev.get("kind")
         if kind == "participant":
@@ -118,9 +119,6 @@ class StudyLiveView:
             self.server.publish(self.cid[TOPIC_SCENE], now, self._scene(now))
 
     def _scene(self, t_ns: int) -> bytes:
-        from foxglove.messages import (Color, CylinderPrimitive, Pose, Quaternion, SceneEntity, SceneUpdate,
-                                       TextPrimitive, Vector3)
-
         ident = Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)
         entities = []
         for i, (x, y) in enumerate(self.centres[:len(self.layout)]):
@@ -139,10 +137,6 @@ class StudyLiveView:
 
     async def _relay(self) -> None:
         """Relay the session's /live/stylus (force, position) as /blind/force, at most RATE_FORCE per second."""
-        import struct
-
-        import websockets
-
         while True:
             try:
                 async with websockets.connect(f"ws://127.0.0.1:{self.relay_port}", subprotocols=[SUBPROTOCOL],
