@@ -131,8 +131,12 @@ def session_diagnose_rows(r: dict) -> list[Row]:
     found = ", ".join(f"{f.get('effect')} (x{f.get('improvement', 0):.3g})" for f in r.get("found", []))
     replay = r.get("replay_rmse_N") or {}
     return _rows([("switched on", _fmt(effects or None)), ("found on the motor force", _fmt(found or None)),
-                  ("recovered parameters", _fmt(json.dumps(r["recovered"], sort_keys=True))
-                   if r.get("recovered") else None),
+                  ("recovered parameters", _fmt("; ".join(
+                      f"{eff} " + ", ".join(f"{k} {v:.4g}" for k, v in sorted(ps.items()))
+                      for eff, ps in sorted(r["recovered"].items()))) if r.get("recovered") else None),
+                  ("column subsets naming every switched-on effect",
+                   _fmt(f"{sum(1 for s in r['subsets'] if s.get('named'))} of {len(r['subsets'])}")
+                   if isinstance(r.get("subsets"), list) and r["subsets"] else None),
                   ("replay RMSE as recorded / plain / identified",
                    _fmt(" / ".join(f"{replay[k]:.3g}" for k in ("as_recorded", "plain", "identified")
                                    if k in replay) + " N") if replay else None),
@@ -280,7 +284,7 @@ def run(names: list[str]) -> int:
 def render_table(bench: Bench, record: dict) -> str:
     """One benchmark's section: what it measures, its figures as a table, then command, machine and date."""
     m = record.get("machine", {})
-    lines = [f"## {bench.name}", "", bench.what + ".", "", "| figure | value |", "|---|---|"]
+    lines = [f"## {bench.name}", "", bench.what[0].upper() + bench.what[1:] + ".", "", "| figure | value |", "|---|---|"]
     lines += [f"| {label} | {value} |" for label, value in bench.rows(record["result"])]
     lines += ["", f"Command: `{record['command']} --json F`; machine: {m.get('nproc')} cores, {m.get('cpu')}, "
                   f"Python {m.get('python')}; date: {record['date']}.", ""]
