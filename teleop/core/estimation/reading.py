@@ -8,7 +8,8 @@ FSR counts -> tensions with the branch from the reading's direction (the numbers
 teleop.core.sensors.FsrConverter, computed here on plain floats), then the fast per-tick estimate of
 `TickComputer.estimate` (capstan / turn / friction compensation, f = -A t, steady-state Kalman) at the
 commanded pose. Cable lengths come from the pose (inverse kinematics), i.e. the lengths the loop commands.
-`update_floats` is the loop's hot path (lists in, lists out); `update` wraps it in numpy for the protocol.
+`update_arrays` is the loop's hot path (LoopTick.estimate; `dynamic` in one compiled call); `update_floats` takes
+and gives lists; `update` wraps it in numpy for the protocol.
 """
 
 from __future__ import annotations
