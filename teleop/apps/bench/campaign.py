@@ -25,6 +25,7 @@ the client's CPU seconds) / cores + tail, the fixed parts as measured.
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 import tempfile
@@ -40,10 +41,23 @@ from teleop.io.outputs import check_output, write_json
 DEFAULT_SCHEDULERS = "none,local:2"
 
 
+def scheduler_list(text: str) -> list:
+    """'none,local:2' -> ["none", "local:2"]: schedulers as `--scheduler` takes them (argparse type)."""
+    schedulers = [s.strip() for s in str(text).split(",") if s.strip()]
+    if not schedulers:
+        raise argparse.ArgumentTypeError(f"expected a comma-separated list such as none,local:2, got '{text}'")
+    for s in schedulers:
+        try:
+            parse_scheduler(s)
+        except InputError as exc:
+            raise argparse.ArgumentTypeError(f"'{text}': {str(exc).replace('--scheduler ', '', 1)}") from None
+    return schedulers
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser("campaign", help="campaign wall time per scheduler, overhead per task, cluster estimate")
     p.add_argument("file", metavar="FILE", help="campaign file (e.g. examples/jnd_grid.toml)")
-    p.add_argument("--schedulers", default=DEFAULT_SCHEDULERS, metavar="S1,S2",
+    p.add_argument("--schedulers", type=scheduler_list, default=DEFAULT_SCHEDULERS, metavar="S1,S2",
                    help=f"schedulers to compare, the first is the reference (default {DEFAULT_SCHEDULERS})")
     p.add_argument("--overhead-tasks", type=positive_int, default=400, metavar="N",
                    help="empty tasks run through the last scheduler to measure its cost per task (400)")
@@ -66,11 +80,7 @@ def _same_results(a, b) -> bool:
 
 
 def run(args) -> int:
-    schedulers = [s.strip() for s in args.schedulers.split(",") if s.strip()]
-    for s in schedulers:
-        parse_scheduler(s)
-    if len(schedulers) < 1:
-        raise InputError(f"--schedulers '{args.schedulers}': expected a comma-separated list such as none,local:2")
+    schedulers = args.schedulers
     if args.json:
         check_output(args.json, "--json")
     campaign = load_campaign(args.file, args.seed)
