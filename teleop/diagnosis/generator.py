@@ -22,7 +22,7 @@ import numpy as np
 from scenes.cable_rig import COLUMNS, rig_effects, simulate
 from teleop.io.recording_io import interchange_text
 from teleop.io.outputs import atomic_write
-from teleop.core.physics import REGISTRY, get_effect
+from teleop.core.physics import REGISTRY, get_effect, linear_force
 from teleop.core.physics.base import Scale
 
 
@@ -113,7 +113,7 @@ def _pad(rng: np.random.Generator, effect: str, index: int, cfg: GenConfig) -> C
     # a contact law (it reads the indentation alone) replaces the linear pad; any other effect acts on its force
     law = effect != "none" and get_effect(effect).inputs == ("d",)
     if not law:
-        F = _run_steps("linear_contact", {"k": k_lin}, d=d)
+        F = linear_force(d, k_lin)
     if effect != "none":
         scale = Scale(travel=5e-3, stiffness=k_lin, v_fast=float(np.percentile(np.abs(d_dot), 99)))
         params = get_effect(effect).rules.draw(rng, scale)
