@@ -112,7 +112,7 @@ def run(args) -> int:
         wrapper = compensation_wrapper(args.compensation, params.dt * params.robot_every)
     robot_hz = None if args.robot_inline else args.robot_rate
     estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
-    if "sensor=" in args.robot:  # sim://robot?sensor=fbg|one: the estimator reads that kind (scenes.sim_sensors)
+    if "sensor=" in args.robot:  # sim://robot?sensor=fbg|one: the estimator reads that kind (loop_estimator)
         estimator = loop_estimator(args.robot, frame_period(params, robot_hz), cal) or estimator
     with _CtrlC() as ctrl_c:
         res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,

@@ -1,5 +1,5 @@
 """The blind-test rig: the four-area pad of seed 000 Fig 14g and the whole chain the participants feel it
-through. This is wiring (it picks concrete devices), so scenes and devices are imported inside functions.
+through. This is wiring: it picks the concrete devices (the simulated stylus and robot, or a session's).
 
 Chain of one tick (teleop.loop.Teleop, unpaced on a manual clock: simulated time, no sleeping):
     sim stylus (operator model pushing toward the participant's target, feeling the commanded force)
@@ -142,7 +142,7 @@ class RigOptions:
 
 def _sensor_estimator(geom, o, robot_params, name: str, noise):
     """The estimator of the rig's sensor kind (teleop.core.estimation.sensor_reading.make_estimator); for "one" the
-    eq 7 model is identified once on the simulated robot (scenes.sim_sensors.identify_one_sensor_on)."""
+    eq 7 model is identified once on the simulated robot (scenes.sensor_identification.identify_one_sensor_on)."""
     kw = {}
     if o.sensor == "one":
         kw = {"model": identify_one_sensor_on(robot_params, 0, 0), "cable": 0}
