@@ -105,6 +105,7 @@ def _pokes(rng: np.random.Generator, t: np.ndarray, cfg: GenConfig) -> np.ndarra
 
 
 def _pad(rng: np.random.Generator, effect: str, index: int, cfg: GenConfig) -> Case:
+    """Pokes on a linear pad with the contact effect `effect` (or 'none') at its own draw's parameters."""
     t = np.arange(int(cfg.duration_s * cfg.fs_hz)) / cfg.fs_hz
     d = _pokes(rng, t, cfg)
     d_dot = np.gradient(d, t)

@@ -15,6 +15,9 @@ An added effect's general form (ParamSpec.shape) is tried once it is named (`gen
 own, in place of the additions once they are exhausted (`_general_baseline`: the capstan's pretension).
 The fit part is scored with Huber's loss (`robust_rms`) for the information criterion; held-out scores are
 plain RMSEs.
+Every effect-specific rule (which effects are never findings, what a fit holds, extra starts, a form the
+fitted values contradict, a baseline effect beside which an effect is no candidate, effects of the drive
+position alone) is the effect's own (teleop.core.physics.base.Rules), read here through `record(d)`.
 """
 
 from __future__ import annotations
