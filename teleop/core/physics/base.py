@@ -222,10 +222,15 @@ class LinkRecord:
     resolution_s: float = 0.0
 
 
+def moves(x: np.ndarray) -> np.ndarray:
+    """|x_k+1 - x_k| of the samples where x moves at all (drive_step, and the links' noise_sigma, is_exact)."""
+    dx = np.abs(np.diff(x))
+    return dx[dx > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)] if dx.size else dx
+
+
 def drive_step(x: np.ndarray) -> float:
     """The drive's typical travel [its unit] in one sample: the median per-sample move while moving."""
-    dx = np.abs(np.diff(x))
-    moving = dx[dx > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)] if dx.size else dx
+    moving = moves(x)
     return float(np.median(moving)) if moving.size else 0.0
 
 

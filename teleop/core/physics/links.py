@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from teleop.core.physics.base import Signals, get_effect
+from teleop.core.physics.base import Signals, get_effect, moves
 
 EXACT = 0.01          # a drive whose noise is below this fraction of its median per-sample move is exact
 
@@ -53,12 +53,6 @@ def noise_sigma(x: np.ndarray) -> float:
         if q > 0 and np.mean(np.abs(steps / q - np.round(steps / q)) < 0.01) > 0.95:
             sigma = max(sigma, q / np.sqrt(12.0))
     return sigma
-
-
-def moves(x: np.ndarray) -> np.ndarray:
-    """|x_k+1 - x_k| of the samples where x moves at all (identify.drive_step, noise_sigma, is_exact)."""
-    dx = np.abs(np.diff(x))
-    return dx[dx > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)] if dx.size else dx
 
 
 def is_exact(x: np.ndarray) -> bool:
