@@ -29,21 +29,10 @@ the same names are the keywords of its `Step.step`. `Effect.output` is the chann
 for; `chain(...)` feeds one effect's output to the next. Parameters are {name: float} dicts in SI units;
 `Effect.params` holds their `ParamSpec` (unit, fit bounds, default, meaning).
 
-Catalogue (registry key: inputs -> output, parameters):
-- position link, motor -> tip position:
-  backlash (x -> x; width), cable_compliance (x, load -> x; k)
-- force link, tip load -> motor force (x increasing = pulling):
-  capstan_friction (x, load [, theta] -> load; mu, theta, k; general form: preload), coulomb_friction (v, load; Fc),
-  viscous_friction (v, load; b), stribeck_friction (v, load; Fc, Fs, vs), dahl_hysteresis (x, load; sigma, Fc),
-  pulley_friction (x, load -> load; mu, wrap, bend, k: seed 002's cable-pulley chain, lumped),
-  parallel_spring (x, load -> load; k, x_ref; general form: g): a spring beside the transmission
-- position link over pulleys: pulley_elongation (x, load -> x; c, mu, wrap, bend, k)
-- sensor, true force -> reading:
-  sensor_hysteresis (force; h, delta), thermal_drift (force, temperature; c, T0),
-  thermal_drift_time (t, force; offset, rate)
-- contact, indentation -> pad force:
-  linear_contact (d; k), hertz_contact (d; k), viscoelasticity (t, force, d; g, tau),
-  contact_damping (force, d, d_dot; c)
+The catalogue is the registry: `catalogue.catalogue_rows()` lists each effect's link, inputs -> output,
+parameters and rules (docs/diagnosis.md's catalogue table is generated from it). Every module of this
+package is imported here, the named ones first (their order is the registry's), then any other, so a new
+effect's module registers it without an edit here.
 
 The pure math lives in module-level functions (capstan_out/capstan_in, tip2motor/motor2tip and their
 `_transitions` forms, backlash, cable_stretch, coulomb, viscous, stribeck, dahl, hysteresis_offset,
@@ -51,6 +40,9 @@ thermal_offset, linear_force, hertz_force, sls_force, damped_force). Stateful mo
 signals without Python loops (`scan.py`: compiled clamp loops for the play operators, prefix scans for
 first-order recurrences).
 """
+
+import importlib
+import pkgutil
 
 from teleop.core.physics.base import (CHANNELS, REGISTRY, Effect, LinkRecord, ParamSpec, Rules, Scale, Signals,
                                       Step, alike, chain, get_effect, register, unregister)
@@ -64,6 +56,9 @@ from teleop.core.physics.friction import coulomb, dahl, stribeck, viscous
 from teleop.core.physics.sensor_effects import hysteresis_offset, thermal_offset
 from teleop.core.physics.contact import damped_force, hertz_force, linear_force, sls_force
 from teleop.core.physics.fit import FitResult, fit, rmse
+
+for _module in pkgutil.iter_modules(__path__):   # a new effect's module registers it (see above)
+    importlib.import_module(f"{__name__}.{_module.name}")
 
 __all__ = [
     "CHANNELS", "REGISTRY", "Effect", "LinkRecord", "ParamSpec", "Rules", "Scale", "Signals", "Step", "alike",
