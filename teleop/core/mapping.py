@@ -7,7 +7,8 @@ released) the current stylus position and robot target are stored as anchors, an
 
 clamped to the robot's workspace box. Cable lengths follow from inverse kinematics at a fixed orientation and
 are then limited so that no cable leaves [l_min, l_max] and no cable moves more than v_max dt in one tick
-(the "sudden jump" hazard). Pure numpy; the loop holds the anchors.
+(the "sudden jump" hazard). The formulas are the kernels of teleop.core.kernels.mapping; this module is their
+numpy face. The loop holds the anchors.
 """
 
 from __future__ import annotations
@@ -18,8 +19,8 @@ import numpy as np
 
 from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry, _frozen
+from teleop.core.kernels import geometry as KG
 from teleop.core.kernels import mapping as KM
-from teleop.core.kinematics import pose2cables
 
 
 @dataclass(frozen=True)
@@ -67,43 +68,50 @@ class MappingParams:
 POKE_WORKSPACE_MAX = (0.005, 0.005, 0.012)
 
 
+def target_constants(params: MappingParams) -> np.ndarray:
+    """(15,) the target's constants of kernel mapping.target_position: s R_reg (rows), workspace min, max [m]."""
+    return np.array([*(params.motion_scale * params.R_reg).ravel(), *params.workspace_min, *params.workspace_max],
+                    dtype=float)
+
+
 def stylus2target(p_stylus, p_stylus_anchor, p_robot_anchor, params: MappingParams) -> np.ndarray:
-    """(3,) robot target position [m]: anchor + s R_reg (p - p_anchor), clamped to the workspace box."""
-    d = np.asarray(p_stylus, dtype=float) - p_stylus_anchor
-    p = p_robot_anchor + params.motion_scale * (params.R_reg @ d)
-    return np.minimum(np.maximum(p, params.workspace_min), params.workspace_max)
+    """(3,) robot target position [m]: anchor + s R_reg (p - p_anchor), clamped to the workspace box (kernel
+    mapping.target_position)."""
+    anchor = np.array([*p_stylus_anchor, *p_robot_anchor], dtype=float)
+    return np.array(KM.target_position(np.asarray(p_stylus, dtype=float), anchor, target_constants(params)))
 
 
 def platform_offsets(geom: Geometry, orientation) -> np.ndarray:
-    """(6, 3) R r_i - B_i for a fixed orientation [alpha, beta, gamma] (rad): lengths = |p + offsets|."""
-    return pose2cables(np.r_[0.0, 0.0, 0.0, np.asarray(orientation, dtype=float)], geom)
+    """(6, 6) per cable (R r_i - B_i, R r_i) [m] for a fixed orientation [alpha, beta, gamma] (rad) (kernel
+    geometry.platform_offsets): lengths = |p + offsets[:, :3]|."""
+    a, b, g = (float(v) for v in orientation)
+    return KG.platform_offsets(a, b, g, geom.r, geom.B, np.empty((len(geom.B), 6)))
 
 
 def position2lengths(p, offsets: np.ndarray) -> np.ndarray:
-    """(6,) cable lengths [m] of the end effector at position p (3,) with fixed-orientation `offsets` (6, 3).
+    """(6,) cable lengths [m] of the end effector at position p (3,) with fixed-orientation `offsets` (6, 6)
+    (`platform_offsets`; kernel geometry.lengths_at).
 
     Same as kinematics.pose2lengths for that orientation (eq 4-5), without rebuilding R every tick.
     """
     p = np.asarray(p, dtype=float)
-    return KM.position_lengths(float(p[0]), float(p[1]), float(p[2]), np.ascontiguousarray(offsets, dtype=float),
-                               np.empty(len(offsets)))
+    return KG.lengths_at(float(p[0]), float(p[1]), float(p[2]), np.ascontiguousarray(offsets, dtype=float),
+                         np.empty(len(offsets)))
 
 
 def limit_lengths(L_target, L_prev, geom: Geometry, dt: float) -> np.ndarray:
     """(6,) lengths inside [l_min, l_max] that move at most v_max dt from L_prev [m].
 
     The whole step is scaled by one factor so the cables keep moving together (the direction of motion is
-    kept); then every length is clipped to its limits.
+    kept); then every length is clipped to its limits (kernels mapping.clip_lengths, mapping.limit_step).
     """
-    L = np.minimum(np.maximum(np.asarray(L_target, dtype=float), geom.l_min), geom.l_max)
+    L = np.array(L_target, dtype=float)
     if L_prev is None:
+        KM.clip_lengths(L, L, geom.l_min, geom.l_max)
         return L
-    dL = L - L_prev
-    step = float(np.max(np.abs(dL)))
-    dmax = geom.v_max * dt
-    if step > dmax:
-        dL = dL * (dmax / step)
-    return np.minimum(np.maximum(L_prev + dL, geom.l_min), geom.l_max)
+    L_prev = np.asarray(L_prev, dtype=float)
+    KM.clip_lengths(L, L_prev, geom.l_min, geom.l_max)
+    return KM.limit_step(L_prev, L, geom.v_max * dt, geom.l_min, geom.l_max)
 
 
 def tilt_angle(orientation, R_reg_neutral=None) -> float:
@@ -137,17 +145,15 @@ class Follower:
 
     def __init__(self, params: MappingParams, geom: Geometry, dt: float):
         dmax = float(geom.v_max * dt)
-        self.c = np.array([*(params.motion_scale * params.R_reg).ravel(), *params.workspace_min,
-                           *params.workspace_max, dmax, geom.v_max * (dmax / geom.v_max), geom.l_min, geom.l_max],
-                          dtype=float)
-        self.offsets = np.ascontiguousarray(platform_offsets(geom, params.home[3:]))
+        self.c = np.r_[target_constants(params), dmax, geom.v_max * (dmax / geom.v_max), geom.l_min, geom.l_max]
+        self.offsets = platform_offsets(geom, params.home[3:])
         self.dmax = dmax
         self._p, self._anchor = np.zeros(3), np.zeros(6)
         self._pos, self._L = np.zeros(3), np.zeros(len(geom.B))
 
     def lengths(self, x: float, y: float, z: float) -> list:
         """Cable lengths [m] at position (x, y, z) [m] (`position2lengths` with the held orientation)."""
-        return KM.position_lengths(float(x), float(y), float(z), self.offsets, np.empty(len(self.offsets))).tolist()
+        return KG.lengths_at(float(x), float(y), float(z), self.offsets, np.empty(len(self.offsets))).tolist()
 
     def step_into(self, p: np.ndarray, anchor: np.ndarray, pos: np.ndarray, L: np.ndarray) -> None:
         """The step on float64 arrays: p (3,) stylus [m], anchor (6,) stylus and robot anchors [m]; pos (3,)

@@ -22,8 +22,8 @@ from teleop.core.direction import DirectionTracker
 from teleop.core.errors import InputError
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.sensor import (adc_round_loop, branch_lag_loop, conductance2counts_loop, conductance_loop,
+                                   counts2conductance, counts2conductance_loop, eq7_run, eq7_start, eq7_step,
                                    fbg_force_loop, fsr_counts, polynomial_loop)
-from teleop.core.physics.scan import clamp_scan
 
 G = 9.80665  # standard gravity [m/s^2], converts the seed's calibration weights to newtons
 LOADING, UNLOADING = 1, -1
@@ -149,9 +149,14 @@ class FsrCalibration:
         return tk[j - 1] + (tk[j] - tk[j - 1]) * (reading - g0) / (g1 - g0)
 
     def counts2conductance(self, counts) -> np.ndarray:
-        """Conductance [S] from ADC counts through the divider: G = c / ((adc_max - c) R)."""
-        c = np.clip(np.asarray(counts, dtype=float), 0.0, self.adc_max - 0.5)
-        return c / ((self.adc_max - c) * self.r_divider)
+        """Conductance [S] from ADC counts through the divider: G = c / ((adc_max - c) R), counts clipped to
+        [0, adc_max - 0.5] (kernel sensor.counts2conductance, array-broadcast)."""
+        return broadcast_call(counts2conductance_loop, counts, self.r_divider, self.adc_max)
+
+    def counts_tension1(self, counts: float, branch: int) -> float:
+        """Tension [N] of one float reading in ADC counts on `branch`: `tension1` of its conductance (kernel
+        sensor.counts2conductance; the per-tick form)."""
+        return self.tension1(counts2conductance(counts, float(self.r_divider), float(self.adc_max)), branch)
 
     def conductance2counts(self, g) -> np.ndarray:
         """ADC counts (float, unrounded) for conductance g [S]: adc_max G R / (1 + G R) (kernel
@@ -331,12 +336,7 @@ class FsrConverter:
         c = np.asarray(counts, dtype=float).tolist()
         d = self.tracker.update(c).tolist()
         cal = self.cal
-        top, R = cal.adc_max - 0.5, cal.r_divider
-        out = []
-        for ci, di in zip(c, d):
-            ci = 0.0 if ci < 0.0 else (top if ci > top else ci)  # counts2conductance
-            out.append(cal.tension1(ci / ((cal.adc_max - ci) * R), UNLOADING if di < 0 else LOADING))
-        return np.array(out)
+        return np.array([cal.counts_tension1(ci, UNLOADING if di < 0 else LOADING) for ci, di in zip(c, d)])
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -435,7 +435,8 @@ class ProximalDistalModel:
     """Proximal -> distal tension profile of a tendon-sheath (seed 001 eq 7, Fig 2b).
 
     Pulling line Fd = Kp Fp + bp, releasing line Fd = Kr Fp + br (Kp < Kr). Between the lines the distal
-    tension stays flat (the transition phases): Fd_k = clip(Fd_{k-1}, lower line, upper line), a play operator.
+    tension stays flat (the transition phases): Fd_k = clip(Fd_{k-1}, lower line, upper line), a play operator
+    (kernels sensor.eq7_step, eq7_start, eq7_run: `step`, `start` and `distal` are their faces).
 
     Attributes:
         Kp, Kr: pulling and releasing slopes dFd/dFp [-].
@@ -447,20 +448,22 @@ class ProximalDistalModel:
     bp: float = 0.0
     br: float = 0.0
 
-    def bounds(self, Fp) -> tuple[np.ndarray, np.ndarray]:
-        """(lower, upper) distal tension lines [N] at proximal tension Fp [N]."""
-        Fp = np.asarray(Fp, dtype=float)
-        a, b = self.Kp * Fp + self.bp, self.Kr * Fp + self.br
-        return np.minimum(a, b), np.maximum(a, b)
+    def start(self, Fp: float) -> float:
+        """Distal tension [N] of a first reading at proximal tension Fp [N]: on the lower line."""
+        return eq7_start(float(Fp), self.Kp, self.Kr, self.bp, self.br)
+
+    def step(self, Fd: float, Fp: float) -> float:
+        """Distal tension [N] after proximal tension Fp [N] from the previous distal tension Fd [N]."""
+        return eq7_step(float(Fd), float(Fp), self.Kp, self.Kr, self.bp, self.br)
 
     def distal(self, Fp, Fd0: float | None = None) -> np.ndarray:
-        """(n,) distal tension estimate [N] from a proximal tension series Fp (n,) [N].
+        """(n,) distal tension estimate [N] from a proximal tension series Fp (n,) [N]: `step` along Fp.
 
-        Fd0: the initial distal tension (default: on the pulling line at Fp[0]).
+        Fd0: the initial distal tension (default: `start` at Fp[0], on the lower line).
         """
-        lo, hi = self.bounds(Fp)
-        y0 = float(lo[0]) if Fd0 is None else float(Fd0)
-        return clamp_scan(y0, lo, hi)
+        Fp = np.ascontiguousarray(Fp, dtype=float)
+        return eq7_run(Fp, np.nan if Fd0 is None else float(Fd0), float(self.Kp), float(self.Kr), float(self.bp),
+                       float(self.br), np.empty(Fp.shape[0]))
 
 
 def fit_proximal_distal(Fp, Fd, min_step: float | None = None) -> ProximalDistalModel:

@@ -54,13 +54,8 @@ class ReadingEstimator:
         self.reset()
 
     def _tension1(self, v: float, branch: int) -> float:
-        """Tension [N] of `v` counts on `branch`: counts -> conductance through the divider (clipped to the ADC
-        range, as FsrCalibration.counts2conductance), then FsrCalibration.tension1."""
-        cal = self.cal
-        amax = float(cal.adc_max)
-        top = amax - 0.5
-        c = 0.0 if v < 0.0 else (top if v > top else v)
-        return cal.tension1(c / ((amax - c) * cal.r_divider), branch)
+        """Tension [N] of `v` counts on `branch` (FsrCalibration.counts_tension1)."""
+        return self.cal.counts_tension1(v, branch)
 
     def reset(self) -> None:
         # FSR reading direction per cable (+1 rising, -1 falling, 0 not yet moved), extreme since the last flip

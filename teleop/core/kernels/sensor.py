@@ -5,6 +5,7 @@
                       linalg.interp1)
     loading_conductance   the loading branch's conductance [S]: max(sum_j c_j u^j, 0)
     conductance2counts    the divider and ADC: adc_max G R / (1 + G R) [counts, unrounded]
+    counts2conductance    its inverse: G = c / ((adc_max - c) R), c clipped to [0, adc_max - 0.5]
     adc_round         rounded, clipped counts: clip(rint(c), 0, adc_max)
     polynomial_loop, conductance_loop, adc_round_loop   element-wise forms (FsrCalibration, the simulated robot)
     fsr_counts        one reading of n FSRs: tensions at the FSRs -> lag -> conductance -> counts + noise
@@ -39,6 +40,15 @@ def conductance2counts(g, r_divider, adc_max):
     adc_max G R / (1 + G R), G clipped at 0."""
     gr = max(g, 0.0) * r_divider
     return adc_max * gr / (1.0 + gr)
+
+
+@njit
+def counts2conductance(c, r_divider, adc_max):
+    """Conductance [S] from ADC counts c through the divider r_divider [ohm]: G = c / ((adc_max - c) R), c
+    clipped to [0, adc_max - 0.5] (the inverse of conductance2counts)."""
+    top = adc_max - 0.5
+    c = 0.0 if c < 0.0 else (top if c > top else c)
+    return c / ((adc_max - c) * r_divider)
 
 
 @njit
@@ -77,6 +87,14 @@ def conductance2counts_loop(g, r_divider, adc_max, out):
     """conductance2counts element-wise (1-D arrays of one length, jit.broadcast_call)."""
     for k in range(g.shape[0]):
         out[k] = conductance2counts(g[k], r_divider[k], adc_max[k])
+    return out
+
+
+@njit
+def counts2conductance_loop(c, r_divider, adc_max, out):
+    """counts2conductance element-wise (1-D arrays of one length, jit.broadcast_call)."""
+    for k in range(c.shape[0]):
+        out[k] = counts2conductance(c[k], r_divider[k], adc_max[k])
     return out
 
 
@@ -137,6 +155,25 @@ def eq7_step(fd, fp, Kp, Kr, bp, br):
 
 
 @njit
+def eq7_start(fp, Kp, Kr, bp, br):
+    """Distal tension [N] of a first reading at proximal tension fp [N] (seed 001 eq 7): on the lower line."""
+    return min(Kp * fp + bp, Kr * fp + br)
+
+
+@njit
+def eq7_run(fp, fd0, Kp, Kr, bp, br, out):
+    """out (n,): eq7_step along the proximal tensions fp (n,) [N] from the distal tension fd0 [N] (NaN:
+    eq7_start at fp[0])."""
+    fd = fd0
+    for k in range(fp.shape[0]):
+        if fd != fd:
+            fd = eq7_start(fp[k], Kp, Kr, bp, br)
+        fd = eq7_step(fd, fp[k], Kp, Kr, bp, br)
+        out[k] = fd
+    return out
+
+
+@njit
 def fbg_row(dl, r, S, out):
     """out (n,) [N] = fbg_force of each column of dl (2, n) [pm] (NaN where a cable has no FBG)."""
     for i in range(dl.shape[1]):
@@ -150,7 +187,7 @@ def one_sensor_row(fp, fd, Kp, Kr, bp, br, dl, cable, r, S, out):
     `cable` its own FBG's fbg_force of dl (2, n) [pm]."""
     for i in range(fp.shape[0]):
         if fd[i] != fd[i]:
-            fd[i] = min(Kp * fp[i] + bp, Kr * fp[i] + br)
+            fd[i] = eq7_start(fp[i], Kp, Kr, bp, br)
         else:
             fd[i] = eq7_step(fd[i], fp[i], Kp, Kr, bp, br)
         out[i] = fd[i]
