@@ -14,8 +14,9 @@ temperature sensitivities kT1, kT2 [pm/degC] and their ratio r = kT2 / kT1 (eq 3
 seed states it (loading - unloading gap 2H over the full-scale output S F_max [%], and 2H / S [N]), the
 RMSE of dl2 [pm], that of the compensated shift dl2 - r dl1 [pm] and the force error it means, / S [N]
 (seed: 12.59 pm, 0.37 N). Standard errors
-from cov = s^2 (X^T X)^-1 per equation; r's by the delta method. Samples of a hold are not independent
-draws of everything (the load cell's own error is shared), so the errors are a floor, not a bound.
+from cov = s^2 (X^T X)^-1 per equation (teleop.core.fit_statistics); r's by the delta method. Samples of
+a hold are not independent draws of everything (the load cell's own error is shared), so the errors are a
+floor, not a bound.
 
 The loading state s is the catalogue's sensor-hysteresis switch (teleop.core.physics.hysteresis_offset with
 h = 1) applied to the reference force, its half-width five times the force noise (so noise does not flip
@@ -30,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from teleop.core.errors import InputError
+from teleop.core.fit_statistics import parameter_covariance, residual_variance
 from teleop.core.physics import hysteresis_offset
 from teleop.core.sensors import FbgParams
 
@@ -92,8 +94,7 @@ def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     """(beta, cov, residual) of y ~ X beta."""
     beta, *_ = np.linalg.lstsq(X, y, rcond=None)
     r = y - X @ beta
-    dof = max(X.shape[0] - X.shape[1], 1)
-    cov = float(r @ r) / dof * np.linalg.pinv(X.T @ X)
+    cov = parameter_covariance(X, residual_variance(r, X.shape[1]))
     return beta, cov, r
 
 

@@ -7,8 +7,8 @@ rows' order tells it (a row above the previous one is loading, below it unloadin
 
 The quintics are fitted by `teleop.core.sensors.fit_fsr_calibration` (the one home of that fit); this module
 adds what a calibration report needs: the coefficients' standard errors (ordinary least squares,
-cov = s^2 (V^T V)^-1 with V the power-basis Vandermonde matrix), the residuals, and their size in newtons
-(residual / local slope dG/dt).
+cov = s^2 (V^T V)^-1 with V the power-basis Vandermonde matrix, teleop.core.fit_statistics), the residuals,
+and their size in newtons (residual / local slope dG/dt).
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 from numpy.polynomial import polynomial as P
 
+from teleop.core.fit_statistics import parameter_covariance, residual_variance, standard_errors
 from teleop.core.sensors import LOADING, UNLOADING, FsrCalibration, FsrCalibrationData, fit_fsr_calibration
 
 BRANCH_WORDS = {"loading": LOADING, "unloading": UNLOADING, "+1": LOADING, "1": LOADING, "-1": UNLOADING}
@@ -71,10 +72,8 @@ def fit_fsr(data: FsrCalibrationData, degree: int = 5) -> FsrFit:
         m = data.branch == br
         t, r = data.tension[m], residual[m]
         V = P.polyvander(t, degree)
-        dof = max(int(m.sum()) - (degree + 1), 1)
-        s2 = float(r @ r) / dof
-        cov = s2 * np.linalg.pinv(V.T @ V)
-        stderr[name] = tuple(np.sqrt(np.clip(np.diag(cov), 0, None)).tolist())
+        cov = parameter_covariance(V, residual_variance(r, degree + 1))
+        stderr[name] = tuple(standard_errors(cov).tolist())
         rms_S[name] = float(np.sqrt(np.mean(r ** 2)))
         coefs = cal.loading if br == LOADING else cal.unloading
         slope = np.abs(P.polyval(t, P.polyder(coefs)))

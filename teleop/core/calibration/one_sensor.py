@@ -4,11 +4,11 @@ instrumented cable, from its proximal (motor) and distal (tip) force.
 The recording is interchange CSV (docs/formats.md) with `motor_force_N` and `tip_force_N` (or N m), or any
 layout through a column map (`--map`, e.g. the shipped `mrdlab`). The fit is
 `teleop.core.sensors.fit_proximal_distal` (line fits of the pulling and releasing phases, then least squares
-of the play-operator prediction); this module adds standard errors (cov = s^2 (J^T J)^-1, J by central
-differences of the same prediction) and the transition widths: at a distal force Fd the motor must change
-its force by w(Fd) = |(Fd - bp) / Kp - (Fd - br) / Kr| while the tip stays put (the flat phases of seed 001
-Fig 2b), reported at the record's top and bottom turns. Successive samples of a recording are correlated,
-so the standard errors are a floor.
+of the play-operator prediction); this module adds standard errors (teleop.core.fit_statistics:
+cov = s^2 (J^T J)^-1, J by central differences of the same prediction) and the transition widths: at a
+distal force Fd the motor must change its force by w(Fd) = |(Fd - bp) / Kp - (Fd - br) / Kr| while the tip
+stays put (the flat phases of seed 001 Fig 2b), reported at the record's top and bottom turns. Successive
+samples of a recording are correlated, so the standard errors are a floor.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from teleop.core.errors import InputError
+from teleop.core.fit_statistics import parameter_covariance, residual_variance, standard_errors
 from teleop.core.sensors import ProximalDistalModel, fit_proximal_distal
 
 NAMES = ("Kp", "Kr", "bp", "br")
@@ -72,9 +73,8 @@ def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
     steps = np.array([1e-6, 1e-6, 1e-6 * scale, 1e-6 * scale]) * np.maximum(1.0, np.abs(z))
     J = np.column_stack([(predict(z + h * e) - predict(z - h * e)) / (2 * h)
                          for h, e in zip(steps, np.eye(4))])
-    s2 = float(r @ r) / max(r.size - 4, 1)
-    cov = s2 * np.linalg.pinv(J.T @ J)
-    stderr = dict(zip(NAMES, np.sqrt(np.clip(np.diag(cov), 0, None)).tolist()))
+    cov = parameter_covariance(J, residual_variance(r, len(NAMES)))
+    stderr = dict(zip(NAMES, standard_errors(cov).tolist()))
     widths = {}
     for name, level in (("top", float(np.max(Fd))), ("bottom", float(np.min(Fd)))):
         w = float(transition_width(model, level))
