@@ -168,12 +168,12 @@ def lengths2poses(L, geom: Geometry, guess=None, iters: int = 12, tol: float = 1
 
 def pose_terms_batch(poses, geom: Geometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """((n, 6, 6) structure matrices A (eq 8), (n, 6) wraps Theta = theta (eq 6) + theta0 [rad], (n, 3) tool
-    offsets R tip [m]) for (n, 6) poses (kernel sim.pose_terms)."""
+    offsets R tip [m]) for (n, 6) poses (kernel sim.pose_terms_loop over sim.pose_terms)."""
     q = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, dtype=float)))
     m, c = len(q), len(geom.B)
     A, theta, tip = np.empty((m, 6, c)), np.empty((m, c)), np.empty((m, 3))
-    KS.pose_terms_batch(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
-                        np.asarray(geom.tip, dtype=float), A, theta, tip)
+    KS.pose_terms_loop(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
+                       np.asarray(geom.tip, dtype=float), A, theta, tip)
     return A, theta, tip
 
 

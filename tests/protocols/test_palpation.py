@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from teleop.apps.cli import main
-from teleop.apps.protocols.palpation import (ESTIMATORS, PalpationParams, Poke, line, load_depth, plan_pokes, reach_scale,
-                                        run_test, sessions_for, stiffness_extras, stroke, summarise, load_response, SEED_TABLE1)
+from teleop.apps.protocols.palpation import (ESTIMATORS, PalpationParams, PlannedPoke, line, load_depth, plan_pokes,
+                                             reach_scale, run_test, sessions_for, stiffness_extras, stroke, summarise,
+                                             load_response, SEED_TABLE1)
 
 # short runs: 2 mm/s pokes and a 3 mm turn-compensation run (the CLI defaults are the seed's 0.5 mm/s)
 QUICK = dataclasses.replace(PalpationParams(), fit_dynamic=False, speed=2e-3, fit_cycles=2, fit_travel=0.003)
@@ -32,12 +33,12 @@ def test_variable_stroke_reverses_and_arrives():
 
 
 def test_plan_deepest_points_are_at_depth():
-    pokes = [Poke("a", (0.001, 0.0)), Poke("b", (-0.002, 0.001))]
+    pokes = [PlannedPoke("a", (0.001, 0.0)), PlannedPoke("b", (-0.002, 0.001))]
     p = PalpationParams()
     plan = plan_pokes(pokes, 0.0235, [0, 0, 0.02], p, 0.004, "uniform", 0.01, np.random.default_rng(0))
     for k, pk in zip(plan.deepest, pokes):
         assert np.allclose(plan.tips[k], [pk.xy[0], pk.xy[1], 0.0275])
-    assert reach_scale(pokes, 0.006) == 1.0 and reach_scale([Poke("c", (0.012, 0.0))], 0.006) == 0.5
+    assert reach_scale(pokes, 0.006) == 1.0 and reach_scale([PlannedPoke("c", (0.012, 0.0))], 0.006) == 0.5
 
 
 def test_stiffness_pokes_go_to_table1_loads():

@@ -42,7 +42,7 @@ KIND = "diagnose"
 
 
 @dataclass(frozen=True)
-class Recording:
+class RecordingEntry:
     """One file to diagnose: absolute path, SHA-256 of its bytes, column map (None: interchange CSV;
     else a shipped name or an absolute .toml path), holdout fraction, the baseline's catalogue effects
     (teleop.diagnosis.diagnose.baseline_effects) and whether the PySINDy peer is scored too."""
@@ -64,7 +64,7 @@ def _digest(path: Path) -> str:
 
 
 def parse(doc: dict, where: str, base_dir: Path) -> tuple:
-    """The [[recordings]] tables of the file `where`: a tuple of Recording, in glob order, each file once."""
+    """The [[recordings]] tables of the file `where`: a tuple of RecordingEntry, in glob order, each file once."""
     check_keys(doc, ("recordings",), where)
     groups = doc.get("recordings")
     if not isinstance(groups, list) or not groups or not all(isinstance(g, dict) for g in groups):
@@ -113,7 +113,7 @@ def parse(doc: dict, where: str, base_dir: Path) -> tuple:
             for f in files:
                 if str(f) not in seen:
                     seen.add(str(f))
-                    out.append(Recording(str(f), _digest(f), cmap, holdout, tuple(baseline), sindy))
+                    out.append(RecordingEntry(str(f), _digest(f), cmap, holdout, tuple(baseline), sindy))
     return tuple(out)
 
 

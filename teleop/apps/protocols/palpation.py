@@ -120,7 +120,7 @@ class PalpationParams:
 
 
 @dataclass(frozen=True)
-class Poke:
+class PlannedPoke:
     """One poke: `label` (region, point or cell), `xy` in the pad frame [m], direction "+z", "+x", ...;
     `depth` [m] past the surface overrides the session's depth when given."""
 
@@ -275,17 +275,17 @@ def sessions_for(test: str, p: PalpationParams, limit: int | None = None, tip_st
     if test == "stiffness":
         pad = pads.three_region_pad()
         loads = dict(p.stiffness_loads)
-        pokes = [Poke(lab, pad.points[lab], "+z", r, load_depth(pad, pad.points[lab], loads[lab], tip_stiffness,
+        pokes = [PlannedPoke(lab, pad.points[lab], "+z", r, load_depth(pad, pad.points[lab], loads[lab], tip_stiffness,
                                                                  tip_radius))
                  for lab in ("black", "red", "yellow") for r in range(p.pokes_per_region)]
         out = [Session("stiffness3", pad, pokes, 0.0, (2,))]
     elif test == "z":
         pad = pads.z_test_pad()
-        pokes = [Poke(lab, xy, "+z", r) for r in range(p.repeats_z) for lab, xy in pad.points.items()]
+        pokes = [PlannedPoke(lab, xy, "+z", r) for r in range(p.repeats_z) for lab, xy in pad.points.items()]
         out = [Session("z60", pad, pokes, p.depth_z, (2,))]
     elif test == "xy":
         pad = pads.hole_pad()
-        pokes = [Poke(d, (0.0, 0.0), d, r) for pair in (("+x", "-x"), ("+y", "-y")) for r in range(p.pokes_xy)
+        pokes = [PlannedPoke(d, (0.0, 0.0), d, r) for pair in (("+x", "-x"), ("+y", "-y")) for r in range(p.pokes_xy)
                  for d in pair]
         out = [Session("hole27", pad, pokes, p.depth_xy, (0, 1, 2))]
     elif test == "scan":
@@ -296,7 +296,7 @@ def sessions_for(test: str, p: PalpationParams, limit: int | None = None, tip_st
             pokes = []
             for r in range(grid.shape[0]):
                 cols = range(grid.shape[1]) if r % 2 == 0 else reversed(range(grid.shape[1]))  # serpentine
-                pokes += [Poke(f"r{r}c{c}", (float(grid[r, c, 0]), float(grid[r, c, 1])), "+z", 0) for c in cols]
+                pokes += [PlannedPoke(f"r{r}c{c}", (float(grid[r, c, 0]), float(grid[r, c, 1])), "+z", 0) for c in cols]
             out.append(Session(f"letter_{letter}", pad, pokes, p.depth_scan, (2,)))
     else:
         raise InputError(f"unknown palpation test '{test}' (expected one of: {', '.join(TESTS)})")

@@ -23,7 +23,7 @@ from teleop.core.estimation.estimators import DynamicParams
 from teleop.core.estimation.tick import TickComputer
 from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation
 from teleop.core.geometry import Geometry
-from teleop.core.kernels.estimate import fsr_tensions
+from teleop.core.kernels.estimate import counts_tensions
 from teleop.core.sensors import LOADING, UNLOADING, FsrCalibration, default_fsr_calibration
 
 
@@ -67,16 +67,16 @@ class ReadingEstimator:
         """Tensions [N] (the estimator's (n,) buffer) from raw FSR counts (n,) float64; updates the branch state.
 
         The numbers of teleop.core.sensors.FsrConverter.update: a Schmitt trigger on the counts picks the loading or
-        unloading branch (teleop.core.kernels.estimate.fsr_tensions); an integer count looks its tension up in the
+        unloading branch (teleop.core.kernels.estimate.counts_tensions); an integer count looks its tension up in the
         table, any other goes through counts -> conductance -> FsrCalibration.tension1.
         """
         t = self._t
-        if fsr_tensions(counts, self._fsr, self.deadband_counts, self._table, t):
+        if counts_tensions(counts, self._fsr, self.deadband_counts, self._table, t):
             self._off_table(counts, t)
         return t
 
     def _off_table(self, counts: np.ndarray, t: np.ndarray) -> None:
-        """The tensions fsr_tensions left NaN (counts off the table) by the per-float conversion, on the branch
+        """The tensions counts_tensions left NaN (counts off the table) by the per-float conversion, on the branch
         it chose."""
         for i in np.flatnonzero(np.isnan(t)):
             t[i] = self._tension1(float(counts[i]), UNLOADING if self._fsr[0, i] < 0.0 else LOADING)

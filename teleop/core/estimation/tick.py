@@ -39,7 +39,7 @@ from teleop.core.rendering import Renderer
 # the compensation step of each estimator (everything else is shared: teleop.core.kernels.estimate)
 ESTIMATE_KERNELS = {"non_compensated": K.estimate_non_compensated, "single": K.estimate_capstan,
                     "double": K.estimate_capstan, "dynamic": K.estimate_dynamic}
-# the loop's estimator behind teleop.core.kernels.estimate.fsr_tensions in one call (ReadingEstimator.update_arrays;
+# the loop's estimator behind teleop.core.kernels.estimate.counts_tensions in one call (ReadingEstimator.update_arrays;
 # the others make the two calls)
 COUNTS_KERNELS = {"dynamic": K.counts_dynamic}
 

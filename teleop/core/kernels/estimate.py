@@ -162,7 +162,7 @@ def direction_update(d, e, flipped, values, deadband):
 
 
 @njit
-def fsr_tensions(counts, st, deadband, table, out):
+def counts_tensions(counts, st, deadband, table, out):
     """FSR tensions [N] (out (n,)) from raw counts (n,): the Schmitt trigger on the counts (st (2, n):
     direction, extreme) picks the branch (falling: unloading, row 1 of `table`; else loading, row 0), and
     an integer count in the table's range looks its tension up. Other counts are left NaN for the caller's
@@ -183,12 +183,12 @@ def fsr_tensions(counts, st, deadband, table, out):
 
 @njit
 def counts_dynamic(counts, fsr, deadband, table, t, pose, dt, cab, c, st, kf, turn, coefs, out):
-    """One tick of the `dynamic` estimator (the loop's) from raw FSR counts in one compiled call: fsr_tensions
+    """One tick of the `dynamic` estimator (the loop's) from raw FSR counts in one compiled call: counts_tensions
     (counts, its state fsr, dead band, table -> t), then estimate_dynamic (one call instead of two: every
     kernel call pays for its argument handling). Counts may be int64 (a
-    robot's ADC) or float64. Returns fsr_tensions' count of tensions left NaN (then nothing is estimated: the
+    robot's ADC) or float64. Returns counts_tensions' count of tensions left NaN (then nothing is estimated: the
     caller converts those counts and calls estimate_dynamic itself)."""
-    missing = fsr_tensions(counts, fsr, deadband, table, t)
+    missing = counts_tensions(counts, fsr, deadband, table, t)
     if missing == 0:
         estimate_dynamic(pose, t, dt, cab, c, st, kf, turn, coefs, out)
     return missing

@@ -41,7 +41,7 @@ def pose_terms(q, r, B, v, theta0, tip, off, A, theta, tip_off):
 
 
 @njit
-def pose_terms_batch(q, r, B, v, theta0, tip, A, theta, tip_off):
+def pose_terms_loop(q, r, B, v, theta0, tip, A, theta, tip_off):
     """pose_terms for poses q (m, 6): A (m, 6, n), theta (m, n), tip_off (m, 3)."""
     off = np.empty((r.shape[0], 6))
     for k in range(q.shape[0]):
