@@ -177,8 +177,8 @@ class Teleop:
     def follow(self, x) -> np.ndarray:
         """ENABLED: stylus -> target -> lengths, step-limited to v_max dt and clipped to the length limits.
 
-        teleop.core.mapping.Follower.step_into (kernel mapping.follow_step): the math of teleop.core.mapping.stylus2target /
-        position2lengths / limit_lengths, compiled (this runs every tick).
+        teleop.core.mapping.Follower.step_into (kernel mapping.follow_step, built from the kernels that
+        teleop.core.mapping.stylus2target / position2lengths / limit_lengths call; this runs every tick).
         """
         # the anchors where anchor() wrote them; the pose's position, a view: the kernel reads the previous
         # target there and writes the new one
