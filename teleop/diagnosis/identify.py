@@ -92,9 +92,9 @@ def robust_rms(r: np.ndarray) -> float:
     """RMS of r with Huber's loss: samples within HUBER robust standard deviations (1.4826 MAD) count
     squared, those beyond linearly. The fit part's score for the information criterion and for picking
     among starts: a real recording carries events no model explains (the MRDLab rig switching its
-    reaction torque on 0.5 s into each run holds 28-43 % of the fit part's squared residual), and a
-    plain RMS lets them decide between models that differ everywhere else. Equal to `rms` for residuals
-    without such events (Gaussian noise: within 0.5 %)."""
+    reaction torque on 0.5 s into each run holds a large share of the fit part's squared residual), and a
+    plain RMS lets them decide between models that differ everywhere else. Close to `rms` for residuals
+    without such events (Gaussian noise)."""
     if not r.size:
         return math.nan
     c = HUBER * 1.4826 * float(np.median(np.abs(r - np.median(r))))
@@ -389,7 +389,7 @@ def _general_baseline(d: LinkData, base: Fit, steps: tuple, current: Fit, fit_id
     with sharp transitions is the same law as a Coulomb friction beside it, and then the catalogue's name
     stands). It is not added on top of them: beside another friction it absorbs what the recording does
     not carry (the session's Coulomb cable without its bend column, whose wrap varies with the pose: a
-    pretension paid x1.65 there)."""
+    pretension paid there)."""
     alone = general_form(d, base, list(base.names), fit_idx, hold_idx, seed)
     if alone is base or not generalised(base, alone) or not _pays(alone, base):
         return steps, current

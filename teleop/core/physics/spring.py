@@ -13,9 +13,9 @@ Where it comes from: anything elastic that the drive deforms in parallel with th
 sensor: a return spring, the other cable pairs of a wrist that the drive's pulley stretches, a flexure or a
 cable harness between the drive and the frame. On the MRDLab da Vinci instrument the spindle's torque carries
 the same restoring torque over the stroke at 10 % and 40 % reaction torque (the band centres of the two load
-levels differ by 1.04 x the jaw torque at every spindle angle), about 16 mN m/rad; at 40 %, where the jaw
-torque follows the angle and the gain takes the linear part, its curvature shows (g about 0.1 N m/rad^2 on
-run 23; it grows with the load, which a spring's would not: docs/diagnosis.md).
+levels differ by the jaw torque difference at every spindle angle); at 40 %, where the jaw torque follows
+the angle and the gain takes the linear part, its curvature shows, and it grows with the load, which a
+spring's would not (docs/diagnosis.md).
 """
 
 from __future__ import annotations
