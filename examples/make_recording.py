@@ -4,7 +4,7 @@
 
 - recording.csv: a 10 s, 200 Hz single-cable rig recording in the interchange format (docs/formats.md),
   simulated by teleop.diagnosis.generator (case 0 of seed 0) with one effect the diagnosis tool is meant to
-  find: backlash between motor and tip (play 1.66 mm).
+  find: backlash between motor and tip (play 2.33 mm).
 - rig_raw.txt: the same samples as a rig's data logger might write them (semicolons, no header, time in
   ms, encoder counts, force in ADC counts), read through column_map.toml.
 """
