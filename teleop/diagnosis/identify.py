@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from teleop.core.fit_statistics import parameter_covariance, residual_variance
 from teleop.core.physics.links import (LinkData, LinkModel, effect_signals, fast_replace, is_contact_law,
                                       predict)
 from teleop.diagnosis.links import fit_baseline
@@ -240,10 +241,8 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
     r_fit = r_all[fit_idx]
     n_eff = effective_n(best.fun)
     # standard errors: cov = s^2 (J^T J)^-1 inflated by n / n_eff for correlated residuals
-    J = best.jac
     m = best.fun.size
-    s2 = float(np.dot(best.fun, best.fun)) / max(m - best.x.size, 1) * (m / n_eff)
-    cov = np.linalg.pinv(J.T @ J) * s2
+    cov = parameter_covariance(best.jac, residual_variance(best.fun, best.x.size) * (m / n_eff))
     stderr = {n: {} for n, _ in model.effects}
     for j, (i, spec) in enumerate(layout):
         name, p = model.effects[i]

@@ -93,6 +93,14 @@ def capstan_band(f, mu_theta):
 
 
 @njit
+def capstan_band_loop(f, mu_theta, lo, hi):
+    """capstan_band element-wise: lo, hi (n,) [N] for forces f (n,) [N] and mu Theta (n,) (1-D arrays of one
+    length)."""
+    for k in range(f.shape[0]):
+        lo[k], hi[k] = capstan_band(f[k], mu_theta[k])
+
+
+@njit
 def capstan_play_step(f, dx, F_tip, mu_theta, k):
     """Motor force [N] after a motor travel dx [m] from f [N]: clamp(f + k dx) into the band of the tip force
     F_tip [N], k [N/m]."""

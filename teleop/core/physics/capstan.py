@@ -20,7 +20,8 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.kernels.sheath import STIFF_STICK_K, Sheath, capstan_tip_run, motor_force, motor_force_run, new_state
+from teleop.core.kernels.sheath import (STIFF_STICK_K, Sheath, capstan_band_loop, capstan_tip_run, motor_force,
+                                        motor_force_run, new_state)
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.ufuncs import hold_loop, tip_loop
 from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
@@ -62,9 +63,14 @@ def motor2tip(F_motor, mu, theta, pulling):
 
 
 def capstan_band(F_tip, mu, theta):
-    """(lo, hi) motor forces reachable for tip force F_tip: the releasing and pulling lines, lo <= hi."""
-    a, b = motor2tip(F_tip, mu, theta, True), motor2tip(F_tip, mu, theta, False)  # F e^-mu theta, F e^+mu theta
-    return np.minimum(a, b), np.maximum(a, b)
+    """(lo, hi) motor forces reachable for tip force F_tip: the releasing and pulling lines F e^-mu theta and
+    F e^+mu theta, lo <= hi (kernel sheath.capstan_band, the band the sheath's motor force is clamped into),
+    array-broadcast."""
+    f, mt = np.broadcast_arrays(np.asarray(F_tip, dtype=float), _mu_theta(mu, theta))
+    flat_f, flat_mt = np.ascontiguousarray(f).reshape(-1), np.ascontiguousarray(mt).reshape(-1)
+    lo, hi = np.empty(flat_f.shape[0]), np.empty(flat_f.shape[0])
+    capstan_band_loop(flat_f, flat_mt, lo, hi)
+    return lo.reshape(f.shape), hi.reshape(f.shape)
 
 
 def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):

@@ -3,7 +3,7 @@
 Free parameters are mapped to [0, 1] (linearly, or in log for `ParamSpec.log`), so one bounded problem
 fits any effect; several starts (the data-driven guess, then seeded perturbations of it) guard against
 bad initial guesses, and the lowest cost wins. Standard errors come from the Jacobian at the optimum:
-cov = s^2 (J^T J)^-1, s^2 = SSR / (m - p), mapped back through d value / d u.
+cov = s^2 (J^T J)^-1 (teleop.core.fit_statistics), s^2 = SSR / (m - p), mapped back through d value / d u.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from teleop.core.errors import InputError
+from teleop.core.fit_statistics import parameter_covariance
 from teleop.core.physics.base import Effect, Signals, get_effect
 
 
@@ -124,11 +125,10 @@ def fit(effect: Effect | str, signals: Signals, y, fixed: Mapping[str, float] | 
             best = res
 
     p = effect.check(unpack(best.x))
-    J = best.jac
     dof = max(m - len(free), 1)
     s2 = 2.0 * best.cost * scale * scale / dof
     # cov_u = s^2 (J^T J)^-1 with J in residual-units of y / scale
-    cov_u = np.linalg.pinv(J.T @ J) * s2 / (scale * scale)
+    cov_u = parameter_covariance(best.jac, s2) / (scale * scale)
     stderr = {k: 0.0 for k in p}
     for i, spec in enumerate(free):
         stderr[spec.name] = float(abs(spec.dvalue_du(p[spec.name])) * np.sqrt(max(cov_u[i, i], 0.0)))
