@@ -12,7 +12,10 @@ the loop's tick all call these):
 - kalman.py     the steady-state Kalman update
 - estimate.py   the per-tick estimate of each estimator (one compiled call), turn correction, FSR branch
                 lookup
-- mapping.py    the stylus -> robot target -> cable length step (motion scale, workspace box, cable speed)
+- mapping.py    the stylus -> robot target -> cable length step (motion scale, workspace box, length clip,
+                cable speed limit)
+- sensor.py     the FSR reading chain (branch lag, conductance, the divider and its inverse, ADC), the FBG's
+                eq 3 and the one-sensor model (seed 001 eq 7: its step, start and run)
 - render.py     the force rendering: frame map, engage rule, ramp-in, passivity observer, norm clamp
 - sim.py        the simulated robot's per-reading cable physics (pose terms, tension distribution, capstan)
 - linalg.py     6 x 6 elimination (LU with complete pivoting, null vector, small solves) and Horner's rule
