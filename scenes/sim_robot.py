@@ -14,6 +14,8 @@ One reading = `substeps` physics steps of dt. Per reading:
 With `backlash` (URL `backlash_mm=W`) each cable's motor-to-cable transmission has play: the realized
 lengths are the play operator (teleop.core.physics backlash) of the commanded ones, cable by cable, and the pose
 is their least-squares forward kinematics (the elastic equilibrium of six equally stiff taut cables).
+With `cable` (URL `plant=distributed`) the distributed tendon-sheath cable (scenes.tendon_sheath) takes the
+lumped sheath's place in every cable, and the FSRs and FBGs read its element tensions (DistributedCables).
 The batch path `run(lengths)` does the same with the array forms of those models (fast); `read()` uses
 their per-sample Step forms; both give the same counts for the same seed (tested).
 """
@@ -29,8 +31,10 @@ from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes import pads as pads_mod
 from scenes.pads import Pad, z_test_pad
 from scenes.pose_follow import PoseFollower
+from scenes.rich_plant import PLANTS as RICH_PLANTS
 from scenes.rich_plant import RichPlant, RichPlantParams, plant_params, with_plant
-from scenes.sim_sensors import FbgArray, fbg_cables
+from scenes.sim_sensors import FBG_FROM_END_M, FbgArray, fbg_cables
+from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams
 from scenes.world import PadWorld, WorldParams
 from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry, default_geometry
@@ -85,6 +89,8 @@ class SimRobotParams:
         plant: effects the estimators do not model, switched on in every cable (scenes.rich_plant
             RichPlantParams: Stribeck, Dahl, guide pulley, FSR creep; with the motor play `backlash` the
             sheath's friction travels with the realized lengths); None: the matched plant.
+        cable: the distributed tendon-sheath cable (scenes.tendon_sheath) in every cable in place of the lumped
+            sheath (`DistributedCables`; URL `plant=distributed`); None: the lumped sheath.
         capstan_k: stick stiffness of the capstan transition at reversals [N/m] (default the seed robot's,
             Sheath.stick_k, where its source is given; the catalogue's stiffer default,
             sheath.STIFF_STICK_K, would reduce the seed's turn transitions to blips).
@@ -105,6 +111,7 @@ class SimRobotParams:
     tip_stiffness: float | None = 1.0e4
     ee_damping_ratio: float = 0.7
     plant: RichPlantParams | None = None
+    cable: TendonSheathParams | None = None
     capstan_k: float = SH.Sheath.stick_k
     noise_counts: float = 1.0
     backlash: float = 0.0
@@ -120,6 +127,9 @@ class SimRobotParams:
         if self.tip_stiffness is not None and self.tip_stiffness <= 0:
             raise InputError("sim robot: tip_stiffness must be > 0 (or None for a rigid tip)")
         fbg_cables(self.sensor, len(g.B), self.fbg_cable)  # a known kind and cable (one-line InputError)
+        if self.cable is not None and self.plant is not None:
+            raise InputError("sim robot: the distributed cable (cable) and the rich plant (plant) are two plants; "
+                             "choose one")
 
     @property
     def dt(self) -> float:
@@ -308,6 +318,7 @@ class SimRobot(ContextDevice):
         self._no_noise = np.zeros((1, n))
         self._added = _AddedEffects(self.model, n) if self.model is not None else None
         self._rich = RichPlant(p.plant, n) if p.plant is not None else None
+        self._cables = DistributedCables(p.cable, n, p.pretension, p.dt) if p.cable is not None else None
         self.is_open = True
 
     def close(self) -> None:
@@ -377,7 +388,8 @@ class SimRobot(ContextDevice):
         t_tip, t_fsr, f, steps, counts = np.empty(n), np.empty(n), np.empty(6), np.empty(n, np.int64), \
             np.empty(n, np.int64)
         noise, k = self._noise_row()  # this reading's ADC noise [counts]: noise[k]
-        direct = self._added is None and self._rich is None  # nothing acts between the cable and its FSR
+        # nothing acts between the lumped sheath and its FSR
+        direct = self._added is None and self._rich is None and self._cables is None
         # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable chain
         # and, when direct, the FSRs (lag, conductance, ADC: FsrBranchLag.counts)
         status = KS.reading_counts(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
@@ -386,19 +398,24 @@ class SimRobot(ContextDevice):
             # not the one-dimensional null space, or infeasible: teleop.core.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
             SH.motor_forces(self._cap, x, t_tip, self._theta, self._kc, t_fsr)
+        t_fbg, extras = t_tip, {}
+        if self._cables is not None:  # the distributed cable in place of the lumped sheath
+            x_d = self.L_home - (self.L_cmd if self._play is None else self._L_real)
+            t_fsr, t_fbg, t_motor = self._cables.step(x_d, t_tip, self._theta - g.theta0)
+            extras["t_motor"] = t_motor
         if self._added is not None:
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + p.dt])[0]
         if not direct or status != KT.OK:
             counts = self._lag.counts(t_fsr, noise[k])  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
-        fbg = None if self._fbg is None else self._fbg.read(t_tip, self.t + p.dt)  # distal FBGs (sim_sensors)
+        fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + p.dt)  # distal FBGs (sim_sensors)
         self.t += p.dt
         self.seq += 1
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
                             boot_id=self.boot_id, wrench_truth=f, fbg_pm=fbg,
-                            extras={"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy()})
+                            extras={"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy(), **extras})
 
     def _noise_row(self) -> tuple:
         """(block, k): the next row of ADC noise [counts] is block[k] (the row _noise_rows(1)[0] would be, without
@@ -460,8 +477,11 @@ class SimRobot(ContextDevice):
         x = -L  # motor positions: hauling in (shortening) is +
         if self._rich is not None and self._play is not None:  # the cable moves with its realized length
             x = -Lr
-        t_fsr = np.empty((n, 6))
-        for i in range(6):  # each cable's sheath along the run, from its state (as read())
+        t_fsr, t_fbg = np.empty((n, 6)), t_tip
+        if self._cables is not None:  # the distributed cable in place of the lumped sheath (as read())
+            x_d = self.L_home - (L if self._play is None else Lr)
+            t_fsr, t_fbg, _ = self._cables.run(np.ascontiguousarray(x_d), t_tip, theta - g.theta0)
+        for i in range(6 if self._cables is None else 0):  # each lumped sheath along the run, from its state
             SH.motor_force_run(np.ascontiguousarray(x[:, i]), np.ascontiguousarray(t_tip[:, i]),
                                np.ascontiguousarray(theta[:, i]), self._kc, self._cap, i, t_fsr[:, i])
         if self._rich is not None:
@@ -470,7 +490,7 @@ class SimRobot(ContextDevice):
         noise = self._noise_rows(n) if p.noise_counts > 0 else np.zeros((n, 6))
         counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
         t = self.t + p.dt * np.arange(1, n + 1)
-        fbg = np.empty((n, 0, 6)) if self._fbg is None else self._fbg.run(t_tip, t)
+        fbg = np.empty((n, 0, 6)) if self._fbg is None else self._fbg.run(t_fbg, t)
         self.t = float(t[-1])
         self.seq += n
         self.L_cmd = L[-1].copy()
@@ -478,6 +498,50 @@ class SimRobot(ContextDevice):
         self._fk.q = self.pose
         return SimTrace(t=t, lengths=L, poses=poses, tip=tips, wrench_truth=f, t_tip=t_tip, t_fsr=t_fsr,
                         counts=counts, theta=theta, fbg_pm=fbg)
+
+
+class DistributedCables:
+    """The robot's cables as distributed tendon-sheath cables (scenes.tendon_sheath, `SimRobotParams.cable`).
+
+    Coupling: the motor drives each cable's proximal end by its haul-in from the home lengths, x = L_home - L
+    (L the commanded length, the realized one with play); the distal end carries the tension at the end
+    effector as a force load, t_tip of the tension distribution (A t + f = 0), the end effector held at its
+    commanded pose with the robot's compliance lumped at the tip (tip_stiffness), as in the lumped plant. (A
+    prescribed tip travel from the end effector's lengths would leave the cable's stretch, and with it the
+    contact, out of the tensions: those lengths follow the commanded ones exactly.) The kinematic bend theta
+    (eq 6) sits on the sheath's kinematic span, the scaffold and route bends are the cable's own.
+    Sensors read element tensions: the FSR the element at B, where the scaffold bend begins
+    (TendonSheathParams.scaffold_span[0]); the FBG the element FBG_FROM_END_M before the sheath's end.
+    `step` (one reading) and `run` (m readings) call the same compiled step.
+    """
+
+    def __init__(self, params: TendonSheathParams, n: int, pretension: float, tick: float):
+        self.params = params
+        self.sheath = TendonSheath(params, SheathLoad("force"), pretension=pretension, n_cables=n, tick=tick)
+        self.j_fsr = self.element_at(params.scaffold_span[0])
+        self.j_fbg = self.element_at(params.length - FBG_FROM_END_M)
+
+    def element_at(self, s: float) -> int:
+        """Index of the element holding arc length s [m] from the motor (TendonSheath.tension_at's rule)."""
+        p = self.params
+        return min(max(int(s / p.element_length), 0), p.n_elements - 1)
+
+    def step(self, x, t_tip, theta) -> tuple:
+        """One reading: motor haul-in x (n,) [m], tip tensions t_tip (n,) [N], kinematic bends theta (n,)
+        [rad] -> (tension at the FSR, at the FBG, at the motor) (n,) each [N]."""
+        out = self.sheath.step(x, t_tip, theta)
+        T = self.sheath.tensions
+        return T[:, self.j_fsr].copy(), T[:, self.j_fbg].copy(), out[:, 0].copy()
+
+    def run(self, X, T_tip, TH, chunk: int = 2048) -> tuple:
+        """`step` over m readings, (m, n) inputs -> (m, n) tensions at the FSR, the FBG and the motor [N]."""
+        m = len(X)
+        fsr, fbg, motor = np.empty(X.shape), np.empty(X.shape), np.empty(X.shape)
+        for a in range(0, m, chunk):  # the element tensions of a chunk at a time (m x n x N would be large)
+            b = min(a + chunk, m)
+            r = self.sheath.run(X[a:b], T_tip[a:b], TH[a:b], keep_tensions=True)
+            fsr[a:b], fbg[a:b], motor[a:b] = r.tensions[:, :, self.j_fsr], r.tensions[:, :, self.j_fbg], r.f_motor
+        return fsr, fbg, motor
 
 
 class _AddedEffects:
@@ -523,12 +587,33 @@ class _AddedEffects:
         return out
 
 
+#: the simulated robot's plants: matched (its physics is the estimators' model), rich (scenes.rich_plant's effects
+#: on top), distributed (scenes.tendon_sheath's cable in place of the lumped sheath)
+PLANTS = RICH_PLANTS + ("distributed",)
+
+
+def with_named_plant(sim: SimRobotParams, plant: str, seed: int, cable_params=None) -> SimRobotParams:
+    """`sim` with the plant named `plant` (PLANTS): matched; rich (drawn from `seed`, its play the robot's);
+    distributed (TendonSheathParams from the [tendon_sheath] table of the TOML file `cable_params`, or its
+    defaults; docs/formats.md)."""
+    if plant not in PLANTS:
+        raise InputError(f"unknown plant '{plant}' (expected one of: {', '.join(PLANTS)})")
+    if plant != "distributed":
+        if cable_params is not None:
+            raise InputError("cable parameters (cable_params) belong to the distributed plant")
+        return replace(with_plant(sim, plant_params(plant, seed)), cable=None)
+    cable = TendonSheathParams() if cable_params is None else TendonSheathParams.from_toml(cable_params)
+    return replace(with_plant(sim, None), cable=cable)
+
+
 def from_url(parsed, options: dict) -> SimRobot:
     """`sim://robot?pad=z60&seed=3&substeps=1&model=M.json&backlash_mm=0.5`: build (not open) a SimRobot;
     `model`: an identified link model (teleop diagnose --save-model) whose findings are switched on in every
     cable; `backlash_mm`: each cable's play width [mm] (SimRobotParams.backlash); `plant=rich`: effects the
-    estimators do not model (scenes.rich_plant, drawn from `seed`; `matched`, the default: none)."""
-    known = {"pad", "seed", "substeps", "letter", "model", "backlash_mm", "sensor", "cable", "plant"}
+    estimators do not model (scenes.rich_plant, drawn from `seed`; `matched`, the default: none);
+    `plant=distributed`: the distributed tendon-sheath cable (DistributedCables), `cable_params=F.toml` its
+    parameters (docs/formats.md)."""
+    known = {"pad", "seed", "substeps", "letter", "model", "backlash_mm", "sensor", "cable", "plant", "cable_params"}
     for k in options:
         if k not in known:
             raise InputError(f"sim://robot: unknown option '{k}' (expected one of: {', '.join(sorted(known))})")
@@ -550,13 +635,16 @@ def from_url(parsed, options: dict) -> SimRobot:
     try:  # sensor=fsr|fbg|one, cable=I: the FBG of sensor=one (scenes.sim_sensors)
         sensing = {"sensor": str(options.get("sensor", "fsr")), "fbg_cable": int(options.get("cable", 0))}
     except ValueError:
-        raise InputError(f"sim://robot: cable must be a cable index, got {options['cable']!r}") from None
+        hint = " (the distributed cable is plant=distributed)" if options.get("cable") == "distributed" else ""
+        raise InputError(f"sim://robot: cable must be the FBG's cable index of sensor=one, got "
+                         f"{options['cable']!r}{hint}") from None
     model = None
     if "model" in options:
         model = load_model(str(options["model"]))
     params = SimRobotParams(substeps=substeps, backlash=play_w, **sensing)
-    if "plant" in options:  # plant=matched|rich, the rich plant's cables drawn from the seed; backlash_mm wins
-        params = with_plant(params, plant_params(str(options["plant"]), seed))
+    if "plant" in options or "cable_params" in options:  # the rich plant's cables drawn from the seed; backlash_mm wins
+        cable_params = None if "cable_params" not in options else str(options["cable_params"])
+        params = with_named_plant(params, str(options.get("plant", "matched")), seed, cable_params)
         if "backlash_mm" in options:
             params = replace(params, backlash=play_w)
     return SimRobot(makers[name](), params, seed=seed, model=model)

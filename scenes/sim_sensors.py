@@ -41,6 +41,9 @@ from teleop.core.errors import InputError
 from teleop.core.physics import hysteresis_offset
 from teleop.core.sensors import FbgParams, check_sensor_kind, synthesize_fbg
 
+#: where the FBG sits: this far before the sheath's distal end [m] (seed 001 sec. 2.1.2)
+FBG_FROM_END_M = 0.03
+
 
 @dataclass(frozen=True)
 class FbgEmulation:

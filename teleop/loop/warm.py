@@ -13,6 +13,9 @@ import time
 
 import numpy as np
 
+from scenes import tendon_sheath_kernels
+from scenes.sim_robot import DistributedCables
+from scenes.tendon_sheath import TendonSheathParams
 from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
 from teleop.core.estimation.kalman import KalmanNoise
 from teleop.core.estimation.reading import ReadingEstimator
@@ -39,11 +42,12 @@ from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_f
 
 _done = []  # [True] once warmed (the argument types do not depend on the geometry's values)
 _MODULES = (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sheath, sim, tap, tension,
-            ufuncs)
+            ufuncs, tendon_sheath_kernels)
 
 
 def kernels() -> list:
-    """Every compiled kernel (numba dispatcher) of teleop.core.kernels."""
+    """Every compiled kernel (numba dispatcher) of teleop.core.kernels and the simulated robot's distributed
+    cable (scenes.tendon_sheath_kernels)."""
     out = []
     for mod in _MODULES:
         out += [v for v in vars(mod).values() if hasattr(v, "py_func") and getattr(v, "__module__", "") == mod.__name__]
@@ -116,6 +120,10 @@ def warm_up(geom=None) -> float:
                           *FsrBranchLag(default_fsr_calibration(), n).kernel_args(), np.zeros((1, n)), 0,
                           np.empty(n, dtype=np.int64))
     KS.conductance_loop(np.full(n, P), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
+    # the distributed cable (sim://robot?plant=distributed): a reading, then a batch
+    cables = DistributedCables(TendonSheathParams(), n, P, 1e-3)
+    cables.step(np.zeros(n), np.full(n, P), np.zeros(n))
+    cables.run(np.zeros((2, n)), np.full((2, n), P), np.zeros((2, n)))
     lag = FsrBranchLag(default_fsr_calibration(), n)
     for _ in range(2):  # the first reading, then the lag
         lag.counts(np.full(n, P), np.zeros(n))

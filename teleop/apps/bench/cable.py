@@ -23,15 +23,24 @@ and the loop's converter (FsrConverter, branch by reading direction).
   fitted on one run and applied to a second run with other noise).
 In the simulation the FSR at B sees only the B-D sheath, so the A-B bend cannot change what it reads
 (the seed's Fig 11 finding holds here by construction; the proximal force does change and is shown).
+
+`--plant distributed`: the one cable is the distributed tendon-sheath cable (scenes.tendon_sheath, its
+parameters from `--cable-params` TOML or its defaults: route bend A-B, FSR at B, scaffold bend B-C, the
+bend theta at the tip) in place of the two capstan segments; the proximal gauge reads the tension at the
+sheath's entrance, the FSR the element at B (its physics and converter as above), the load is the hanging
+weight (a force) or the spring. Nothing is fitted: mu_AB and mu_BD are the cable's one mu_c.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import asdict
 
 import numpy as np
 
 from scenes.cable_rig import simulate
+from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams
+from teleop.apps.argtypes import input_file
 from teleop.core.errors import InputError
 from teleop.core.estimation.turn import TurnCompensation, TurnCompensator, fit_turn_compensation
 from teleop.core.geometry import Geometry
@@ -72,6 +81,11 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("cable", help="seed 000 single-cable experiments (Fig 9, 11, 13) on the simulated bench")
     p.add_argument("--experiment", choices=EXPERIMENTS, required=True, help="which figure to reproduce")
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.add_argument("--plant", default="matched", choices=("matched", "distributed"),
+                   help="the cable: matched (the rig's capstan segments, default) or distributed (the distributed "
+                        "tendon-sheath cable, scenes/tendon_sheath.py)")
+    p.add_argument("--cable-params", type=input_file, default=None, metavar="TOML",
+                   help="with --plant distributed: the cable's [tendon_sheath] table (docs/formats.md)")
     p.add_argument("--json", metavar="F", help="write the numbers as JSON")
     p.add_argument("--plot", metavar="F", help="write the figure (PNG)")
     p.set_defaults(func=run)
@@ -100,6 +114,26 @@ def sheath(seed: int, x: np.ndarray, theta, mu: float, load: dict, noise: float 
                    noise=noise, given=given, columns=("motor_pos_mm", "motor_force_N", "tip_force_N"))
     c = _columns(rec)
     return c["motor_force_N"], c["tip_force_N"]
+
+
+def distributed(seed: int, x: np.ndarray, theta: float, load: dict, cable: TendonSheathParams, theta1=None,
+                noise: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(proximal force at the sheath's entrance, tension at B, tip load force) [N] of the one cable as the
+    distributed tendon-sheath cable: motor haul-in x (n,) [m] at FS_HZ (from its first sample), the bend
+    theta of C-D [rad], load {"tip_force": (n,)} (a force) or {"spring_N_per_m", "preload_N"}, the route bend
+    A-B theta1 [rad] (None: the cable's). The proximal gauge's noise: `noise` x 0.4 % of the mean load."""
+    if "tip_force" in load:
+        tip = np.asarray(load["tip_force"], dtype=float)
+        sheath = TendonSheath(cable, SheathLoad("force"), pretension=float(tip[0]), tick=1.0 / FS_HZ, theta1=theta1)
+        F_mean = float(np.mean(tip))
+    else:
+        sheath = TendonSheath(cable, SheathLoad("spring", stiffness=load["spring_N_per_m"]),
+                              pretension=load["preload_N"], tick=1.0 / FS_HZ, theta1=theta1)
+        tip, F_mean = np.zeros(x.size), load["preload_N"]
+    run = sheath.run(x - x[0], tip, theta, keep_tensions=True)
+    j = min(int(cable.scaffold_span[0] / cable.element_length), cable.n_elements - 1)  # B: the scaffold bend's start
+    proximal = run.f_motor[:, 0] + np.random.default_rng(seed).normal(0.0, 0.004 * F_mean * noise, x.size)
+    return proximal, run.tensions[:, 0, j], run.f_tip[:, 0]
 
 
 def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0) -> np.ndarray:
@@ -159,15 +193,28 @@ def triangle(amplitude: float, speed: float, strokes: int, rest_s: float = 1.0) 
 
 # ---- experiments -----------------------------------------------------------------------------------------
 
-def fig9(seed: int = 0) -> dict:
-    """Proximal vs distal force under a hanging weight at theta = 0, 30, 60, 90 deg (module docstring)."""
+def _cable_keys(cable: TendonSheathParams | None) -> dict:
+    """The JSON's plant keys: none for the rig's capstan segments, the distributed cable's parameters."""
+    return {} if cable is None else {"plant": "distributed", "cable": asdict(cable)}
+
+
+def fig9(seed: int = 0, cable: TendonSheathParams | None = None) -> dict:
+    """Proximal vs distal force under a hanging weight at theta = 0, 30, 60, 90 deg (module docstring);
+    `cable`: the distributed cable in place of the rig's capstan segments."""
     x = triangle(5e-3, 2e-3, 6)
     out = {"mu_BD": mu_bd(), "mu_AB": mu_ab(), "theta0_deg": 140.0, "theta1_deg": 360.0, "cases": {}, "series": {}}
+    if cable is not None:
+        out.update(mu_BD=cable.mu_c, mu_AB=cable.mu_c, theta0_deg=math.degrees(cable.theta0),
+                   theta1_deg=math.degrees(cable.theta1), **_cable_keys(cable))
     for k, deg in enumerate((0, 30, 60, 90)):
         W = 1.96 if deg == 0 else 2.94
-        T_B, _ = sheath(seed + k, x, THETA0 + math.radians(deg), mu_bd(), {"tip_force": np.full(x.size, W)})
+        if cable is None:
+            T_B, _ = sheath(seed + k, x, THETA0 + math.radians(deg), mu_bd(), {"tip_force": np.full(x.size, W)})
+            proximal, _ = sheath(seed + 200 + k, x, THETA1, mu_ab(), {"tip_force": T_B}, noise=1.0)
+        else:
+            proximal, T_B, _ = distributed(seed + 200 + k, x, math.radians(deg), {"tip_force": np.full(x.size, W)},
+                                           cable, noise=1.0)
         distal = fsr_reading(T_B, seed + 100 + k)
-        proximal, _ = sheath(seed + 200 + k, x, THETA1, mu_ab(), {"tip_force": T_B}, noise=1.0)
         d, p, b = _levels(distal, x), _levels(proximal, x), _levels(T_B, x)
         case = {"pretension_N": W, "distal_N": list(d), "proximal_N": list(p), "distal_change_N": d[0] - d[1],
                 "proximal_change_N": p[0] - p[1], "tension_B_N": list(b), "tension_B_change_N": b[0] - b[1]}
@@ -191,19 +238,24 @@ def _errors(est: np.ndarray, truth: np.ndarray, x: np.ndarray, window_s: float =
             "max_abs_near_turns_N": float(np.max(np.abs(e[near]))) if near.any() else 0.0}
 
 
-def fig11(seed: int = 0, theta_deg: float = 0.0) -> dict:
-    """FSR-modelled tension against the F/T truth of a spring at variable motor speed (module docstring)."""
+def fig11(seed: int = 0, theta_deg: float = 0.0, cable: TendonSheathParams | None = None) -> dict:
+    """FSR-modelled tension against the F/T truth of a spring at variable motor speed (module docstring);
+    `cable`: the distributed cable in place of the rig's capstan segments."""
     t = np.arange(int(20 * FS_HZ)) / FS_HZ
     motions = {"b": 4e-3 * np.sin(2 * np.pi * 0.15 * t),
                "c": 2.5e-3 * np.sin(2 * np.pi * 0.12 * t) + 1.5e-3 * np.sin(2 * np.pi * 0.41 * t + 1.0)}
     theta = THETA0 + math.radians(theta_deg)
     load = {"spring_N_per_m": 400.0, "preload_N": 3.0}
-    out = {"theta_CD_deg": theta_deg, "spring": load, "cases": {}, "series": {}}
+    out = {"theta_CD_deg": theta_deg, "spring": load, "cases": {}, "series": {}, **_cable_keys(cable)}
     for k, (name, x) in enumerate(motions.items()):
-        T_B, truth = sheath(seed + k, x, theta, mu_bd(), load, noise=1.0)
+        if cable is None:
+            T_B, truth = sheath(seed + k, x, theta, mu_bd(), load, noise=1.0)
         for ab in (360, 180):
-            # the proximal (motor) force over A-B: the FSR does not see it
-            proximal, _ = sheath(seed + 10 + k, x, math.radians(ab), mu_ab(), {"tip_force": T_B})
+            if cable is None:  # the proximal (motor) force over A-B: the FSR does not see it
+                proximal, _ = sheath(seed + 10 + k, x, math.radians(ab), mu_ab(), {"tip_force": T_B})
+            else:  # one cable: A-B's bend may change what reaches B
+                proximal, T_B, truth = distributed(seed + 10 + k, x, math.radians(theta_deg), load, cable,
+                                                   theta1=math.radians(ab))
             F = fsr_reading(T_B, seed + 100 + k)          # the FSR at B: the same tension whatever A-B does
             single = single_compensation(F, x, mu_bd(), theta)
             flat = motor2tip_transitions(F, mu_bd(), theta)
@@ -216,25 +268,31 @@ def fig11(seed: int = 0, theta_deg: float = 0.0) -> dict:
     return out
 
 
-def fig13(seed: int = 0, pretensions_N=(1.96, 4.9), speed_mm_s: float = 0.5) -> dict:
+def fig13(seed: int = 0, pretensions_N=(1.96, 4.9), speed_mm_s: float = 0.5,
+          cable: TendonSheathParams | None = None) -> dict:
     """No-load back and forth, 20 mm twice at 0.5 mm/s: sensed force without, single and double compensation,
-    at each pretension (the weight that keeps the cable taut; the truth is 0)."""
+    at each pretension (the weight that keeps the cable taut; the truth is 0); `cable`: the distributed cable
+    in place of the rig's capstan segments."""
     x = triangle(10e-3, speed_mm_s * 1e-3, 4, rest_s=5.0)
     t = np.arange(x.size) / FS_HZ
-    out = {"stroke_mm": 20.0, "speed_mm_s": speed_mm_s, "strokes": 4, "pretensions": {}, "series": {"t": t, "x": x}}
+    out = {"stroke_mm": 20.0, "speed_mm_s": speed_mm_s, "strokes": 4, "pretensions": {}, "series": {"t": t, "x": x},
+           **_cable_keys(cable)}
     for k, W in enumerate(pretensions_N):
-        res, sensed = _no_load(seed + 10 * k, x, float(W))
+        res, sensed = _no_load(seed + 10 * k, x, float(W), cable)
         out["pretensions"][f"{W:g}"] = res
         out["series"][f"{W:g}"] = sensed
     out["seed"] = SEED["fig13"]
     return out
 
 
-def _no_load(seed: int, x: np.ndarray, W: float) -> tuple[dict, dict]:
+def _no_load(seed: int, x: np.ndarray, W: float, cable: TendonSheathParams | None = None) -> tuple[dict, dict]:
     t = np.arange(x.size) / FS_HZ
     runs = []
     for r in range(2):                       # run 0 fits the turn polynomials, run 1 is measured
-        T_B, _ = sheath(seed + r, x, THETA0, mu_bd(), {"tip_force": np.full(x.size, W)})
+        if cable is None:
+            T_B, _ = sheath(seed + r, x, THETA0, mu_bd(), {"tip_force": np.full(x.size, W)})
+        else:  # the same cable twice: the runs differ in the FSR's noise
+            _, T_B, _ = distributed(seed + r, x, 0.0, {"tip_force": np.full(x.size, W)}, cable)
         F = fsr_reading(T_B, seed + 100 + r)
         runs.append((F, single_compensation(F, x, mu_bd(), THETA0), T_B))
     poses = np.zeros((x.size, 6))
@@ -270,8 +328,10 @@ def table(name: str, res: dict) -> str:
     """The numbers beside the seed's, as text."""
     lines = []
     if name == "fig9":
+        how = "the distributed cable's mu_c" if res.get("plant") == "distributed" else \
+            "fitted to Fig 9a's proximal swing"
         lines.append(f"seed 000 Fig 9 on the simulated bench: mu(B-D) = {res['mu_BD']:.4f}, mu(A-B) = {res['mu_AB']:.4f} "
-                     f"(fitted to Fig 9a's proximal swing), theta0 140 deg, theta1 360 deg")
+                     f"({how}), theta0 {res['theta0_deg']:g} deg, theta1 {res['theta1_deg']:g} deg")
         lines.append("distal = what the FSR at B reports; tension at B = the cable's true tension there (no sensor)")
         lines.append(f"{'theta':>6} {'W [N]':>6}  {'distal hi/lo (change) [N]':>28}  {'proximal hi/lo (change) [N]':>30}"
                      f"  {'tension at B hi/lo (change)':>28}")
@@ -397,7 +457,12 @@ def run(args) -> int:
     for flag, path in (("--json", args.json), ("--plot", args.plot)):
         if path:
             check_output(path, flag)
-    res = {"fig9": fig9, "fig11": fig11, "fig13": fig13}[args.experiment](args.seed)
+    if args.cable_params is not None and args.plant != "distributed":
+        raise InputError("--cable-params: the cable's parameters belong to --plant distributed")
+    cable = None
+    if args.plant == "distributed":
+        cable = TendonSheathParams() if args.cable_params is None else TendonSheathParams.from_toml(args.cable_params)
+    res = {"fig9": fig9, "fig11": fig11, "fig13": fig13}[args.experiment](args.seed, cable=cable)
     print(table(args.experiment, res))
     if args.json:
         write_json(args.json, {"experiment": args.experiment, "seed": args.seed, **_jsonable(res)})

@@ -33,13 +33,15 @@ With the batch path (default; `--no-batch` skips it) the same commanded lengths,
 replayed through a fresh SimRobot's batched `run()` (the palpation path), timed the same way
 (pybullet_step, physics_other; arrays: the rest), and its FSR counts compared with the loop's.
 
+`--plant rich|distributed` runs the robot with that plant (`--cable-params` the distributed cable's TOML).
+
 JSON: {"seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wall_s", "cpu_s",
 "realtime_factor", "realtime_factor_cpu", "budget_factor", "pass", "ticks", "readings", "physics_steps",
 "stages_timed", "pybullet_timed", "stages": {stage: {"wall_s", "fraction", "per_tick_us": {"p50", "p99"}}},
 "trajectory": {...},
 "batch": {"simulated_s", "wall_s", "cpu_s", "realtime_factor", "realtime_factor_cpu", "pass", "readings",
 "stages": {stage: {"wall_s", "fraction"}}, "counts_max_abs_diff_vs_loop"}}. Wall-clock numbers depend on
-the machine's load; tests check only their consistency.
+the machine's load; tests check only their consistency. With --plant other than matched, also "plant".
 """
 
 from __future__ import annotations
@@ -55,6 +57,8 @@ import time
 import numpy as np
 
 from devices.simulated import OperatorParams, Script, SimulatedStylus
+from scenes.sim_robot import PLANTS
+from teleop.apps.argtypes import input_file
 from teleop.core.errors import InputError
 from teleop.core.kernels.tap import sim_log_row
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
@@ -80,6 +84,11 @@ def register(subparsers) -> None:
     p.add_argument("--depth-mm", type=float, default=30.0,
                    help="stylus poke depth [mm] (x motion scale 0.25 at the robot; the pad is 5 mm ahead)")
     p.add_argument("--period-s", type=float, default=2.0, help="poke period [s] (default 2)")
+    p.add_argument("--plant", default="matched", choices=PLANTS,
+                   help="the simulated robot's plant (sim://robot plant=): matched (default), rich, or distributed "
+                        "(the distributed tendon-sheath cable, scenes/tendon_sheath.py)")
+    p.add_argument("--cable-params", type=input_file, default=None, metavar="TOML",
+                   help="with --plant distributed: the cable's [tendon_sheath] table (docs/formats.md)")
     p.add_argument("--no-batch", action="store_true", help="skip the batched SimRobot.run path")
     p.add_argument("--stages", action="store_true",
                    help="split the robot's time (kinematics .. cable_sensor) with timers inside it, which cost "
@@ -132,11 +141,16 @@ def _meter_world(world, meter: CallTimer, solver: CallTimer) -> bool:
     return True
 
 
-def _make_robot(pad: str, seed: int, substeps: int):
+def _make_robot(pad: str, seed: int, substeps: int, plant: str = "matched", cable_params: str | None = None):
+    url = f"sim://robot?pad={pad}&seed={seed}&substeps={substeps}"
+    if plant != "matched":
+        url += f"&plant={plant}"
+    if cable_params is not None:
+        url += f"&cable_params={cable_params}"
     try:
-        return open_device(f"sim://robot?pad={pad}&seed={seed}&substeps={substeps}")
+        return open_device(url)
     except InputError as exc:
-        raise InputError(f"--pad/--substeps: {exc}") from None
+        raise InputError(f"--pad/--substeps/--plant/--cable-params: {exc}") from None
 
 
 def _seeds(seed: int) -> tuple[int, int]:
@@ -162,13 +176,15 @@ def _factor(simulated: float, spent: float) -> float:
 
 
 def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: int = 1, depth: float = 0.030,
-              period: float = 2.0, batch: bool = True, stages: bool = True) -> dict:
+              period: float = 2.0, batch: bool = True, stages: bool = True, plant: str = "matched",
+              cable_params: str | None = None) -> dict:
     """Run the unpaced simulation for `seconds` of simulated time [s]; the result dict (module docstring).
 
-    depth: stylus poke depth [m]; period: poke period [s]."""
+    depth: stylus poke depth [m]; period: poke period [s]; plant, cable_params: the robot's plant
+    (scenes.sim_robot.PLANTS; the JSON's "plant" when not matched)."""
     n = int(round(seconds * RATE_HZ))
     robot_seed, stylus_seed = _seeds(seed)
-    robot = _make_robot(pad, robot_seed, substeps)
+    robot = _make_robot(pad, robot_seed, substeps, plant, cable_params)
     clock_t = [0.0]
     stylus = SimulatedStylus(Script(kind="pokes", amplitude=depth, period=period), OperatorParams(),
                              seed=stylus_seed, clock=lambda: clock_t[0])
@@ -259,14 +275,17 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
             "peak_stylus_force_N": round(float(np.linalg.norm(F_log, axis=1).max(initial=0.0)), 6),
         },
     }
+    if plant != "matched":
+        out["plant"] = plant
     if batch:
-        out["batch"] = bench_batch(L_log[:j], counts_log[:j], pad, robot_seed, substeps)
+        out["batch"] = bench_batch(L_log[:j], counts_log[:j], pad, robot_seed, substeps, plant, cable_params)
     return out
 
 
-def bench_batch(lengths: np.ndarray, counts: np.ndarray, pad: str, robot_seed: int, substeps: int) -> dict:
+def bench_batch(lengths: np.ndarray, counts: np.ndarray, pad: str, robot_seed: int, substeps: int,
+                plant: str = "matched", cable_params: str | None = None) -> dict:
     """The same commanded lengths (n, 6) [m] through a fresh SimRobot.run (the palpation path), timed."""
-    robot = _make_robot(pad, robot_seed, substeps)
+    robot = _make_robot(pad, robot_seed, substeps, plant, cable_params)
     phys, solver = CallTimer(), CallTimer()
     with robot:
         _meter_world(robot.world, phys, solver)
@@ -340,7 +359,8 @@ def format_table(out: dict) -> str:
 def run(args) -> int:
     _check(args)
     out = bench_sim(args.seconds, args.seed, args.pad, args.substeps, args.depth_mm * 1e-3, args.period_s,
-                    batch=not args.no_batch, stages=args.stages and not args.no_stages)
+                    batch=not args.no_batch, stages=args.stages and not args.no_stages, plant=args.plant,
+                    cable_params=args.cable_params)
     print(format_table(out))
     if hasattr(os, "getloadavg"):  # context for the numbers: other processes sharing the cores
         print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cpus", file=sys.stderr)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 
+from scenes.sim_robot import PLANTS
 from teleop.apps.argtypes import input_file
 from teleop.apps.protocols import palpation
 from teleop.apps.protocols.palpation_sensors import sensor_calibration
@@ -21,10 +22,14 @@ def register(subparsers) -> None:
     p.add_argument("--speed-profile", default="uniform", choices=("uniform", "variable"),
                    help="uniform 0.5 mm/s pokes, or variable speed with reversals (default uniform)")
     p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise and the variable profile")
-    p.add_argument("--plant", default="matched", choices=("matched", "rich"),
+    p.add_argument("--plant", default="matched", choices=PLANTS,
                    help="matched: the robot's physics is the estimators' model; rich: with effects none of them "
                         "models (sheath float, Stribeck, Dahl, guide pulley, FSR creep; scenes/rich_plant.py), "
-                        "drawn per cable from --seed (default matched)")
+                        "drawn per cable from --seed; distributed: the distributed tendon-sheath cable "
+                        "(scenes/tendon_sheath.py) in place of the lumped sheath (default matched)")
+    p.add_argument("--cable-params", type=input_file, default=None, metavar="TOML",
+                   help="with --plant distributed: the cable's parameters, a [tendon_sheath] table "
+                        "(docs/formats.md; default its built-in values)")
     p.add_argument("--repeats", type=int, default=None, help="z test repetitions (default 5, as the seed)")
     p.add_argument("--limit", type=int, default=None, help="keep only the first N pokes of each run (quick look)")
     p.add_argument("--sensor", default="fsr", choices=("fsr", "fbg", "one"),
@@ -50,7 +55,7 @@ def run(args) -> int:
     if args.limit is not None and args.limit < 1:
         raise InputError(f"--limit must be >= 1, got {args.limit}")
     res = palpation.run_test(args.test, args.speed_profile, args.seed, params, limit=args.limit, progress=True,
-                   plant=args.plant)
+                   plant=args.plant, cable_params=args.cable_params)
     print(res.table())
     if args.json:
         write_json(args.json, res.to_json())

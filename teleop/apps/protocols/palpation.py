@@ -24,8 +24,8 @@ import numpy as np
 from scenes import pads
 from scenes.materials import ATTRIBUTION
 from scenes.pads import SCAN_COLS, SCAN_ROWS, letter_mask
-from scenes.rich_plant import RichPlant, plant_params, with_plant
-from scenes.sim_robot import SimRobot, SimRobotParams, home_pose
+from scenes.rich_plant import RichPlant
+from scenes.sim_robot import SimRobot, SimRobotParams, home_pose, with_named_plant
 from scenes.world import PadWorld, WorldParams
 from teleop.apps.protocols.palpation_estimators import ESTIMATORS, concat_traces, estimate, fsr_tensions, slice_trace
 from teleop.apps.protocols.palpation_plots import plot_result
@@ -399,16 +399,18 @@ class PalpationResult:
 
 
 def run_test(test: str, profile: str = "uniform", seed: int = 0, params: PalpationParams = PalpationParams(),
-             limit: int | None = None, progress: bool = False, plant: str = "matched") -> PalpationResult:
+             limit: int | None = None, progress: bool = False, plant: str = "matched",
+             cable_params=None) -> PalpationResult:
     """Run a palpation test on the simulated robot (see the module docstring). `plant`: "matched" (the
-    robot's physics is the estimators' model) or "rich" (scenes.rich_plant's effects on top, drawn from
-    `seed`)."""
+    robot's physics is the estimators' model), "rich" (scenes.rich_plant's effects on top, drawn from
+    `seed`) or "distributed" (scenes.tendon_sheath's cable, its parameters from the TOML `cable_params`
+    or its defaults)."""
     if profile not in PROFILES:
         raise InputError(f"unknown speed profile '{profile}' (expected one of: {', '.join(PROFILES)})")
 
-    sim = with_plant(SimRobotParams(substeps=params.substeps,
-                                    world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt)),
-                     plant_params(plant, seed))
+    sim = with_named_plant(SimRobotParams(substeps=params.substeps,
+                                          world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt)),
+                           plant, seed, cable_params)
     sessions = sessions_for(test, params, limit, sim.tip_stiffness, sim.world.tip_radius)
 
     sim = replace(sim, sensor=params.sensor)  # the robot's sensor kind (scenes.sim_sensors)
@@ -488,7 +490,8 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     elif test == "scan":
         extra = scan_extras(extra_grids)
     extra["calibration"] = calib
-    extra["plant"] = {"name": plant, **({} if sim.plant is None else RichPlant(sim.plant).describe())}
+    extra["plant"] = {"name": plant, **({} if sim.plant is None else RichPlant(sim.plant).describe()),
+                      **({} if sim.cable is None else {"cable": asdict(sim.cable)})}
     pdict = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(params).items()}
     pdict.update({"reading_rate_hz": _num(1.0 / dt), "physics_dt_s": sim.world.dt, "pretension_N": sim.pretension,
                   "tip_stiffness_N_per_m": sim.tip_stiffness, "capstan_k_N_per_m": sim.capstan_k,
