@@ -520,6 +520,7 @@ class DistributedCables:
         self.sheath = TendonSheath(params, SheathLoad("force"), pretension=pretension, n_cables=n, tick=tick)
         self.j_fsr = self.element_at(params.scaffold_span[0])
         self.j_fbg = self.element_at(params.length - FBG_FROM_END_M)
+        self._out = np.empty((n, 4))  # a reading's motor force, tip force, tip travel, Newton iterations
 
     def element_at(self, s: float) -> int:
         """Index of the element holding arc length s [m] from the motor (TendonSheath.tension_at's rule)."""
@@ -529,9 +530,9 @@ class DistributedCables:
     def step(self, x, t_tip, theta) -> tuple:
         """One reading: motor haul-in x (n,) [m], tip tensions t_tip (n,) [N], kinematic bends theta (n,)
         [rad] -> (tension at the FSR, at the FBG, at the motor) (n,) each [N]."""
-        out = self.sheath.step(x, t_tip, theta)
+        self.sheath.step_into(x, t_tip, theta, self._out)  # the robot's own (n,) float arrays: no checks
         T = self.sheath.tensions
-        return T[:, self.j_fsr].copy(), T[:, self.j_fbg].copy(), out[:, 0].copy()
+        return T[:, self.j_fsr].copy(), T[:, self.j_fbg].copy(), self._out[:, 0].copy()
 
     def run(self, X, T_tip, TH, chunk: int = 2048) -> tuple:
         """`step` over m readings, (m, n) inputs -> (m, n) tensions at the FSR, the FBG and the motor [N]."""

@@ -389,10 +389,16 @@ class TendonSheath:
         if not math.isfinite(float(X.sum() + TIP.sum() + TH.sum())):
             raise InputError("tendon sheath: motor, tip and theta inputs must be finite")
         out = np.empty((self.n_cables, 4))
-        K.step(self.u, self.v, self.z, self.pretension, self.tip_prev, X, TIP, TH, self._fixed, self._W, self._p,
-               self.load.mode, self.tick, self.n_sub, self.tensions, out, self._w, self._b)
-        self.t += self.tick
+        self.step_into(X, TIP, TH, out)
         return out[:, :3]
+
+    def step_into(self, x_motor, tip_input, theta, out) -> None:
+        """`step` without its input checks, for a caller whose inputs are its own arrays: x_motor, tip_input,
+        theta (c,) float64, C-contiguous and finite; writes out (c, 4): motor force [N], tip load force [N],
+        tip travel [m], Newton iterations of the tick."""
+        K.step(self.u, self.v, self.z, self.pretension, self.tip_prev, x_motor, tip_input, theta, self._fixed, self._W,
+               self._p, self.load.mode, self.tick, self.n_sub, self.tensions, out, self._w, self._b)
+        self.t += self.tick
 
     def run(self, x_motor, tip_input=None, theta=0.0, keep_tensions: bool = False) -> SheathRun:
         """Ticks for motor travel x_motor (m,) or (m, c) [m]; tip_input and theta as in `step`, each (m,) or

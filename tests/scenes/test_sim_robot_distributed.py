@@ -9,10 +9,14 @@ import sys
 import numpy as np
 import pytest
 
+from scenes.pads import blind_test_pad
 from scenes.rich_plant import RichPlantParams
 from scenes.sim_robot import DistributedCables, SimRobot, SimRobotParams, with_named_plant
 from scenes.tendon_sheath import TendonSheathParams
+from teleop.apps.bench.feedforward import bench_feedforward
 from teleop.apps.bench.sim import bench_sim
+from teleop.apps.campaign.blind import make_point
+from teleop.apps.protocols.blind.rig import RigOptions, Station, rig_dict
 from teleop.apps.cli import build_parser, main
 from teleop.core.errors import InputError
 from teleop.core.kinematics import poses2lengths
@@ -115,12 +119,33 @@ def test_url_options_and_their_errors(tmp_path):
     ["palpate", "--test", "z", "--plant", "distributed"],
     ["bench", "sim", "--plant", "distributed"],
     ["bench", "cable", "--experiment", "fig9", "--plant", "distributed"],
+    ["blind-test", "--plant", "distributed"],
+    ["bench", "blind-jnd", "--plant", "distributed"],
+    ["bench", "feedforward", "--plant", "distributed"],
 ])
 def test_plant_distributed_is_accepted(argv):
     args = build_parser().parse_args(argv)
     assert args.plant == "distributed"
     with pytest.raises(SystemExit):
         build_parser().parse_args([a if a != "distributed" else "lumpy" for a in argv])
+
+
+def test_feedforward_sessions_run_on_the_distributed_plant():
+    out, runs = bench_feedforward(seconds=1.0, settle=0.5, plant="distributed")
+    assert out["plant"] == "distributed"
+    assert all(s["final_state"] == "ENABLED" and s["readings"] > 0 for s in out["sessions"].values())
+
+
+def test_the_blind_rig_and_campaign_take_the_plant():
+    pad = blind_test_pad()
+    station = Station(pad, RigOptions(plant="distributed"), seed=(0, 1))
+    assert station.robot.params.cable == TendonSheathParams()
+    assert Station(pad, RigOptions(), seed=(0, 1)).robot.params.cable is None
+    assert "plant" not in rig_dict(RigOptions()) and rig_dict(RigOptions(plant="rich"))["plant"] == "rich"
+    point = make_point({}, {"plant": "distributed"}, {}, "campaign")
+    assert point.rig["plant"] == "distributed" and "plant" not in make_point({}, {}, {}, "campaign").rig
+    with pytest.raises(InputError, match="plant"):
+        RigOptions(plant="lumpy")
 
 
 def test_bench_cable_fig9_with_the_distributed_plant_keeps_its_keys(tmp_path):

@@ -20,7 +20,7 @@ from teleop.apps.campaign.runner import run_campaign
 from teleop.apps.campaign.spec import Campaign
 from teleop.apps.commands.blind_test import add_rig_options, participant_params, rig_options
 from teleop.apps.commands.campaign import add_scheduler_option
-from teleop.apps.protocols.blind.rig import SimRig
+from teleop.apps.protocols.blind.rig import SimRig, rig_dict
 from teleop.core.errors import InputError
 from teleop.io.outputs import check_output, output_problem, save_figure, write_json
 
@@ -59,7 +59,7 @@ def run(args) -> int:
             check_output(path, flag)
     if args.out and output_problem(args.out, directory=True):
         raise InputError(f"--out {args.out}: {output_problem(args.out, directory=True)}")
-    point = make_point({}, {k: v for k, v in dataclasses.asdict(options).items() if k != "seed"},
+    point = make_point({}, {k: v for k, v in rig_dict(options).items() if k != "seed"},
                        {k: v for k, v in dataclasses.asdict(base).items() if k != "jnd"}, "teleop bench blind-jnd")
     study = BlindStudy(participants=args.participants, per_task=args.participants_per_task, jnds=tuple(jnds),
                        points=(point,))

@@ -23,10 +23,15 @@ space (the sine is centred on the home pose, 5 mm above the pad; --axis z would 
 amplitudes). Seeds: the robot's ADC noise and the operator's tremor from one SeedSequence(--seed), the same
 in all three sessions.
 
+`--plant distributed`: every session's robot with the distributed tendon-sheath cable (scenes.sim_robot
+DistributedCables, default parameters) for its tensions. The pose still follows the realized lengths (the
+play operator), the cable's tip travel is not fed back to it: the tip error is the play's as before, what
+changes is the sensed tension and so the force rendered on the operator's hand.
+
 JSON: {"seed", "seconds", "settle_s", "backlash_mm", "compensation": {"source", "width_mm"}, "stylus":
 {"axis", "amp_mm", "period_s"}, "rate_hz", "robot_rate_hz", "sessions": {name: {"tip_error_mm": {"rms",
 "p95", "max"}, "readings", "final_state", "fault_reason", "max_command_step_mm"}}, "v_max_step_mm",
-"ratio_rms" (plain / compensated), "pass" (ratio_rms >= 2 and no session faulted)}.
+"ratio_rms" (plain / compensated), "pass" (ratio_rms >= 2 and no session faulted)}; "plant" when not matched.
 
 With --recordings the same error is read from recorded `teleop session --record` files instead (simulated
 robot: its `x_tip` beside the loop's `/teleop/setpoint`, one value per robot frame after --settle-s; paced
@@ -45,6 +50,7 @@ import numpy as np
 from devices.simulated import OperatorParams, Script, SimulatedStylus
 from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
 from scenes.sim_robot import SimRobot, SimRobotParams
+from scenes.tendon_sheath import TendonSheathParams
 from teleop.apps.argtypes import input_file
 from teleop.core.control.feedforward import model_backlash_width
 from teleop.core.errors import InputError
@@ -79,6 +85,9 @@ def register(subparsers) -> None:
                    help="stylus amplitude [mm] (x motion scale 0.25 at the robot; default 12)")
     p.add_argument("--period-s", type=float, default=2.0, help="stylus period [s] (default 2)")
     p.add_argument("--seed", type=int, default=0, help="seeds the operator's tremor and the ADC noise (default 0)")
+    p.add_argument("--plant", default="matched", choices=("matched", "distributed"),
+                   help="matched (default) or distributed: the robot's tensions from the distributed tendon-sheath "
+                        "cable (scenes/tendon_sheath.py); the play stays the robot's play operator")
     p.add_argument("--recordings", nargs="+", metavar="MCAP", type=input_file,
                    help="measure recorded sessions of the simulated robot instead (e.g. without, then with "
                         "--compensation); the ratio is first / second")
@@ -94,14 +103,15 @@ def _seeds(seed: int) -> tuple[int, int]:
 
 
 def run_session(backlash: float, width: float | None, seconds: float, seed: int, axis: str = "x",
-                amp: float = 12e-3, period: float = 2.0) -> dict:
+                amp: float = 12e-3, period: float = 2.0, plant: str = "matched") -> dict:
     """One closed-loop session on the manual clock; the plant's play `backlash` [m], the feed-forward's
-    `width` [m] (None: off). Returns arrays per robot reading: "t" [s], "err" [m] (tip error), "enabled",
+    `width` [m] (None: off), `plant` matched or distributed (module docstring). Returns arrays per robot reading: "t" [s], "err" [m] (tip error), "enabled",
     and "final_state", "fault_reason", "max_command_step" [m]."""
     robot_seed, stylus_seed = _seeds(seed)
     params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=ROBOT_RATE_HZ,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
-    sim = SimRobot(params=SimRobotParams(substeps=SUBSTEPS, backlash=backlash), seed=robot_seed)
+    cable = TendonSheathParams() if plant == "distributed" else None
+    sim = SimRobot(params=SimRobotParams(substeps=SUBSTEPS, backlash=backlash, cable=cable), seed=robot_seed)
     logged = LoggedDevice(sim)  # what reaches the robot: the speed check
     clock_t = [0.0]
     robot = logged if width is None else BacklashCompensatedRobot(logged, width, params.dt * params.robot_every,
@@ -182,15 +192,16 @@ def _stats_mm(e: np.ndarray) -> dict:
 
 def bench_feedforward(backlash: float = 0.5e-3, width: float | None = None, source: str = "the plant's own width",
                       seconds: float = 10.0, settle: float = 1.0, seed: int = 0, axis: str = "x",
-                      amp: float = 12e-3, period: float = 2.0, progress=None) -> tuple[dict, dict]:
+                      amp: float = 12e-3, period: float = 2.0, progress=None,
+                      plant: str = "matched") -> tuple[dict, dict]:
     """(result dict of the module docstring, raw traces by session). width: the feed-forward's play [m]
-    (None: `backlash`); progress(name) is called as each session starts."""
+    (None: `backlash`); progress(name) is called as each session starts; plant: matched or distributed."""
     width = backlash if width is None else width
     runs, sessions = {}, {}
-    for name, plant, w in (("plain", backlash, None), ("compensated", backlash, width), ("no_play", 0.0, None)):
+    for name, play, w in (("plain", backlash, None), ("compensated", backlash, width), ("no_play", 0.0, None)):
         if progress is not None:
             progress(name)
-        tr = run_session(plant, w, seconds, seed, axis, amp, period)
+        tr = run_session(play, w, seconds, seed, axis, amp, period, plant)
         runs[name] = tr
         keep = tr["enabled"] & (tr["t"] >= settle)
         sessions[name] = {"tip_error_mm": _stats_mm(tr["err"][keep]), "readings": int(keep.sum()),
@@ -205,6 +216,8 @@ def bench_feedforward(backlash: float = 0.5e-3, width: float | None = None, sour
            "rate_hz": RATE_HZ, "robot_rate_hz": ROBOT_RATE_HZ, "sessions": sessions,
            "v_max_step_mm": round(runs["plain"]["v_max_step"] * 1e3, 6), "ratio_rms": ratio,
            "pass": bool(ratio is not None and ratio >= TARGET_RATIO and not faulted)}
+    if plant != "matched":
+        out["plant"] = plant
     return out, runs
 
 
@@ -294,7 +307,7 @@ def run(args) -> int:
     out, runs = bench_feedforward(args.backlash_mm * 1e-3, width, source, args.seconds, args.settle_s, args.seed,
                                   args.axis, args.amp_mm * 1e-3, args.period_s,
                                   progress=lambda name: print(f"feedforward: session {name} ...", file=sys.stderr,
-                                                              flush=True))
+                                                              flush=True), plant=args.plant)
     print(format_report(out))
     if args.json:
         write_json(args.json, out)

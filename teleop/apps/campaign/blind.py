@@ -37,7 +37,7 @@ from teleop.apps.campaign.identity import Task, seeds
 from teleop.apps.campaign.plots import jnd_curves_figure
 from teleop.apps.campaign.values import coerce, get_int
 from teleop.apps.protocols.blind.participants import ParticipantParams
-from teleop.apps.protocols.blind.rig import RigOptions, SimRig, blind_areas
+from teleop.apps.protocols.blind.rig import RigOptions, SimRig, blind_areas, rig_dict
 from teleop.apps.protocols.blind.study import (ParticipantRecord, StudyResult, coordinator_draws, record_from,
                                                run_participant)
 from teleop.core.config import check_keys
@@ -112,7 +112,7 @@ def make_point(params: dict, rig: dict, participant: dict, where: str) -> GridPo
         person = ParticipantParams(**participant)
     except InputError as exc:
         raise InputError(f"{where}: {exc}") from None
-    full_rig = {k: v for k, v in dataclasses.asdict(options).items() if k != "seed"}
+    full_rig = {k: v for k, v in rig_dict(options).items() if k != "seed"}
     full_person = {k: v for k, v in dataclasses.asdict(person).items() if k != "jnd"}
     return GridPoint(params=dict(params), rig=full_rig, participant=full_person)
 

@@ -15,13 +15,14 @@ from dataclasses import asdict
 import numpy as np
 
 from scenes.pads import blind_area_centres
+from scenes.sim_robot import PLANTS
 from teleop.apps.argtypes import jnd_fraction, positive_int
 from teleop.apps.commands.session import add_live_arguments
 from teleop.apps.protocols.blind.human import Coordinator, run_human_study
 from teleop.apps.protocols.blind.participants import ParticipantParams
 from teleop.apps.protocols.blind.probe import PressAborted
 from teleop.apps.protocols.blind.rig import (BackgroundSession, RehearsalStation, RigOptions, SimRig, blind_areas,
-                                             transparency)
+                                             rig_dict, transparency)
 from teleop.apps.protocols.blind.study import run_simulated_study
 from teleop.core.errors import InputError
 from teleop.io.outputs import write_json
@@ -50,6 +51,9 @@ def add_rig_options(p) -> None:
     p.add_argument("--sensor", default="fsr", choices=("fsr", "fbg", "one"),
                    help="the robot's tension sensors: fsr (the FSR array, default), fbg (seed 001's distal FBG on "
                         "every cable) or one (the FSR array plus one cable's FBG, seed 001's sensor-model approach)")
+    p.add_argument("--plant", default="matched", choices=PLANTS,
+                   help="the simulated robot's plant: matched (default), rich (effects no estimator models, drawn "
+                        "per robot) or distributed (the distributed tendon-sheath cable, scenes/tendon_sheath.py)")
     p.add_argument("--press-force", type=float, default=None, metavar="N",
                    help="participants press until the stylus force reaches about N newtons, capped by the "
                         "depth (default 0.2 N; 0: push by depth only)")
@@ -108,6 +112,7 @@ def rig_options(args):
     if getattr(args, "robot_substeps", None) is not None:
         kw["robot_substeps"] = args.robot_substeps
     kw["sensor"] = getattr(args, "sensor", "fsr")
+    kw["plant"] = getattr(args, "plant", "matched")
     return RigOptions(**kw)
 
 
@@ -154,7 +159,7 @@ def run_transparency(args) -> int:
               f"{cell(med(r['unfiltered'])):>10} {cell(med(r['contact']))} {r['expected']:11.1f}")
     if args.json:
         write_json(args.json, {"speeds_m_per_s": list(TRANSPARENCY_SPEEDS), "press_force_N": params.force,
-                               "rig": _asdict(options), "rows": rows})
+                               "rig": rig_dict(options), "rows": rows})
     return 0
 
 

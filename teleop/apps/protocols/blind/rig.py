@@ -42,7 +42,7 @@ from devices.simulated import Script, SimulatedStylus
 from scenes.materials import ATTRIBUTION, contact_stiffness, get_material
 from scenes.pads import BLIND_LABELS, BLIND_MATERIALS, blind_area_centres, blind_test_pad
 from scenes.sensor_identification import identify_one_sensor_on
-from scenes.sim_robot import SimRobot, SimRobotParams
+from scenes.sim_robot import PLANTS, SimRobot, SimRobotParams, with_named_plant
 from scenes.world import WorldParams
 from teleop.apps.protocols.blind.probe import Poke, PokeRequest, PressAborted
 from teleop.apps.protocols.blind.stats import loading_slope
@@ -106,6 +106,9 @@ class RigOptions:
             The loop's 8 Hz default lags far more; at 20 Hz the slope rendered on rigid spreads with the
             participants' speed and the ranking suffers (`--transparency --kalman-bandwidth 20`).
         sensor: the robot's tension sensors (teleop.core.sensors.SENSOR_KINDS: fsr, fbg, one; scenes.sim_sensors).
+        plant: the simulated robot's plant (scenes.sim_robot.PLANTS): matched, rich (drawn from the robot's
+            seed) or distributed (the distributed tendon-sheath cable at its default parameters). Listed in
+            `rig_dict` only when not matched.
     """
 
     compensation: bool = True
@@ -122,8 +125,11 @@ class RigOptions:
     tip_stiffness: float | None = None
     kalman_bandwidth: float = 80.0
     sensor: str = "fsr"
+    plant: str = "matched"
 
     def __post_init__(self):
+        if self.plant not in PLANTS:
+            raise InputError(f"blind-test rig: plant must be one of {', '.join(PLANTS)}, got {self.plant!r}")
         for name in ("force_scale", "motion_scale", "gap", "release_speed"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -138,6 +144,15 @@ class RigOptions:
             raise InputError(f"blind-test rig: kalman_bandwidth must be > 0 Hz, got {self.kalman_bandwidth!r}")
         if int(self.robot_substeps) < 1:
             raise InputError(f"blind-test rig: robot_substeps must be >= 1, got {self.robot_substeps}")
+
+
+def rig_dict(options: RigOptions) -> dict:
+    """The options as a dict, `plant` only when not matched (a matched rig's dict, its results' config and a
+    campaign task's identity, are what they were before the plant could be chosen)."""
+    d = dataclasses.asdict(options)
+    if d["plant"] == "matched":
+        del d["plant"]
+    return d
 
 
 def _sensor_estimator(geom, o, robot_params, name: str, noise):
@@ -170,7 +185,8 @@ class Station:
         robot_seed, stylus_seed = (int(s) for s in ss.generate_state(2) % (2 ** 31))
         home_tip_z = WorldParams().surface_z - 0.005  # the sim robot's home: tip 5 mm before the surface
         world = WorldParams(surface_z=home_tip_z + o.gap)
-        robot_params = SimRobotParams(world=world, substeps=int(o.robot_substeps), sensor=o.sensor)
+        robot_params = with_named_plant(SimRobotParams(world=world, substeps=int(o.robot_substeps), sensor=o.sensor),
+                                        o.plant, robot_seed)
         if o.tip_stiffness is not None:
             robot_params = dataclasses.replace(robot_params, tip_stiffness=float(o.tip_stiffness))
         self.robot = SimRobot(pad, robot_params, seed=robot_seed)
@@ -394,7 +410,7 @@ class SimRig:
 
     def describe(self) -> dict:
         """The chain's settings for the results' config."""
-        d = dataclasses.asdict(self.options)
+        d = rig_dict(self.options)
         d["tip_stiffness_used"] = self.tip_stiffness()
         return d
 
