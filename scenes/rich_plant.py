@@ -21,10 +21,10 @@ Along one cable, from the motor to the FSR (x_c = the cable's travel, increasing
                                      tare at power-on (t = 0)
     -> the FSR's own hysteresis, divider and ADC (scenes.sim_robot, unchanged).
 
-Every formula is the catalogue's (teleop.core.physics: stribeck, dahl, pulley_motor_force with the lumped
-chain, and the thermal_drift_time effect; the backlash play operator in scenes.sim_robot); this module only
-chains them per cable and keeps each state in the catalogue's per-sample Steps, so the batch path
-(`SimRobot.run`, m samples, the array forms) and the per-reading path (m = 1, the Steps) agree.
+Every formula is the catalogue's (teleop.core.physics: stribeck, the dahl_hysteresis, pulley_friction and
+thermal_drift_time effects; the backlash play operator in scenes.sim_robot); this module only chains them
+per cable and keeps each state in the catalogue's per-sample Steps, so the batch path (`SimRobot.run`, m
+samples, the Steps' array forms) and the per-reading path (m = 1, the Steps) agree.
 
 Parameters: `RichPlantParams` (nominal values and where each comes from); every cable draws its own
 values, each nominal times exp(spread N(0, 1)) from `seed` (cables of one robot differ: different bends,
@@ -40,8 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from teleop.core.errors import InputError
-from teleop.core.physics import Signals, dahl, get_effect, pulley_motor_force, stribeck
-from teleop.core.physics.pulley import lumped_chain
+from teleop.core.physics import get_effect, stribeck
 
 EFFECTS = ("backlash", "stribeck_friction", "dahl_hysteresis", "pulley_friction", "thermal_drift_time")
 PLANTS = ("matched", "rich")
@@ -168,8 +167,6 @@ class RichPlant:
         self.cables = draw_cables(params, self.n)
         self.on = set(params.effects)
         self.steps = [{e: get_effect(e).make_step(p) for e, p in c.items()} for c in self.cables]
-        self._chain = [lumped_chain(c["pulley_friction"]) if "pulley_friction" in c else None for c in self.cables]
-        self._drift = get_effect("thermal_drift_time")
         for st in self.steps:
             if "thermal_drift_time" in st:
                 st["thermal_drift_time"].step(t=0.0, force=0.0)   # the tare at power-on: t0 = 0
@@ -220,20 +217,12 @@ class RichPlant:
             if "stribeck_friction" in st:
                 s = st["stribeck_friction"].params
                 f += stribeck(v[:, i], s["Fc"], s["Fs"], s["vs"])
-            if "dahl_hysteresis" in st:
-                d = st["dahl_hysteresis"]
-                x0 = x[0] if d.x_prev is None else d.x_prev
-                Fd = dahl(np.concatenate([[x0], x]), d.params["sigma"], d.params["Fc"], d.F)[1:]
-                d.F, d.x_prev = float(Fd[-1]), float(x[-1])
-                f += Fd
+            if "dahl_hysteresis" in st:   # the array forms from the Steps' states, which they leave at the end
+                f = st["dahl_hysteresis"].run(x=x, load=f)
             if "pulley_friction" in st:
-                p = st["pulley_friction"]
-                F0 = None if p.x_prev is None else p.F + p.params["k"] * (x[0] - p.x_prev)  # clipped in its band
-                f = pulley_motor_force(x, f, self._chain[i], p.params["k"], F0)
-                p.F, p.x_prev = float(f[-1]), float(x[-1])
+                f = st["pulley_friction"].run(x=x, load=f)
             if "thermal_drift_time" in st:  # drift since the tare at power-on, t = 0
-                sig = Signals(t=np.concatenate([[0.0], t]), force=np.concatenate([[0.0], f]))
-                f = self._drift.simulate(sig, st["thermal_drift_time"].params)[1:]
+                f = st["thermal_drift_time"].run(t=t, force=f)
             out[:, i] = f
         return out
 

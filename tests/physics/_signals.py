@@ -26,6 +26,17 @@ def sum_of_sines(t: np.ndarray, amplitude: float, freqs=(0.23, 0.61, 1.37), seed
     return amplitude * x / np.abs(x).max()
 
 
+def all_channels(n: int, seed: int = 0) -> Signals:
+    """A 1 kHz signal of n samples with every channel present: reversing motion, load, a pad's contact cycles
+    (in and out of contact), temperature and bend."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 1e-3
+    x = 8e-3 * np.sin(2 * np.pi * 2.0 * t) + 1e-3 * np.sin(2 * np.pi * 9.3 * t) + rng.normal(0, 1e-6, n)
+    d = 1e-3 + 3e-3 * np.sin(2 * np.pi * 3.1 * t)
+    return Signals(t=t, x=x, load=3 + np.sin(5.0 * t) + rng.normal(0, 0.05, n), force=500 * np.maximum(d, 0),
+                   temperature=25 + 10 * t, theta=2.4 + 0.2 * np.sin(3.0 * t), d=d)
+
+
 def noisy(y: np.ndarray, sigma: float, seed: int = 1) -> np.ndarray:
     """y plus seeded Gaussian noise of standard deviation sigma."""
     return y + np.random.default_rng(seed).normal(0.0, sigma, y.shape)

@@ -1,4 +1,5 @@
-"""Physical properties of the models (hypothesis, seeded) and the prefix scans against plain loops."""
+"""Physical properties of the models (hypothesis, seeded) and the catalogue's driver against plain loops over
+the step kernels."""
 
 import numpy as np
 import pytest
@@ -6,47 +7,51 @@ from hypothesis import given, settings, strategies as st
 
 from teleop.core.physics import (CapstanCompensator, Signals, cable_stretch, chain, dahl, get_effect, hysteresis_offset,
                             linear_force, motor2tip_transitions, sls_force, stribeck)
-from teleop.core.physics.scan import affine_scan, clamp_scan
+from teleop.core.physics import REGISTRY
+from ._signals import all_channels
 
 SETTINGS = settings(derandomize=True, max_examples=40, deadline=None)
 walk = st.lists(st.floats(-1e-3, 1e-3), min_size=2, max_size=120)
 
 
-@SETTINGS
-@given(lo=st.lists(st.floats(-10, 10), min_size=1, max_size=70), seed=st.integers(0, 100),
-       y0=st.floats(-20, 20))
-def test_clamp_scan_equals_loop(lo, seed, y0):
-    lo = np.array(lo)
-    hi = lo + np.random.default_rng(seed).uniform(0, 3, lo.size)
-    y, ref = y0, []
-    for a, b in zip(lo, hi):
-        y = min(max(y, a), b)
-        ref.append(y)
-    np.testing.assert_array_equal(clamp_scan(y0, lo, hi), ref)
+@pytest.mark.parametrize("name", [n for n, e in REGISTRY.items() if e.kernel is not None])
+def test_driver_is_a_plain_loop_over_the_step_kernel(name):
+    # the array form is the compiled driver over the effect's step kernel: the same numbers as calling the
+    # kernel's Python source sample by sample
+    eff = get_effect(name)
+    sig = all_channels(600, seed=4)
+    p = eff.check(None)
+    cols = [sig[c] if sig[c] is not None else np.full(sig.n, p[c]) for c in eff.inputs + eff.optional]
+    s = np.array(eff.kernel.state, dtype=float)
+    pv = eff.packed(p)
+    ref = [eff.kernel.step.py_func(s, np.array(u), pv) for u in zip(*cols)]
+    np.testing.assert_allclose(eff.apply(sig, p), ref, rtol=1e-12, atol=1e-15)
 
 
-def test_clamp_scan_runs_trailing_axes_independently():
-    # (n, 6) cables with one start each, as the sensor models call it: each column is its own recursion
+@pytest.mark.parametrize("name", ["backlash", "dahl_hysteresis", "pulley_friction", "viscoelasticity",
+                                  "sensor_hysteresis", "capstan_friction"])
+def test_a_step_runs_a_batch_from_its_state_and_keeps_the_last(name):
+    # Step.run continues from the Step's state: two batches give the one run of the whole signal
+    eff = get_effect(name)
+    sig = all_channels(400, seed=5)
+    names = eff.inputs + tuple(c for c in eff.optional if sig[c] is not None)
+    st = eff.make_step(eff.defaults())
+    first = st.run(**{c: sig[c][:150] for c in names})
+    second = st.run(**{c: sig[c][150:] for c in names})
+    np.testing.assert_array_equal(np.concatenate([first, second]), eff.apply(sig, eff.defaults()))
+    assert st.step(**{c: float(sig[c][-1]) for c in names}) == pytest.approx(second[-1], rel=1e-9, abs=1e-12)
+
+
+def test_hysteresis_offset_runs_trailing_axes_independently():
+    # (n, 6) sensors with one start each: each column is its own recursion
     rng = np.random.default_rng(3)
-    lo = np.cumsum(rng.normal(0, 0.3, (500, 6)), axis=0)
-    hi = lo + rng.uniform(0, 2, (500, 6))
-    y0 = rng.normal(0, 1, 6)
-    out = clamp_scan(y0, lo, hi)
+    F = np.cumsum(rng.normal(0, 0.3, (500, 6)), axis=0)
+    z0 = F[0] + rng.uniform(-0.2, 0.2, 6)
+    out = hysteresis_offset(F, 0.4, 0.5, z0)
     assert out.shape == (500, 6)
     for j in range(6):
-        np.testing.assert_array_equal(out[:, j], clamp_scan(y0[j], lo[:, j], hi[:, j]))
-
-
-@SETTINGS
-@given(alpha=st.lists(st.floats(0, 1), min_size=1, max_size=70), seed=st.integers(0, 100), y0=st.floats(-5, 5))
-def test_affine_scan_equals_loop(alpha, seed, y0):
-    alpha = np.array(alpha)
-    beta = np.random.default_rng(seed).normal(size=alpha.size)
-    y, ref = y0, []
-    for a, b in zip(alpha, beta):
-        y = a * y + b
-        ref.append(y)
-    np.testing.assert_allclose(affine_scan(y0, alpha, beta), ref, rtol=1e-10, atol=1e-12)
+        np.testing.assert_array_equal(out[:, j], hysteresis_offset(F[:, j], 0.4, 0.5, z0[j]))
+    assert np.all(np.abs(out) <= 0.4 + 1e-12) and np.any(out[0] != 0)
 
 
 @SETTINGS

@@ -6,6 +6,8 @@ the loop's tick all call these):
 - geometry.py   ZYX rotation (eq 5), platform offsets, cable length and unit vector (eq 4), wrap angle
                 (eq 6 + theta0), structure-matrix column (eq 8), inverse and forward kinematics
 - friction.py   direction (Schmitt) rule, Dahl, Coulomb, viscous, Stribeck, the play (backlash) and its inverse
+- effects.py    the effect catalogue's step kernels (one per effect, over the ones here) and the one driver
+                that runs any of them over a whole signal
 - sheath.py     the sheath: its parameters, friction state layout and capstan law (stick transitions, the start
                 on the tip tension, the `dynamic` estimator's inverse, the seed's compensation eq 7)
 - tension.py    the closed-form tension distribution of a one-dimensional null space

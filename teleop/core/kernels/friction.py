@@ -98,42 +98,11 @@ def play_mix_step(z1, z2, x, r1, r2, w1, w2, grow):
     return z1, z2, x + math.exp(grow * x) * (w1 * (z1 - x) + w2 * (z2 - x))
 
 
-# ------------------------------------------------------------------ array forms: loops over the steps above
-@njit
-def clamp_run(y0, lo, hi, out):
-    """out (n,): y_k = clamp(y_k-1, lo_k, hi_k) from y_-1 = y0 (the play operator's recursion; lo <= hi)."""
-    y = y0
-    for k in range(lo.shape[0]):
-        y = clamp(y, lo[k], hi[k])
-        out[k] = y
-    return out
-
-
-@njit
-def dahl_run(x, sigma, Fc, F0, out):
-    """out (n,): Dahl force [N] along the positions x (n,) [m], from F0 at the first sample."""
-    F = F0
-    for k in range(x.shape[0]):
-        if k > 0:
-            F = dahl_step(F, x[k] - x[k - 1], sigma, Fc)
-        out[k] = F
-    return out
-
-
 @njit
 def play_mix_start(x0, r1, r2, start):
     """(z1, z2): the general play's states at the first position x0, start in [-1, 1] (where in its band each
     play was when the record began)."""
     return x0 + start * r1, x0 + start * r2
-
-
-@njit
-def play_mix_run(x, r1, r2, w1, w2, grow, start, out):
-    """out (n,): play_mix_step along the positions x (n,), from play_mix_start at x[0]."""
-    z1, z2 = play_mix_start(x[0], r1, r2, start)
-    for k in range(x.shape[0]):
-        z1, z2, out[k] = play_mix_step(z1, z2, x[k], r1, r2, w1, w2, grow)
-    return out
 
 
 @njit

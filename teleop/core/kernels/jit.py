@@ -95,7 +95,6 @@ def njit(fn):
         return _numba.njit(nogil=True)(fn)
 
 
-
 def broadcast_call(loop, *args):
     """Array form of a scalar kernel: `loop(a1, ..., ak, out)` is a compiled loop applying the kernel to
     1-D float arrays element by element; the arguments are broadcast against each other (numpy rules) and

@@ -7,7 +7,8 @@ Every effect is registered under its canonical name and used three ways:
     sig = Signals(t=t, x=motor_pos)                      # SI arrays (n,); v derived from x
     tip = eff.apply(sig, {"width": 1e-3})                # (a) whole signal -> output channel (n,)
     st = eff.make_step({"width": 1e-3})                  # (b) real time: st.step(x=x_k) per sample,
-    tip_k = st.step(x=0.002)                             #     same math, state kept in st; st.reset()
+    tip_k = st.step(x=0.002)                             #     the same kernel, state kept in st; st.reset();
+    tips = st.run(x=motor_pos)                           #     st.run: a batch from st's state
     res = fit(eff, sig, measured_tip)                    # (c) identify: res.params, res.stderr, res.rmse
     res = fit("capstan_friction", Signals(t=t, x=x, load=F_tip), F_motor,
               fixed={"theta": 2.44}, mask=train)        # fixed parameters, residual on `train` only
@@ -34,11 +35,12 @@ parameters and rules (docs/diagnosis.md's catalogue table is generated from it).
 package is imported here, the named ones first (their order is the registry's), then any other, so a new
 effect's module registers it without an edit here.
 
-The pure math lives in module-level functions (capstan_out/capstan_in, tip2motor/motor2tip and their
-`_transitions` forms, backlash, cable_stretch, coulomb, viscous, stribeck, dahl, hysteresis_offset,
-thermal_offset, linear_force, hertz_force, sls_force, damped_force). Stateful models run over whole
-signals without Python loops (`scan.py`: compiled clamp loops for the play operators, prefix scans for
-first-order recurrences).
+Each effect's physics is written once, as a compiled step kernel `step(state, input, params) -> output`
+(teleop.core.kernels.effects; `Kernel` on the Effect): the array form is the one compiled driver's loop over
+it (kernels.effects.drive), the Step calls it per sample. The module-level functions (tip2motor_transitions,
+backlash, cable_stretch, dahl, hysteresis_offset, thermal_offset, linear_force, hertz_force, sls_force,
+damped_force, spring_force, pulley_motor_force) run the same kernels; coulomb, viscous, stribeck and the
+capstan's hold law are element-wise loops over the scalar kernels those steps call.
 """
 
 import importlib

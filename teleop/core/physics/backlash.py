@@ -13,7 +13,8 @@ stretch, changes along the stroke; the scale is 1 at x_ref, where `elastic` is t
 once; a fit holds x_ref at the record's mean tip position). `start` in [-1, 1] is where in its band each play was
 when the record began (0: centred). This is a Prandtl-Ishlinskii operator with three play widths (0, w,
 TAIL_RATIO w) and a position-dependent output scale; with elastic = tail = grow = start = 0 it is the plain
-play, computed by the same prefix scan as before. Per sample: kernels.friction.play_mix_step.
+play. The physics is one step kernel (kernels.effects.backlash_step, over kernels.friction.play_mix_step);
+the array form is the catalogue's driver loop over it.
 """
 
 from __future__ import annotations
@@ -22,17 +23,18 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.kernels.friction import play_mix_run, play_mix_start, play_mix_step
-from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
-from teleop.core.physics.scan import clamp_step, play
+from teleop.core.kernels.effects import backlash_run, backlash_step
+from teleop.core.physics.base import Effect, Kernel, KernelStep, ParamSpec, Rules, Signals, drive_kernel, register
 
 TAIL_RATIO = 4.0   # the wide play's width over the main play's
 
 
 def backlash(x: np.ndarray, width: float, y0: float | None = None) -> np.ndarray:
-    """(n,) tip position [m or rad] from motor position x (n,) with play of total width [same unit]."""
+    """(n,) tip position [m or rad] from motor position x (n,) with play of total width [same unit], the
+    play's position before x[0] at y0 (default: x[0])."""
     x = np.asarray(x, dtype=float)
-    return play(float(x[0]) if y0 is None else float(y0), x, 0.5 * width)
+    state = np.array([np.nan if y0 is None else float(y0), np.nan])
+    return drive_kernel(KERNEL, state, x.reshape(-1, 1), pack(BACKLASH.check({"width": width})))
 
 
 def mix_layout(p: Mapping[str, float]) -> tuple[float, float, float, float]:
@@ -47,18 +49,13 @@ def is_plain(p: Mapping[str, float]) -> bool:
     return p["elastic"] == 0.0 and p["tail"] == 0.0 and p["grow"] == 0.0 and p["start"] == 0.0
 
 
-def general_backlash(x: np.ndarray, p: Mapping[str, float]) -> np.ndarray:
-    """(n,) tip position [m or rad] of the general form (module docstring) from motor positions x (n,)."""
-    x = np.ascontiguousarray(x, dtype=float)
-    r1, r2, w1, w2 = mix_layout(p)
-    out = play_mix_run(x - p["x_ref"], r1, r2, w1, w2, float(p["grow"]), float(p["start"]), np.empty_like(x))
-    return out + p["x_ref"]
+def pack(p: Mapping[str, float]) -> tuple:
+    """The step kernel's parameters (kernels.effects.backlash_step): mix_layout, grow, start, x_ref and
+    whether the form is plain (fixed with the parameters: decided once, not per sample)."""
+    return mix_layout(p) + (p["grow"], p["start"], p["x_ref"], float(is_plain(p)))
 
 
-def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
-    if is_plain(p):
-        return backlash(signals.x, p["width"])
-    return general_backlash(signals.x, p)
+KERNEL = Kernel(backlash_step, backlash_run, state=(np.nan, np.nan), pack=pack)
 
 
 def _guess(signals: Signals, y: np.ndarray) -> dict:
@@ -81,29 +78,19 @@ PARAMS = (ParamSpec("width", "m", 1e-8, 100.0, 5e-4, "total play (dead band) wid
                     "general form)", shape=True, state=True))
 
 
-class BacklashStep(Step):
-    """Per-sample backlash: step(x) -> tip position."""
+class BacklashStep(KernelStep):
+    """Per-sample backlash: step(x) -> tip position; `y` the plain play's position (None before the first
+    sample)."""
 
     effect_name = "backlash"
 
-    def reset(self) -> None:
-        self.y = None
-        self.z = None
-        self.plain = is_plain(self.params)   # fixed with the parameters: decided once, not per sample
+    @property
+    def y(self) -> float | None:
+        return None if np.isnan(self.state[0]) else float(self.state[0])
 
-    def step(self, x: float) -> float:
-        p = self.params
-        if self.plain:
-            r = 0.5 * p["width"]
-            self.y = x if self.y is None else clamp_step(self.y, x - r, x + r)
-            return float(self.y)
-        r1, r2, w1, w2 = mix_layout(p)
-        xr = float(x) - p["x_ref"]
-        if self.z is None:
-            self.z = play_mix_start(xr, r1, r2, float(p["start"]))
-        z1, z2, y = play_mix_step(self.z[0], self.z[1], xr, r1, r2, w1, w2, float(p["grow"]))
-        self.z = (z1, z2)
-        return float(y + p["x_ref"])
+    @y.setter
+    def y(self, value: float) -> None:
+        self.state[0] = value
 
 
 def _hold(rec, known, direction) -> dict:
@@ -119,8 +106,8 @@ BACKLASH = register(Effect(
     params=PARAMS,
     inputs=("x",),
     output="x",
-    simulate=_simulate,
     guess=_guess,
+    kernel=KERNEL,
     step_class=BacklashStep,
     # a wide play flattens the affine least-squares gain (the tip stands still over the dead band): refit
     # from gains up to 1 / (1 - play fraction) larger

@@ -2,8 +2,9 @@
 
 - `Signals`: a frozen bundle of equal-length 1-D arrays over time (SI units), the input of every effect.
 - `ParamSpec`: one parameter's name, unit, fit bounds, typical value and meaning.
-- `Effect`: one model = pure array function `simulate(signals, params) -> (n,)`, a per-sample `Step`
-  class with the same math, a `guess(signals, y) -> params` for fitting, and its parameter specs.
+- `Effect`: one model = its per-sample physics, one compiled step kernel (`Kernel`; the array form
+  `simulate(signals, params) -> (n,)` is the one driver's loop over it, the real-time `Step` calls it per
+  sample), a `guess(signals, y) -> params` for fitting, and its parameter specs.
 - `Rules`: what the diagnosis, the generators and the docs read of an effect (link channel, primary
   parameters, what it cannot be told apart from, its fit starts, its generator draw).
 - `REGISTRY` / `get_effect(name)`: the catalogue by canonical name.
@@ -206,6 +207,68 @@ class Step(ABC):
         """Advance one sample and return the output channel's value."""
 
 
+@dataclass(frozen=True)
+class Kernel:
+    """An effect's per-sample physics, written once: `step(s, u, p) -> y`, a compiled kernel of
+    teleop.core.kernels.effects (its docstring: s the state, u one sample of the channels Effect.inputs +
+    Effect.optional, p the parameters), and `run(s, U, p, out)` the compiled loop of that step along U (n, k).
+    state: s before the first sample (NaN first: the step starts it from that sample); pack(params) -> p
+    (default: the values in the ParamSpecs' order)."""
+
+    step: Callable
+    run: Callable
+    state: tuple[float, ...] = (math.nan,)
+    pack: Callable[[Mapping[str, float]], tuple] | None = None
+
+
+class KernelStep(Step):
+    """Per-sample form of an effect with a `Kernel`: step(**channels) calls its step kernel once; run(**arrays)
+    is its array form from this state. The state (`state`, the kernel's s) is left at the last sample."""
+
+    def reset(self) -> None:
+        eff = self.effect()
+        self.state = np.array(eff.kernel.state, dtype=float)
+        self._p = eff.packed(self.params)
+        self._names = eff.inputs + eff.optional
+
+    @classmethod
+    def effect(cls) -> "Effect":
+        return cls._effect or get_effect(cls.effect_name)
+
+    def step(self, **u) -> float:
+        row = np.array([self._channel(c, u.get(c)) for c in self._names])
+        return float(self.effect().kernel.step(self.state, row, self._p))
+
+    def run(self, **arrays) -> np.ndarray:
+        """(n,) the output along (n,) arrays of the channels (the array form), continuing from this state."""
+        cols = [np.broadcast_to(np.asarray(self._channel(c, arrays.get(c)), dtype=float),
+                                np.shape(arrays[self._names[0]])) for c in self._names]
+        return drive_kernel(self.effect().kernel, self.state, np.column_stack(cols), self._p)
+
+    def _channel(self, name: str, value):
+        if value is not None:
+            return value
+        if name in self.params:   # an optional channel not given: the parameter of its name
+            return self.params[name]
+        raise InputError(f"effect '{self.effect_name}': step needs channel '{name}'")
+
+
+def drive_kernel(kernel: Kernel, state: np.ndarray, U: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """(n,) kernel.step along the samples U (n, k) from state (updated in place to the last sample's)."""
+    U = np.ascontiguousarray(U, dtype=float)
+    return kernel.run(state, U, np.ascontiguousarray(p, dtype=float), np.empty(U.shape[0]))
+
+
+def kernel_call(kernel: Kernel, p, *channels, state=None):
+    """kernel.step along the channels (arrays broadcast against each other, samples along the flattened
+    broadcast shape) under the parameter vector p, from `state` (default: the kernel's start); the result
+    has the broadcast shape."""
+    arrs = np.broadcast_arrays(*[np.asarray(c, dtype=float) for c in channels])
+    U = np.column_stack([a.reshape(-1) for a in arrs])
+    s = np.array(kernel.state, dtype=float) if state is None else state
+    return drive_kernel(kernel, s, U, np.asarray(p, dtype=float)).reshape(arrs[0].shape)
+
+
 @dataclass(frozen=True, eq=False)
 class LinkRecord:
     """What an effect's diagnosis rules read of one link's recording: (n,) arrays in SI units, None where
@@ -298,9 +361,12 @@ class Effect:
     """One named model of the catalogue.
 
     name: canonical name (registry key); link: 'position' | 'force' | 'sensor' | 'contact';
-    inputs: channels `simulate` and `Step.step` need; optional: channels used when present;
+    inputs: channels `simulate` and `Step.step` need; optional: channels used when present (for a kernel,
+    a parameter of the same name stands in for a missing one);
     output: the channel the result stands for (chaining writes it back there);
-    simulate(signals, params) -> (n,) array; guess(signals, y) -> params dict; step_class: Step subclass;
+    kernel: the per-sample physics (`Kernel`); with it, simulate and step_class default to the driver's loop
+    over it and `KernelStep`. Without one (an effect written in Python, a chain): simulate(signals, params)
+    -> (n,) array and step_class, a Step subclass. guess(signals, y) -> params dict;
     rules: what the diagnosis, the generators and the docs read of it (`Rules`).
     """
 
@@ -310,15 +376,45 @@ class Effect:
     params: tuple[ParamSpec, ...]
     inputs: tuple[str, ...]
     output: str
-    simulate: Callable[[Signals, Mapping[str, float]], np.ndarray]
     guess: Callable[[Signals, np.ndarray], dict]
-    step_class: type
+    simulate: Callable[[Signals, Mapping[str, float]], np.ndarray] | None = None
+    step_class: type | None = None
     optional: tuple[str, ...] = field(default=())
     rules: Rules = field(default=Rules())
+    kernel: Kernel | None = None
+
+    def __post_init__(self):
+        if self.kernel is None:
+            if self.simulate is None or self.step_class is None:
+                raise ValueError(f"effect '{self.name}': needs a kernel, or simulate and step_class")
+            return
+        missing = [c for c in self.optional if c not in self.param_names]
+        if missing:
+            raise ValueError(f"effect '{self.name}': optional channels {missing} have no parameter to stand in")
+        if self.simulate is None:
+            object.__setattr__(self, "simulate", lambda signals, params: self.run(signals, params))
+        if self.step_class is None:
+            object.__setattr__(self, "step_class", type(f"{self.name}_step", (KernelStep,),
+                                                        {"effect_name": self.name, "_effect": self}))
 
     @property
     def param_names(self) -> tuple[str, ...]:
         return tuple(p.name for p in self.params)
+
+    def packed(self, params: Mapping[str, float]) -> np.ndarray:
+        """The kernel's parameter vector p of the full `params` (Kernel.pack, or the ParamSpecs' order)."""
+        k = self.kernel
+        vals = k.pack(params) if k.pack is not None else [params[n] for n in self.param_names]
+        return np.array(vals, dtype=float)
+
+    def run(self, signals: Signals, params: Mapping[str, float], state: np.ndarray | None = None) -> np.ndarray:
+        """(n,) the kernel's array form: its step along every sample of `signals` under the full `params`,
+        from `state` (default: the kernel's start; a given state is left at the last sample's)."""
+        n = signals.n
+        cols = [signals[c] if signals[c] is not None else np.full(n, float(params[c]))
+                for c in self.inputs + self.optional]
+        s = np.array(self.kernel.state, dtype=float) if state is None else state
+        return drive_kernel(self.kernel, s, np.column_stack(cols), self.packed(params))
 
     def spec(self, name: str) -> ParamSpec:
         """The ParamSpec called `name`."""

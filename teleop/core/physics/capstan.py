@@ -10,7 +10,8 @@ force follows the cable stretch, F_m <- F_m + k dx, clamped to the band
 gives the plain sign(dx) switch. The inverse (compensation) needs no k: the tip force is the play of the
 motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)). The law, its state and its start
 on the tip force are the sheath's kernels (teleop.core.kernels.sheath), shared with the simulated robot and
-the estimators.
+the estimators; the catalogue effect's step kernel (kernels.effects.capstan_friction_step) applies them, its
+array form is the catalogue's driver loop over that step.
 """
 
 from __future__ import annotations
@@ -20,11 +21,11 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.kernels.sheath import (STIFF_STICK_K, Sheath, capstan_band_loop, capstan_tip_run, motor_force,
-                                        motor_force_run, new_state)
+from teleop.core.kernels.effects import capstan_friction_run, capstan_friction_step
+from teleop.core.kernels.sheath import STIFF_STICK_K, Sheath, capstan_band_loop, capstan_tip_run, new_state
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.ufuncs import hold_loop, tip_loop
-from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
+from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, kernel_call, register
 
 
 def capstan_out(T_in, mu, theta):
@@ -81,19 +82,20 @@ def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
     F_m,k = clamp(F_m,k-1 + k (x_k - x_k-1), F_t,k e^-mu theta, F_t,k e^+mu theta) (kernel
     sheath.motor_force).
     """
-    x = np.ascontiguousarray(x, dtype=float)
-    F_tip = np.ascontiguousarray(np.broadcast_to(np.asarray(F_tip, dtype=float), x.shape))
-    th = np.ascontiguousarray(np.broadcast_to(np.asarray(theta, dtype=float), x.shape))
-    st = new_state(1)
+    x = np.asarray(x, dtype=float)
+    st = new_state(1).reshape(-1)
     if F0 is not None:  # a given motor force at the first position
-        st[:2, 0] = float(x[0]), float(F0)
-    return motor_force_run(x, F_tip, th, _constants(mu, k), st, 0, np.empty(x.shape[0]))
+        st[:2] = float(x[0]), float(F0)
+    return kernel_call(KERNEL, _pack({"mu": mu, "k": k, "preload": 0.0}), x, F_tip, theta, state=st)
 
 
-def _constants(mu, k) -> np.ndarray:
-    """The sheath's kernel constants for friction mu [-] and stick stiffness k [N/m] (the wrap comes with the
-    signals)."""
-    return Sheath(mu=float(mu), stick_k=float(k)).constants()
+def _pack(p: Mapping[str, float]) -> np.ndarray:
+    """The step kernel's parameters: the sheath's kernel constants for friction mu [-] and stick stiffness k
+    [N/m] (the wrap comes with the signals), then the preload [N]."""
+    return np.append(Sheath(mu=float(p["mu"]), stick_k=float(p["k"])).constants(), p.get("preload", 0.0))
+
+
+KERNEL = Kernel(capstan_friction_step, capstan_friction_run, state=tuple(new_state(1).reshape(-1)), pack=_pack)
 
 
 def motor2tip_transitions(F_motor, mu, theta, F0=None):
@@ -111,11 +113,6 @@ def motor2tip_transitions(F_motor, mu, theta, F0=None):
 
 def _theta(signals: Signals, params: Mapping[str, float]):
     return signals.theta if signals.theta is not None else params["theta"]
-
-
-def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
-    P = p.get("preload", 0.0)   # + 0.0 and - 0.0 leave the plain law's floats as they are
-    return tip2motor_transitions(signals.x, signals.load + P, p["mu"], _theta(signals, p), p["k"]) - P
 
 
 def _guess(signals: Signals, y: np.ndarray) -> dict:
@@ -142,23 +139,6 @@ PARAMS = (
               "pair's, or a load sensor zeroed under tension): the sheath grips load + preload, the motor "
               "force is read from the preload (general form; 0: the plain law)", shape=True),
 )
-
-
-class CapstanStep(Step):
-    """Per-sample capstan_friction: step(x, load, theta=None) -> motor force [N]."""
-
-    effect_name = "capstan_friction"
-
-    def reset(self) -> None:
-        self.st = new_state(1)   # the sheath's state (teleop.core.kernels.sheath)
-        self.c = _constants(self.params["mu"], self.params["k"])
-
-    def step(self, x: float, load: float, theta: float | None = None) -> float:
-        p = self.params
-        P = p.get("preload", 0.0)
-        T = float(load) + P   # the tension the sheath grips
-        F = motor_force(self.st, 0, float(x), T, float(p["theta"] if theta is None else theta), self.c)
-        return float(F) - P
 
 
 class CapstanCompensator:
@@ -238,8 +218,7 @@ CAPSTAN_FRICTION = register(Effect(
     inputs=("x", "load"),
     optional=("theta",),
     output="load",
-    simulate=_simulate,
     guess=_guess,
-    step_class=CapstanStep,
+    kernel=KERNEL,
     rules=Rules(channel="motor_force", primary=("mu",), hold=_hold, baseline_starts=_baseline_starts),
 ))

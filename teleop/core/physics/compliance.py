@@ -1,24 +1,22 @@
 """Cable compliance: the cable stretches under load, so the tip lags the motor by load / k.
 
-tip = x - load / k, with x the motor position [m] (cable hauled in) and load the tip tension [N].
+tip = x - load / k, with x the motor position [m] (cable hauled in) and load the tip tension [N]; the
+physics is the step kernel kernels.effects.cable_compliance_step.
 """
 
 from __future__ import annotations
 
-from typing import Mapping
-
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
+from teleop.core.kernels.effects import cable_compliance_run, cable_compliance_step
+from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, kernel_call, register
+
+KERNEL = Kernel(cable_compliance_step, cable_compliance_run, state=())
 
 
 def cable_stretch(x: np.ndarray, load: np.ndarray, k: float) -> np.ndarray:
     """(n,) tip position [m]: x - load / k, with k the cable (and sheath) axial stiffness [N/m]."""
-    return np.asarray(x, dtype=float) - np.asarray(load, dtype=float) / k
-
-
-def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return cable_stretch(signals.x, signals.load, p["k"])
+    return kernel_call(KERNEL, (k,), x, load)
 
 
 def _guess(signals: Signals, y: np.ndarray) -> dict:
@@ -32,18 +30,6 @@ PARAMS = (ParamSpec("k", "N/m", 1.0, 1e9, 2e4, "axial stiffness of the cable bet
                     log=True, positive=True),)
 
 
-class ComplianceStep(Step):
-    """Per-sample cable_compliance: step(x, load) -> tip position [m]."""
-
-    effect_name = "cable_compliance"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, x: float, load: float) -> float:
-        return float(x - load / self.params["k"])
-
-
 CABLE_COMPLIANCE = register(Effect(
     name="cable_compliance",
     link="position",
@@ -51,9 +37,8 @@ CABLE_COMPLIANCE = register(Effect(
     params=PARAMS,
     inputs=("x", "load"),
     output="x",
-    simulate=_simulate,
     guess=_guess,
-    step_class=ComplianceStep,
+    kernel=KERNEL,
     rules=Rules(channel="tip_pos", primary=("k",),
                 draw=lambda rng, s: {"k": s.load_span / (rng.uniform(0.04, 0.12) * 2 * s.travel)}),
 ))

@@ -8,43 +8,43 @@
   relaxes from k d to g k d; faster indentation gives more force. Discretised exactly for Fe linear over
   each sample interval: q_k = a q_k-1 + (1 - g) (dFe/dt) tau (1 - a), a = exp(-dt / tau).
 - contact_damping: F = Fe + c d_dot while in contact, never pulling (F >= 0), zero out of contact.
-Every contact force is zero without contact and never negative.
+Every contact force is zero without contact and never negative. Each effect's physics is one step kernel
+(teleop.core.kernels.effects); the array forms are the catalogue's driver loop over it.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Mapping
-
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
-from teleop.core.physics.scan import affine_scan
+from teleop.core.kernels.effects import contact_damping_run, contact_damping_step, hertz_contact_run, \
+    hertz_contact_step, linear_contact_run, linear_contact_step, viscoelasticity_run, viscoelasticity_step
+from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, kernel_call, register
+
+LINEAR = Kernel(linear_contact_step, linear_contact_run, state=())
+HERTZ = Kernel(hertz_contact_step, hertz_contact_run, state=())
+SLS = Kernel(viscoelasticity_step, viscoelasticity_run, state=(math.nan, 0.0, 0.0))
+DAMPING = Kernel(contact_damping_step, contact_damping_run, state=())
 
 
 def linear_force(d, k):
     """Spring contact force [N]: k max(d, 0)."""
-    return k * np.maximum(np.asarray(d, dtype=float), 0.0)
+    return kernel_call(LINEAR, (k,), d)
 
 
 def hertz_force(d, k):
     """Hertz contact force [N]: k max(d, 0)^1.5."""
-    return k * np.maximum(np.asarray(d, dtype=float), 0.0) ** 1.5
+    return kernel_call(HERTZ, (k,), d)
 
 
 def sls_force(t, Fe, d, g, tau):
     """(n,) viscoelastic contact force [N] from the elastic force Fe (n,) [N], indentation d (n,) [m]."""
-    t, Fe = np.asarray(t, dtype=float), np.asarray(Fe, dtype=float)
-    dt = np.diff(t, prepend=t[0] - (t[1] - t[0]))
-    a = np.exp(-dt / tau)
-    dFe = np.diff(Fe, prepend=Fe[0])
-    q = affine_scan(0.0, a, (1.0 - g) * (dFe / dt) * tau * (1.0 - a))
-    return np.where(np.asarray(d) > 0, np.maximum(g * Fe + q, 0.0), 0.0)
+    return kernel_call(SLS, (g, tau), t, Fe, d)
 
 
 def damped_force(Fe, d, d_dot, c):
     """Contact force [N] with damping c [N s/m]: max(Fe + c d_dot, 0) in contact, else 0."""
-    return np.where(np.asarray(d) > 0, np.maximum(np.asarray(Fe, dtype=float) + c * np.asarray(d_dot), 0.0), 0.0)
+    return kernel_call(DAMPING, (c,), Fe, d, d_dot)
 
 
 def _loaded(s: Signals, y: np.ndarray) -> np.ndarray:
@@ -75,74 +75,18 @@ def _damping_guess(s: Signals, y: np.ndarray) -> dict:
     return {"c": c} if c > 0 else {}
 
 
-class LinearContactStep(Step):
-    """Per-sample linear_contact: step(d) -> force [N]."""
-
-    effect_name = "linear_contact"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, d: float) -> float:
-        return float(self.params["k"] * max(d, 0.0))
-
-
-class HertzContactStep(Step):
-    """Per-sample hertz_contact: step(d) -> force [N]."""
-
-    effect_name = "hertz_contact"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, d: float) -> float:
-        return float(self.params["k"] * max(d, 0.0) ** 1.5)
-
-
-class ViscoelasticityStep(Step):
-    """Per-sample viscoelasticity: step(t, force, d) -> force [N]; force = the elastic force Fe."""
-
-    effect_name = "viscoelasticity"
-
-    def reset(self) -> None:
-        self.t_prev = None
-        self.Fe_prev = 0.0
-        self.q = 0.0
-
-    def step(self, t: float, force: float, d: float) -> float:
-        g, tau = self.params["g"], self.params["tau"]
-        if self.t_prev is not None and t > self.t_prev:
-            dt = t - self.t_prev
-            a = math.exp(-dt / tau)
-            self.q = a * self.q + (1.0 - g) * ((force - self.Fe_prev) / dt) * tau * (1.0 - a)
-        self.t_prev, self.Fe_prev = t, force
-        return float(max(g * force + self.q, 0.0)) if d > 0 else 0.0
-
-
-class ContactDampingStep(Step):
-    """Per-sample contact_damping: step(force, d, d_dot) -> force [N]."""
-
-    effect_name = "contact_damping"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, force: float, d: float, d_dot: float) -> float:
-        return float(max(force + self.params["c"] * d_dot, 0.0)) if d > 0 else 0.0
-
-
 LINEAR_CONTACT = register(Effect(
     name="linear_contact", link="contact", doc="spring pad: F = k d in contact",
     params=(ParamSpec("k", "N/m", 1.0, 1e7, 500.0, "pad stiffness", log=True),),
     inputs=("d",), output="force",
-    simulate=lambda s, p: linear_force(s.d, p["k"]), guess=_linear_guess, step_class=LinearContactStep,
+    guess=_linear_guess, kernel=LINEAR,
     rules=Rules(channel="force", primary=("k",), finding=False)))   # the contact baseline's own law
 
 HERTZ_CONTACT = register(Effect(
     name="hertz_contact", link="contact", doc="Hertz pad: F = k d^1.5 in contact",
     params=(ParamSpec("k", "N/m^1.5", 1.0, 1e9, 1e4, "Hertz coefficient (4/3 E* sqrt(R))", log=True),),
     inputs=("d",), output="force",
-    simulate=lambda s, p: hertz_force(s.d, p["k"]), guess=_hertz_guess, step_class=HertzContactStep,
+    guess=_hertz_guess, kernel=HERTZ,
     rules=Rules(channel="force", primary=("k",),
                 draw=lambda rng, s: {"k": s.stiffness / math.sqrt(rng.uniform(2e-3, 5e-3))})))
 
@@ -152,8 +96,7 @@ VISCOELASTICITY = register(Effect(
     params=(ParamSpec("g", "1", 0.0, 1.0, 0.6, "relaxed / instantaneous stiffness ratio"),
             ParamSpec("tau", "s", 1e-4, 1e4, 1.0, "relaxation time", log=True, positive=True)),
     inputs=("t", "force", "d"), output="force",
-    simulate=lambda s, p: sls_force(s.t, s.force, s.d, p["g"], p["tau"]), guess=_sls_guess,
-    step_class=ViscoelasticityStep,
+    guess=_sls_guess, kernel=SLS,
     # a relaxation faster than the data resolve (tau below twice the inputs' smoothing) is damping
     rules=Rules(channel="force", primary=("g", "tau"), wrong_form=lambda p, rec: p["tau"] < 2.0 * rec.resolution_s,
                 draw=lambda rng, s: {"g": rng.uniform(0.4, 0.8), "tau": rng.uniform(0.2, 1.5)})))
@@ -162,7 +105,6 @@ CONTACT_DAMPING = register(Effect(
     name="contact_damping", link="contact", doc="F = Fe + c d_dot in contact, never pulling",
     params=(ParamSpec("c", "N s/m", 1e-4, 1e6, 5.0, "contact damping coefficient", log=True),),
     inputs=("force", "d", "d_dot"), output="force",
-    simulate=lambda s, p: damped_force(s.force, s.d, s.d_dot, p["c"]), guess=_damping_guess,
-    step_class=ContactDampingStep,
+    guess=_damping_guess, kernel=DAMPING,
     rules=Rules(channel="force", primary=("c",),
                 draw=lambda rng, s: {"c": rng.uniform(0.15, 0.4) * s.stiffness * s.travel / s.v_fast})))

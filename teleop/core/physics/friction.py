@@ -8,20 +8,22 @@ Each effect returns the motor-side force F_m = load + F_f, with F_f:
   sample (x monotone in between) exactly: F_k = s Fc + (F_k-1 - s Fc) exp(-sigma |dx| / Fc), s = sgn(dx),
   from F = 0 at the first sample. Smooth pre-sliding transition of initial slope sigma after reversals.
 v is the motor velocity (positive while pulling); sign(0) = 0.
-Each formula is one scalar kernel of teleop.core.kernels.friction; the array forms loop over it (compiled), the
-Steps call it per sample.
+Each formula is one scalar kernel of teleop.core.kernels.friction; each effect's step kernel
+(teleop.core.kernels.effects) adds it to the load, the array form is the catalogue's driver loop over that
+step and the Step calls it per sample.
 """
 
 from __future__ import annotations
 
-from typing import Mapping
-
 import numpy as np
 
-from teleop.core.kernels.friction import coulomb_force, dahl_run, dahl_step, stribeck_force, viscous_force
+from teleop.core.kernels.effects import coulomb_friction_run, coulomb_friction_step, dahl_hysteresis_run, \
+    dahl_hysteresis_step, stribeck_friction_run, stribeck_friction_step, viscous_friction_run, viscous_friction_step
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.ufuncs import coulomb_loop, stribeck_loop, viscous_loop
-from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, drive_step, register
+from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, drive_step, kernel_call, register
+
+DAHL = Kernel(dahl_hysteresis_step, dahl_hysteresis_run, state=(np.nan, 0.0))
 
 
 def coulomb(v, Fc):
@@ -42,17 +44,13 @@ def stribeck(v, Fc, Fs, vs):
 
 def dahl(x, sigma, Fc, F0: float = 0.0):
     """(n,) Dahl friction force [N] along the position x (n,) [m]; sigma [N/m], Fc [N] (> 0).
-    F_k = a F_k-1 + s Fc (1 - a), a = exp(-sigma |dx| / Fc), s = sign(dx) (kernel friction.dahl_step)."""
-    x = np.ascontiguousarray(x, dtype=float)
-    return dahl_run(x, float(sigma), float(Fc), float(F0), np.empty(x.shape[0]))
+    F_k = a F_k-1 + s Fc (1 - a), a = exp(-sigma |dx| / Fc), s = sign(dx) (kernel friction.dahl_step; the
+    dahl_hysteresis step kernel on a zero load)."""
+    return kernel_call(DAHL, (sigma, Fc), x, 0.0, state=np.array([np.nan, float(F0)]))
 
 
 def _moving(v: np.ndarray) -> np.ndarray:
     return np.abs(v) > 1e-3 * max(float(np.abs(v).max()), 1e-300)
-
-
-def _coulomb_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return s.load + coulomb(s.v, p["Fc"])
 
 
 def _coulomb_guess(s: Signals, y: np.ndarray) -> dict:
@@ -60,17 +58,9 @@ def _coulomb_guess(s: Signals, y: np.ndarray) -> dict:
     return {"Fc": float(np.median(np.abs(y - s.load)[m])) if m.any() else 0.1}
 
 
-def _viscous_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return s.load + viscous(s.v, p["b"])
-
-
 def _viscous_guess(s: Signals, y: np.ndarray) -> dict:
     b = float(np.dot(s.v, y - s.load) / max(np.dot(s.v, s.v), 1e-300))
     return {"b": b if b > 0 else 1.0}
-
-
-def _stribeck_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return s.load + stribeck(s.v, p["Fc"], p["Fs"], p["vs"])
 
 
 def _stribeck_guess(s: Signals, y: np.ndarray) -> dict:
@@ -98,10 +88,6 @@ def _stribeck_guess(s: Signals, y: np.ndarray) -> dict:
     return {"Fc": Fc, "Fs": Fs if Fs > 1.2 * Fc else 2.0 * Fc, "vs": vs}
 
 
-def _dahl_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return s.load + dahl(s.x, p["sigma"], p["Fc"])
-
-
 def _dahl_guess(s: Signals, y: np.ndarray) -> dict:
     f = y - s.load
     Fc = float(np.percentile(np.abs(f), 95))
@@ -110,59 +96,6 @@ def _dahl_guess(s: Signals, y: np.ndarray) -> dict:
     m = np.abs(dx) > 1e-12
     sigma = float(np.percentile(np.abs(dF[m] / dx[m]), 90)) if m.sum() > 10 else 1e4
     return {"Fc": Fc, "sigma": sigma}
-
-
-class CoulombStep(Step):
-    """Per-sample coulomb_friction: step(v, load) -> motor force [N]."""
-
-    effect_name = "coulomb_friction"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, v: float, load: float) -> float:
-        return float(load + coulomb_force(float(v), self.params["Fc"]))
-
-
-class ViscousStep(Step):
-    """Per-sample viscous_friction: step(v, load) -> motor force [N]."""
-
-    effect_name = "viscous_friction"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, v: float, load: float) -> float:
-        return float(load + viscous_force(float(v), self.params["b"]))
-
-
-class StribeckStep(Step):
-    """Per-sample stribeck_friction: step(v, load) -> motor force [N]."""
-
-    effect_name = "stribeck_friction"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, v: float, load: float) -> float:
-        p = self.params
-        return float(load + stribeck_force(float(v), p["Fc"], p["Fs"], p["vs"]))
-
-
-class DahlStep(Step):
-    """Per-sample dahl_hysteresis: step(x, load) -> motor force [N]."""
-
-    effect_name = "dahl_hysteresis"
-
-    def reset(self) -> None:
-        self.x_prev = None
-        self.F = 0.0
-
-    def step(self, x: float, load: float) -> float:
-        if self.x_prev is not None:
-            self.F = dahl_step(self.F, x - self.x_prev, self.params["sigma"], self.params["Fc"])
-        self.x_prev = x
-        return float(load + self.F)
 
 
 _FC = ParamSpec("Fc", "N", 0.0, 50.0, 0.2, "Coulomb (kinetic) friction force")
@@ -182,7 +115,7 @@ def _dahl_wrong(p, rec) -> bool:
 COULOMB_FRICTION = register(Effect(
     name="coulomb_friction", link="force", doc="constant, direction-dependent: load + Fc sign(v)",
     params=(_FC,), inputs=("v", "load"), output="load",
-    simulate=_coulomb_sim, guess=_coulomb_guess, step_class=CoulombStep,
+    guess=_coulomb_guess, kernel=Kernel(coulomb_friction_step, coulomb_friction_run, state=()),
     # constant-magnitude frictions on one channel are one effect to any data
     rules=Rules(channel="motor_force", primary=("Fc",), alike=("stribeck_friction", "dahl_hysteresis"),
                 draw=lambda rng, s: {"Fc": s.friction})))
@@ -191,7 +124,7 @@ VISCOUS_FRICTION = register(Effect(
     name="viscous_friction", link="force", doc="velocity-proportional: load + b v",
     params=(ParamSpec("b", "N s/m", 1e-6, 1e5, 10.0, "viscous friction coefficient", log=True),),
     inputs=("v", "load"), output="load",
-    simulate=_viscous_sim, guess=_viscous_guess, step_class=ViscousStep,
+    guess=_viscous_guess, kernel=Kernel(viscous_friction_step, viscous_friction_run, state=()),
     rules=Rules(channel="motor_force", primary=("b",),
                 draw=lambda rng, s: {"b": s.friction / s.v_fast * rng.uniform(1.0, 2.0)})))
 
@@ -202,7 +135,7 @@ STRIBECK_FRICTION = register(Effect(
             ParamSpec("Fs", "N", 0.0, 50.0, 0.3, "static (breakaway) friction force"),
             ParamSpec("vs", "m/s", 1e-7, 10.0, 1e-3, "Stribeck velocity", log=True, positive=True)),
     inputs=("v", "load"), output="load",
-    simulate=_stribeck_sim, guess=_stribeck_guess, step_class=StribeckStep,
+    guess=_stribeck_guess, kernel=Kernel(stribeck_friction_step, stribeck_friction_run, state=()),
     # the peak and its velocity scale have basins of their own (a sine's low-speed stretches are short:
     # from its data-driven guess a fit can settle on half the peak at twice the speed)
     rules=Rules(channel="motor_force", primary=("Fc", "Fs"), alike=("dahl_hysteresis",), starts=6,
@@ -218,6 +151,6 @@ DAHL_HYSTERESIS = register(Effect(
             ParamSpec("Fc", "N", 1e-6, 50.0, 0.2, "Coulomb friction force reached in sliding",
                       log=True, positive=True)),
     inputs=("x", "load"), output="load",
-    simulate=_dahl_sim, guess=_dahl_guess, step_class=DahlStep,
+    guess=_dahl_guess, kernel=DAHL,
     rules=Rules(channel="motor_force", primary=("Fc",), wrong_form=_dahl_wrong,
                 draw=lambda rng, s: {"Fc": s.friction, "sigma": s.friction / (rng.uniform(0.05, 0.2) * s.travel)})))

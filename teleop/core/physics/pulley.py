@@ -18,7 +18,7 @@ the model below is built from those quantities and says where it simplifies:
   releasing line lo(T_tip) and the pulling line hi(T_tip).
 - reversals: the cable sticks on the pulleys and the motor force travels between the lines with the cable
   stretch, F_m <- clamp(F_m + k dx, lo, hi), k the stick stiffness [N/m] (the capstan law's transition,
-  teleop.core.physics.capstan); solved as a clamp prefix scan of y = F_m - k x.
+  teleop.core.physics.capstan; kernel effects.driven_play).
 - elongation: segment j (length d_j [m], tension T_j) stretches by T_j d_j / EA; the tip position is
   x - sum_j T_j d_j / EA. During a transition the segment tensions are interpolated between their
   releasing and pulling profiles by where the motor force sits in its band.
@@ -27,7 +27,8 @@ Array functions take a `PulleyChain`; the catalogue effects (`pulley_friction`: 
 motor force; `pulley_elongation`: position link, x and load -> tip position) are its lumped one-pulley
 form, whose parameters a recording can identify: mu and wrap only as the product mu wrap (fix one),
 bend = sum_i B_i, and c = L / EA the cable's compliance (the lumped pulley sits mid-cable, so the mean
-segment tension (T_tip + F_m) / 2 stretches the whole length).
+segment tension (T_tip + F_m) / 2 stretches the whole length). Their physics is one step kernel each
+(teleop.core.kernels.effects), the array forms the catalogue's driver loop over it.
 """
 
 from __future__ import annotations
@@ -38,8 +39,11 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
-from teleop.core.physics.scan import clamp_scan, clamp_step
+from teleop.core.kernels.effects import driven_play_run, driven_play_step, pulley_elongation_run, \
+    pulley_elongation_step, pulley_friction_run, pulley_friction_step
+from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, kernel_call, register
+
+DRIVEN_PLAY = Kernel(driven_play_step, driven_play_run, state=(math.nan, 0.0))
 
 
 @dataclass(frozen=True)
@@ -108,14 +112,12 @@ def pulley_band(T_tip, chain: PulleyChain) -> tuple[np.ndarray, np.ndarray]:
 def pulley_motor_force(x, T_tip, chain: PulleyChain, k: float, F0: float | None = None) -> np.ndarray:
     """(n,) motor force [N] for motor position x (n,) [m] and tip tension T_tip (n,) [N] with stick
     transitions of stiffness k [N/m]: F_k = clamp(F_k-1 + k (x_k - x_k-1), lo_k, hi_k), F0 default T_tip[0]
-    clamped into its band."""
+    clamped into its band (kernel effects.driven_play)."""
     x = np.asarray(x, dtype=float)
     T = np.broadcast_to(np.asarray(T_tip, dtype=float), x.shape)
     lo, hi = pulley_band(T, chain)
-    F0 = float(np.clip(T[0] if F0 is None else F0, lo[0], hi[0]))
-    # y = F - k x turns the driven play into a plain clamp: y_k = clamp(y_k-1, lo_k - k x_k, hi_k - k x_k)
-    y = clamp_scan(F0 - k * x[0], lo - k * x, hi - k * x)
-    return y + k * x
+    start = T if F0 is None else np.full(x.shape, float(F0))
+    return kernel_call(DRIVEN_PLAY, (k,), x, start, lo, hi)
 
 
 def pulley_elongation(F_motor, T_tip, chain: PulleyChain) -> np.ndarray:
@@ -137,10 +139,6 @@ def lumped_chain(p: Mapping[str, float]) -> PulleyChain:
 
 
 # ---- catalogue effects ------------------------------------------------------------------------------------
-
-def _friction_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return pulley_motor_force(s.x, s.load, lumped_chain(p), p["k"])
-
 
 def _friction_guess(s: Signals, y: np.ndarray) -> dict:
     wrap = PARAMS_F[1].default
@@ -167,30 +165,6 @@ PARAMS_F = (
 )
 
 
-class PulleyFrictionStep(Step):
-    """Per-sample pulley_friction: step(x, load) -> motor force [N]."""
-
-    effect_name = "pulley_friction"
-
-    def reset(self) -> None:
-        self.x_prev = None
-        self.F = 0.0
-        p = self.params
-        self._K, self._B = math.exp(p["mu"] * p["wrap"]), p["bend"]
-
-    def _band(self, load: float) -> tuple[float, float]:
-        return max((load - self._B) / self._K, 0.0), self._K * load + self._B
-
-    def step(self, x: float, load: float) -> float:
-        lo, hi = self._band(float(load))
-        if self.x_prev is None:
-            self.F = clamp_step(float(load), lo, hi)
-        else:
-            self.F = clamp_step(self.F + self.params["k"] * (x - self.x_prev), lo, hi)
-        self.x_prev = x
-        return float(self.F)
-
-
 def _hold_wrap(rec, known, direction) -> dict:
     """mu and the wrap: only their product shows."""
     return {"wrap": PARAMS_F[1].default}
@@ -204,18 +178,12 @@ PULLEY_FRICTION = register(Effect(
     params=PARAMS_F,
     inputs=("x", "load"),
     output="load",
-    simulate=_friction_sim,
     guess=_friction_guess,
-    step_class=PulleyFrictionStep,
+    kernel=Kernel(pulley_friction_step, pulley_friction_run, state=(math.nan, 0.0)),
     # on force data alone the capstan law plus a constant bending loss: beside a capstan baseline it would
     # rename a Coulomb friction, not find the pulleys
     rules=Rules(channel="motor_force", primary=("mu",), not_beside=("capstan_friction",), hold=_hold_wrap),
 ))
-
-
-def _elong_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    F_m = pulley_motor_force(s.x, s.load, lumped_chain(p), p["k"])
-    return s.x - p["c"] * 0.5 * (s.load + F_m)
 
 
 def _elong_guess(s: Signals, y: np.ndarray) -> dict:
@@ -230,20 +198,6 @@ PARAMS_E = (ParamSpec("c", "m/N", 1e-9, 1e-1, 2e-5, "cable compliance L / (E A) 
                       log=True, positive=True),) + PARAMS_F
 
 
-class PulleyElongationStep(Step):
-    """Per-sample pulley_elongation: step(x, load) -> tip position [m]."""
-
-    effect_name = "pulley_elongation"
-
-    def reset(self) -> None:
-        p = self.params
-        self._friction = PulleyFrictionStep({k: p[k] for k in ("mu", "wrap", "bend", "k")})
-
-    def step(self, x: float, load: float) -> float:
-        F_m = self._friction.step(x=x, load=load)
-        return float(x - self.params["c"] * 0.5 * (load + F_m))
-
-
 PULLEY_ELONGATION = register(Effect(
     name="pulley_elongation",
     link="position",
@@ -252,8 +206,7 @@ PULLEY_ELONGATION = register(Effect(
     params=PARAMS_E,
     inputs=("x", "load"),
     output="x",
-    simulate=_elong_sim,
     guess=_elong_guess,
-    step_class=PulleyElongationStep,
+    kernel=Kernel(pulley_elongation_step, pulley_elongation_run, state=(math.nan, 0.0)),
     rules=Rules(channel="tip_pos", primary=("c",), hold=_hold_wrap),
 ))

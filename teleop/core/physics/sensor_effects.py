@@ -7,16 +7,20 @@
   Starts neutral (s = 0).
 - thermal_drift: reading = F + c (T - T0), T the sensor temperature [degC].
 - thermal_drift_time: when no temperature is recorded, reading = F + offset + rate (t - t_0), t_0 = t[0].
+Each effect's physics is one step kernel (teleop.core.kernels.effects); the array forms are the catalogue's
+driver loop over it.
 """
 
 from __future__ import annotations
 
-from typing import Mapping
-
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
-from teleop.core.physics.scan import clamp_step, play
+from teleop.core.kernels.effects import hysteresis_offset_run, hysteresis_offset_step, sensor_hysteresis_run, \
+    sensor_hysteresis_step, thermal_drift_run, thermal_drift_step, thermal_drift_time_run, thermal_drift_time_step
+from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, kernel_call, register
+
+OFFSET = Kernel(hysteresis_offset_step, hysteresis_offset_run)
+THERMAL = Kernel(thermal_drift_step, thermal_drift_run, state=())
 
 
 def hysteresis_offset(F: np.ndarray, h: float, delta: float, z0=None) -> np.ndarray:
@@ -25,17 +29,17 @@ def hysteresis_offset(F: np.ndarray, h: float, delta: float, z0=None) -> np.ndar
     F may be (n, k) (k sensors along the columns). z0: the switch state [N] before F[0] ((k,) or a float;
     default F[0], neutral); the state after the last sample is F[-1] - offset[-1] delta / h."""
     F = np.asarray(F, dtype=float)
-    z = play(F[0] if z0 is None else np.asarray(z0, dtype=float), F, delta)
-    return h * (F - z) / delta
+    cols = F.reshape(F.shape[0], -1)
+    Z0 = np.broadcast_to(np.nan if z0 is None else np.asarray(z0, dtype=float), cols.shape[1:]).reshape(-1)
+    out = np.column_stack([kernel_call(OFFSET, (h, delta), cols[:, j], state=np.array([Z0[j]]))
+                           for j in range(cols.shape[1])])
+    return out.reshape(F.shape)
 
 
 def thermal_offset(T: np.ndarray, c: float, T0: float) -> np.ndarray:
-    """Reading offset [N]: c (T - T0), c [N/K], T and T0 [degC]."""
-    return c * (np.asarray(T, dtype=float) - T0)
-
-
-def _hyst_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return s.force + hysteresis_offset(s.force, p["h"], p["delta"])
+    """Reading offset [N]: c (T - T0), c [N/K], T and T0 [degC] (the thermal_drift step kernel on a zero
+    force)."""
+    return kernel_call(THERMAL, (c, T0), 0.0, T)
 
 
 def _hyst_guess(s: Signals, y: np.ndarray) -> dict:
@@ -44,63 +48,15 @@ def _hyst_guess(s: Signals, y: np.ndarray) -> dict:
     return {"h": h, "delta": 0.05 * float(np.ptp(s.force)) + 1e-6}
 
 
-def _thermal_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return s.force + thermal_offset(s.temperature, p["c"], p["T0"])
-
-
 def _thermal_guess(s: Signals, y: np.ndarray) -> dict:
     # y - F = c T - c T0: a straight line in T
     c, a = np.polyfit(s.temperature, y - s.force, 1)
     return {"c": float(c), "T0": float(-a / c) if abs(c) > 1e-12 else float(np.mean(s.temperature))}
 
 
-def _time_sim(s: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return s.force + p["offset"] + p["rate"] * (s.t - s.t[0])
-
-
 def _time_guess(s: Signals, y: np.ndarray) -> dict:
     rate, offset = np.polyfit(s.t - s.t[0], y - s.force, 1)
     return {"rate": float(rate), "offset": float(offset)}
-
-
-class SensorHysteresisStep(Step):
-    """Per-sample sensor_hysteresis: step(force) -> reading [N]."""
-
-    effect_name = "sensor_hysteresis"
-
-    def reset(self) -> None:
-        self.z = None
-
-    def step(self, force: float) -> float:
-        d = self.params["delta"]
-        self.z = force if self.z is None else clamp_step(self.z, force - d, force + d)
-        return float(force + self.params["h"] * (force - self.z) / d)
-
-
-class ThermalDriftStep(Step):
-    """Per-sample thermal_drift: step(force, temperature) -> reading [N]."""
-
-    effect_name = "thermal_drift"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, force: float, temperature: float) -> float:
-        return float(force + self.params["c"] * (temperature - self.params["T0"]))
-
-
-class TimeDriftStep(Step):
-    """Per-sample thermal_drift_time: step(t, force) -> reading [N]; t_0 is the first t seen."""
-
-    effect_name = "thermal_drift_time"
-
-    def reset(self) -> None:
-        self.t0 = None
-
-    def step(self, t: float, force: float) -> float:
-        if self.t0 is None:
-            self.t0 = t
-        return float(force + self.params["offset"] + self.params["rate"] * (t - self.t0))
 
 
 def _thermal_hold(rec, known, direction) -> dict:
@@ -119,7 +75,7 @@ SENSOR_HYSTERESIS = register(Effect(
             ParamSpec("delta", "N", 1e-6, 100.0, 0.2, "half the force change over which the offset flips",
                       log=True, positive=True)),
     inputs=("force",), output="force",
-    simulate=_hyst_sim, guess=_hyst_guess, step_class=SensorHysteresisStep,
+    guess=_hyst_guess, kernel=Kernel(sensor_hysteresis_step, sensor_hysteresis_run),
     # on the motor sensor under a spring load, a hysteresis is a constant-magnitude friction's band
     rules=Rules(channel="motor_force", primary=("h",),
                 alike=("coulomb_friction", "stribeck_friction", "dahl_hysteresis"),
@@ -131,7 +87,7 @@ THERMAL_DRIFT = register(Effect(
     params=(ParamSpec("c", "N/K", -10.0, 10.0, 0.01, "temperature coefficient of the reading"),
             ParamSpec("T0", "degC", -50.0, 150.0, 20.0, "temperature of zero offset")),
     inputs=("force", "temperature"), output="force",
-    simulate=_thermal_sim, guess=_thermal_guess, step_class=ThermalDriftStep,
+    guess=_thermal_guess, kernel=THERMAL,
     rules=Rules(channel="motor_force", primary=("c",), hold=_thermal_hold, draw=_thermal_draw)))
 
 THERMAL_DRIFT_TIME = register(Effect(
@@ -140,6 +96,6 @@ THERMAL_DRIFT_TIME = register(Effect(
     params=(ParamSpec("offset", "N", -100.0, 100.0, 0.0, "offset at the first sample"),
             ParamSpec("rate", "N/s", -10.0, 10.0, 0.0, "drift rate")),
     inputs=("t", "force"), output="force",
-    simulate=_time_sim, guess=_time_guess, step_class=TimeDriftStep,
+    guess=_time_guess, kernel=Kernel(thermal_drift_time_step, thermal_drift_time_run),
     # no physical cause to name: a drift with time and no temperature channel is reported as unexplained
     rules=Rules(channel="motor_force", primary=("rate",), finding=False)))

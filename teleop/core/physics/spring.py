@@ -20,21 +20,18 @@ spring's would not (docs/diagnosis.md).
 
 from __future__ import annotations
 
-from typing import Mapping
-
 import numpy as np
 
-from teleop.core.physics.base import Effect, ParamSpec, Rules, Signals, Step, register
+from teleop.core.kernels.effects import parallel_spring_run, parallel_spring_step
+from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, kernel_call, register
+
+KERNEL = Kernel(parallel_spring_step, parallel_spring_run, state=())
 
 
 def spring_force(x, k: float, g: float, x_ref: float):
-    """Force [N] of the parallel spring at motor position x [m] (array or scalar): k dx + g dx^2 / 2."""
-    dx = np.asarray(x, dtype=float) - x_ref
-    return dx * (k + 0.5 * g * dx)
-
-
-def _simulate(signals: Signals, p: Mapping[str, float]) -> np.ndarray:
-    return signals.load + spring_force(signals.x, p["k"], p.get("g", 0.0), p["x_ref"])
+    """Force [N] of the parallel spring at motor position x [m] (array or scalar): k dx + g dx^2 / 2
+    (the step kernel on a zero load)."""
+    return kernel_call(KERNEL, (k, g, x_ref), x, 0.0)
 
 
 def _guess(signals: Signals, y: np.ndarray) -> dict:
@@ -54,19 +51,6 @@ PARAMS = (ParamSpec("k", "N/m", -1e9, 1e9, 100.0, "stiffness at x_ref (N m/rad o
                     "it at the record's mean drive position; the offset takes the force there)"))
 
 
-class SpringStep(Step):
-    """Per-sample parallel_spring: step(x, load) -> motor force [N]."""
-
-    effect_name = "parallel_spring"
-
-    def reset(self) -> None:
-        pass
-
-    def step(self, x: float, load: float) -> float:
-        p = self.params
-        return float(load + spring_force(x, p["k"], p.get("g", 0.0), p["x_ref"]))
-
-
 def _hold(rec, known, direction) -> dict:
     """Counted from the record's mean drive position."""
     return {"x_ref": direction * float(np.mean(rec.x))} if rec.x is not None else {}
@@ -79,8 +63,7 @@ PARALLEL_SPRING = register(Effect(
     params=PARAMS,
     inputs=("x", "load"),
     output="load",
-    simulate=_simulate,
     guess=_guess,
-    step_class=SpringStep,
+    kernel=KERNEL,
     rules=Rules(channel="motor_force", primary=("k",), position_only=True, hold=_hold),
 ))
