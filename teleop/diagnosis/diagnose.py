@@ -23,12 +23,15 @@ from teleop.diagnosis.peer import arx_rmse
 from teleop.diagnosis.sindy_peer import sindy_rmse
 from teleop.io.recording_io import Recording
 from teleop.core.errors import InputError
-from teleop.core.physics import get_effect
+from teleop.core.physics import REGISTRY, get_effect
 
 HOLDOUT = 0.4           # last 40 % of each recording scores the models
-#: the project's simulation of a cable setup: the sheath's capstan friction on the force link (over the
-#: recorded bend, or a fitted mu Theta where none is recorded); the spring load is the position link's gain
-PROJECT_BASELINE = ("capstan_friction",)
+#: the project's simulation of a cable setup: the effects whose rules say so (Rules.baseline; the sheath's
+#: capstan friction on the force link, over the recorded bend, or a fitted mu Theta where none is recorded);
+#: the spring load is the position link's gain
+PROJECT_BASELINE = tuple(n for n, e in REGISTRY.items() if e.rules.baseline)
+#: the simplest law of the drive's rate (Rules.rate_probe), fitted to pick an exact drive's rate convention
+RATE_PROBE = tuple(n for n, e in REGISTRY.items() if e.rules.rate_probe)[:1]
 STRUCTURE = 2.0         # residual RMS above this many noise levels, with a condition explaining >= R2_MIN
 R2_MIN = 0.3            # of it, is reported as unexplained
 
@@ -144,12 +147,12 @@ class Diagnosis:
                 final = res.final
                 params = dict(final.model.effects)[name]
                 block = _param_block(self.rec, d, name, params, final.stderr.get(name, {}))
-                if name == "backlash" and not d.link.through_spring:  # also in motor units
-                    g = abs(final.model.gain)
-                    w = block["width"]
-                    block["width_input"] = {"value": w["value"] / g,
-                                            "stderr": None if w["stderr"] is None else w["stderr"] / g,
-                                            "unit": self.rec.units[d.link.input], "derived": True}
+                for p in () if d.link.through_spring else get_effect(name).rules.input_units:
+                    g = abs(final.model.gain)   # also in the input's (motor) units
+                    w = block[p]
+                    block[f"{p}_input"] = {"value": w["value"] / g,
+                                           "stderr": None if w["stderr"] is None else w["stderr"] / g,
+                                           "unit": self.rec.units[d.link.input], "derived": True}
                 first = len(before.model.effects) == before.model.base
                 alts = sorted(((n, f.rmse_hold) for n, f in res.ranking.items() if n != name),
                               key=lambda kv: kv[1])[:3] if first else []
@@ -257,12 +260,12 @@ def exact_rate(d: LinkData, fit_idx: slice, hold_idx: slice, baseline: tuple, se
     """`d` with the rate convention of its exact drive that the held-out part prefers: the central difference
     of the catalogue's array forms or the backward one of a per-sample simulation (at a reversal they differ
     by one sample, and an operator's tremor reverses a command hundreds of times). The probe: the baseline
-    with the simplest rate law on it (Coulomb friction), fitted each way."""
+    with the simplest rate law on it (Rules.rate_probe: Coulomb friction), fitted each way."""
     best, pick = math.inf, d
     for cand in (d, dataclasses.replace(d, backward=True, cache={})):
         base = simulation_baseline(cand, fit_idx, hold_idx, baseline, seed)
         try:
-            r = fit_chain(cand, base.model, ("coulomb_friction",), fit_idx, hold_idx, seed=seed).rmse_hold
+            r = fit_chain(cand, base.model, RATE_PROBE, fit_idx, hold_idx, seed=seed).rmse_hold
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             r = base.rmse_hold
         if r < best:
@@ -301,12 +304,13 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
             d = exact_rate(d, fit_idx, hold_idx, tuple(baseline), seed)
         res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed,
                                         baseline=tuple(baseline))
-        if link.kind == "position" and "backlash" in res.final.names and not is_exact(rec.channels[link.input]):
+        sharp = [n for n in res.final.names if get_effect(n).rules.raw_input]
+        if link.kind == "position" and sharp and not is_exact(rec.channels[link.input]):
             # a play seen on the raw input too: keep whichever input the held-out part prefers (an exact
             # input is not smoothed: its raw form is the same)
             d_raw = link_data(rec, link, corrections, raw_input=True)
             raw = identify_link(d_raw, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline))
-            if raw.final.rmse_hold < res.final.rmse_hold and "backlash" in raw.final.names:
+            if raw.final.rmse_hold < res.final.rmse_hold and set(sharp) & set(raw.final.names):
                 d, res = d_raw, raw
         results.append(res)
         corr = sensor_correction(res)

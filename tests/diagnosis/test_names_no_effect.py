@@ -10,7 +10,7 @@ from teleop.core.physics import REGISTRY
 
 ROOT = Path(__file__).resolve().parents[2]
 FILES = ("teleop/diagnosis/identify.py", "teleop/diagnosis/generator.py", "scenes/cable_rig.py",
-         "teleop/apps/bench/diagnose_rig.py")
+         "teleop/apps/bench/diagnose_rig.py", "teleop/diagnosis/diagnose.py")
 
 
 def _literals(path: Path) -> list[str]:

@@ -112,5 +112,6 @@ BACKLASH = register(Effect(
     # a wide play flattens the affine least-squares gain (the tip stands still over the dead band): refit
     # from gains up to 1 / (1 - play fraction) larger
     rules=Rules(channel="tip_pos", primary=("width",), gain_restarts=(1.5, 2.5, 4.0), hold=_hold,
-                draw=lambda rng, s: {"width": rng.uniform(0.08, 0.25) * 2 * s.travel}),
+                draw=lambda rng, s: {"width": rng.uniform(0.08, 0.25) * 2 * s.travel}, raw_input=True,
+                input_units=("width",)),
 ))

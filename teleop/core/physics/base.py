@@ -340,7 +340,14 @@ class Rules:
     wrong_form(params, record) -> True when fitted values contradict the effect's defining signature.
     baseline_starts(record, index, gain, offset, direction) -> [(direction, gain, offset, params)]: extra
     starts when the effect is in a baseline (`index` the fit part's sample indices).
-    draw(rng, scale) -> params: a generator's random parameters, material but not dominant."""
+    draw(rng, scale) -> params: a generator's random parameters, material but not dominant.
+    baseline: part of the project's simulation of a cable setup (the diagnosis's default baseline).
+    rate_probe: the simplest law of the drive's rate: the diagnosis fits it to tell which rate convention
+    (central or backward differences) an exact drive's recording prefers.
+    raw_input: its signature is sharp in the input (a play's take-up): found on a position link whose input
+    the diagnosis smooths, the link is identified on its raw input too and the better kept.
+    input_units: parameters in the output's unit that the diagnosis also reports in the input's (divided by
+    the link's gain)."""
 
     channel: str = ""
     primary: tuple[str, ...] = ()
@@ -354,6 +361,10 @@ class Rules:
     wrong_form: Callable[[Mapping[str, float], LinkRecord], bool] | None = None
     baseline_starts: Callable[..., list] | None = None
     draw: Callable[[np.random.Generator, Scale], dict] | None = None
+    baseline: bool = False
+    rate_probe: bool = False
+    raw_input: bool = False
+    input_units: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

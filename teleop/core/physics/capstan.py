@@ -220,5 +220,7 @@ CAPSTAN_FRICTION = register(Effect(
     output="load",
     guess=_guess,
     kernel=KERNEL,
-    rules=Rules(channel="motor_force", primary=("mu",), hold=_hold, baseline_starts=_baseline_starts),
+    # the project's simulation of a cable setup: the sheath's capstan friction on the force link
+    rules=Rules(channel="motor_force", primary=("mu",), hold=_hold, baseline_starts=_baseline_starts,
+                baseline=True),
 ))

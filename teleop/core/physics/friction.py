@@ -118,7 +118,7 @@ COULOMB_FRICTION = register(Effect(
     guess=_coulomb_guess, kernel=Kernel(coulomb_friction_step, coulomb_friction_run, state=()),
     # constant-magnitude frictions on one channel are one effect to any data
     rules=Rules(channel="motor_force", primary=("Fc",), alike=("stribeck_friction", "dahl_hysteresis"),
-                draw=lambda rng, s: {"Fc": s.friction})))
+                draw=lambda rng, s: {"Fc": s.friction}, rate_probe=True)))
 
 VISCOUS_FRICTION = register(Effect(
     name="viscous_friction", link="force", doc="velocity-proportional: load + b v",
