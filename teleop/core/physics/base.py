@@ -230,14 +230,18 @@ class KernelStep(Step):
         self.state = np.array(eff.kernel.state, dtype=float)
         self._p = eff.packed(self.params)
         self._names = eff.inputs + eff.optional
+        self._row = np.empty(len(self._names))   # one sample of the channels, refilled by each step
+        self._step = eff.kernel.step
 
     @classmethod
     def effect(cls) -> "Effect":
         return cls._effect or get_effect(cls.effect_name)
 
     def step(self, **u) -> float:
-        row = np.array([self._channel(c, u.get(c)) for c in self._names])
-        return float(self.effect().kernel.step(self.state, row, self._p))
+        row = self._row
+        for j, c in enumerate(self._names):
+            row[j] = self._channel(c, u.get(c))
+        return float(self._step(self.state, row, self._p))
 
     def run(self, **arrays) -> np.ndarray:
         """(n,) the output along (n,) arrays of the channels (the array form), continuing from this state."""
