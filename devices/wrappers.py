@@ -25,6 +25,7 @@ import numpy as np
 from devices.base import ContextDevice, DeviceError, HapticSample, RobotReading
 from teleop.core.control.feedforward import TAU_S, V0_M_S, BacklashFeedforward
 from teleop.core.kernels.safety import all_finite
+from teleop.io.stop_signals import ignore_stop_signals
 
 # ------------------------------------------------------------------------------------------------------------
 # generic wrappers
@@ -230,6 +231,7 @@ def _unpack(v: np.ndarray, keys: list) -> RobotReading:
 def _worker(build, rate_hz: float, shm_read, shm_cmd, conn, parent_pid: int, rt_priority: int | None = None) -> None:
     """Child: build the robot (`build()`), own it, apply the latest command, read, publish, at rate_hz (sleeping,
     not spinning)."""
+    ignore_stop_signals()  # the group's SIGINT/SIGTERM/SIGHUP: the loop process stops the robot in order
     try:
         if rt_priority:
             os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(rt_priority)))

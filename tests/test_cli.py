@@ -133,7 +133,7 @@ def test_help_and_version_exit_0_on_stdout(capsys, argv):
 
 def test_ctrl_c_during_a_recorded_session_exit_130_recording_closed_and_marked(tmp_path):
     """Ctrl-C reaches every process of the session (as a terminal sends it): the loop stops, the recording
-    is closed whole, the JSON says interrupted, exit 130."""
+    is closed whole, the JSON says "interrupted": "SIGINT", exit 130."""
     import os
     import signal
     import time
@@ -156,7 +156,7 @@ def test_ctrl_c_during_a_recorded_session_exit_130_recording_closed_and_marked(t
     assert p.returncode == 130, stderr
     assert "INTERRUPTED" in stdout and "interrupted" in stderr and "Traceback" not in stderr, (stdout, stderr)
     doc = json.loads(out.read_text())
-    assert doc["interrupted"] is True and 0 < doc["timing"]["ticks"] < 600_000
+    assert doc["interrupted"] == "SIGINT" and 0 < doc["timing"]["ticks"] < 600_000
     s = read_session(rec)
     assert not s.damage and "session" in s.metadata and s.metadata["session_end"]["interrupted"] == "SIGINT"
 

@@ -11,12 +11,15 @@ import argparse
 import importlib
 import pkgutil
 import re
+import signal
 import sys
+import threading
 
 from devices.base import DeviceError
 from teleop import __version__
 from teleop.apps.argtypes import OUTPUT_OPTIONS, seed_int
 from teleop.core.errors import InputError
+from teleop.io.stop_signals import STOP, exit_code, ignore_stop_signals
 
 
 _TYPE_NAMES = {"int": "an integer", "float": "a number"}
@@ -113,7 +116,8 @@ def build_parser() -> TeleopArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the `teleop` command on `argv` (default: sys.argv[1:]); return the exit code.
 
-    0 on success (also for --help and --version), 2 on bad input (one line on stderr), 130 on Ctrl-C.
+    0 on success (also for --help and --version), 2 on bad input (one line on stderr), 128 + the signal's
+    number when SIGINT (Ctrl-C: 130), SIGTERM (143) or SIGHUP (129) stopped it (teleop.io.stop_signals).
     """
     parser = build_parser()
     try:
@@ -123,14 +127,19 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    main_thread = threading.current_thread() is threading.main_thread()
+    if main_thread:  # the one handler of SIGINT, SIGTERM and SIGHUP (teleop.io.stop_signals)
+        STOP.install()
     try:
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        return exit_code(STOP.signum) if STOP.signum else code  # a polling command wrote its partial results
     except InputError as exc:
         print(f"teleop: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("teleop: interrupted", file=sys.stderr)
-        return 130
+        signum = STOP.signum or signal.SIGINT
+        print(f"teleop: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+        return exit_code(signum)
     except OSError as exc:
         if exc.filename is None:
             raise
@@ -144,6 +153,11 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"teleop: error: {message}", file=sys.stderr)
         return 2
+    finally:
+        if main_thread:
+            STOP.uninstall()
+            if STOP.signum:  # stopped: a repeat must not kill the interpreter's shutdown (joining its children)
+                ignore_stop_signals()
 
 
 def _device_error(exc: Exception) -> str | None:

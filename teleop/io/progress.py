@@ -16,11 +16,13 @@ PLAIN_INTERVAL_S = 5.0  # [s] between plain lines when stderr is not a terminal
 
 
 class PlainProgress:
-    """``desc: k/total unit (p %), t s elapsed`` on `stream` at most every `interval_s` seconds of `clock`,
-    and a last line on close when at least one line was written (a short run stays silent)."""
+    """``desc: k/total unit (p %), t s elapsed[, about s left][, postfix]`` on `stream` at most every
+    `interval_s` seconds of `clock`, and a last line on close when at least one line was written (a short run
+    stays silent, unless `start_line` asks for a first line at once). The time left is the elapsed time per
+    unit done so far times the units left."""
 
     def __init__(self, total: int | None, desc: str, unit: str = "it", stream=None,
-                 interval_s: float = PLAIN_INTERVAL_S, clock=time.monotonic):
+                 interval_s: float = PLAIN_INTERVAL_S, clock=time.monotonic, start_line: bool = False):
         self.total, self.desc, self.unit = total, desc, unit
         self.stream = stream if stream is not None else sys.stderr
         self.interval_s, self.clock = interval_s, clock
@@ -29,17 +31,26 @@ class PlainProgress:
         self.t0 = self.clock()
         self._last = self.t0
         self._closed = False
+        self.postfix = ""
+        if start_line:
+            self.lines += 1
+            print(self._line(self.t0), file=self.stream, flush=True)
 
     def _line(self, now: float, done: bool = False) -> str:
         elapsed = now - self.t0
         count = f"{self.n}/{self.total}" if self.total else f"{self.n}"
         share = f" ({100.0 * self.n / self.total:.0f} %)" if self.total else ""
+        post = f", {self.postfix}" if self.postfix else ""
         if done:
-            return f"{self.desc}: done, {self.n} {self.unit} in {elapsed:.0f} s"
+            return f"{self.desc}: done, {self.n} {self.unit} in {elapsed:.0f} s{post}"
         left = ""
         if self.total and 0 < self.n < self.total:
             left = f", about {elapsed * (self.total - self.n) / self.n:.0f} s left"
-        return f"{self.desc}: {count} {self.unit}{share}, {elapsed:.0f} s elapsed{left}"
+        return f"{self.desc}: {count} {self.unit}{share}, {elapsed:.0f} s elapsed{left}{post}"
+
+    def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
+        """Text added to the next lines (as tqdm's set_postfix_str)."""
+        self.postfix = str(s)
 
     def update(self, n: int = 1) -> None:
         self.n += n
@@ -62,10 +73,11 @@ class PlainProgress:
         return False
 
 
-def progress(total: int | None, desc: str, unit: str = "it", stream=None, **tqdm_kwargs):
-    """A progress reporter with ``update(n)`` and ``close()`` (also a context manager): tqdm when `stream`
-    (default stderr) is a terminal, else PlainProgress."""
+def progress(total: int | None, desc: str, unit: str = "it", stream=None, start_line: bool = False, **tqdm_kwargs):
+    """A progress reporter with ``update(n)``, ``set_postfix_str(s)`` and ``close()`` (also a context manager):
+    tqdm when `stream` (default stderr) is a terminal (its bar shows at once), else PlainProgress (with a
+    first line at once if `start_line`)."""
     stream = stream if stream is not None else sys.stderr
     if stream.isatty():
         return tqdm(total=total, desc=desc, unit=unit, file=stream, **tqdm_kwargs)
-    return PlainProgress(total, desc, unit, stream=stream)
+    return PlainProgress(total, desc, unit, stream=stream, start_line=start_line)

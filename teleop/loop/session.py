@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import gc
 import platform
-import signal
 import subprocess
 import time
 from dataclasses import dataclass, field
@@ -27,9 +26,11 @@ from teleop.core.estimation.sensor_reading import make_estimator
 from teleop.core.geometry import default_geometry
 from teleop.core.kinematics import pose2lengths
 from teleop.io.recording import Recorder, Ring
+from teleop.io.stop_signals import STOP
 from teleop.loop.core import Teleop
 from teleop.loop.devices_by_url import open_device, process_robot
 from teleop.loop.live import LiveView
+from teleop.loop.loop_progress import LoopProgress
 from teleop.loop.params import LoopParams
 from teleop.loop.tap import RowTap, numeric_extras, session_layout
 from teleop.loop.timing import SimClock, TimingLog, run_paced, run_stepped, set_normal, set_realtime
@@ -48,7 +49,7 @@ class SessionResult:
     record: str | None = None
     scheduling: str = ""
     live: dict = field(default_factory=dict)  # the live view's counters (teleop.loop.live.LiveView.stats), if served
-    interrupted: str = ""  # "SIGINT" (Ctrl-C) or "SIGTERM" when a signal ended the run before `seconds`
+    interrupted: str = ""  # "SIGINT" (Ctrl-C), "SIGTERM" or "SIGHUP" when a signal ended the run before `seconds`
 
 
 def software_version() -> str:
@@ -139,14 +140,6 @@ def _start_live(tp, layout, extras, recorder, live: tuple, scene: dict | None):
     return view
 
 
-class _Terminate(Exception):
-    pass
-
-
-def _on_sigterm(signum, frame):
-    raise _Terminate()
-
-
 def frame_period(params: LoopParams, robot_process_hz: float | None) -> float:
     """Period [s] of the robot frames the estimator sees: the robot process's rate, or every robot_every ticks."""
     return max(params.dt, 1.0 / robot_process_hz) if robot_process_hz else params.dt * params.robot_every
@@ -180,7 +173,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 spin_us: float | None = None, flush_interval: float = 0.1, haptic=None, robot=None,
                 robot_process_hz: float | None = 1000.0, realtime: bool = True,
                 robot_rt_priority: int | None = None, live: tuple | None = None,
-                live_scene: dict | None = None, robot_wrapper=None, sim_clock: bool = False) -> SessionResult:
+                live_scene: dict | None = None, robot_wrapper=None, sim_clock: bool = False,
+                progress: bool = False) -> SessionResult:
     """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
 
     With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
@@ -194,7 +188,13 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     `sim_clock` ticks on a simulated clock instead (timing.run_stepped: tick k at k periods, no waiting; the
     same inputs give the same session on any machine); it needs the robot inline (robot_process_hz None) and a
     simulated stylus (sim://, opened here on that clock); `robot_wrapper(robot, clock)` is handed the clock
-    (None: the wall clock).
+    (None: the wall clock). `progress` shows the run's ticks, state, misses and faults on stderr
+    (teleop.loop.loop_progress).
+
+    A stop signal (teleop.io.stop_signals: SIGINT, SIGTERM, SIGHUP, with the CLI's handler installed) ends the
+    loop between two ticks; the devices are stopped, the recording closed with the signal's name in its
+    `session_end` record, and the result's `interrupted` names it. Without that handler Ctrl-C's
+    KeyboardInterrupt does the same ("SIGINT").
     """
     if sim_clock and robot_process_hz:
         raise ValueError("a simulated clock needs the robot inline (robot_process_hz=None): a robot process runs "
@@ -219,8 +219,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             robot = built = open_device(robot_url)
     if robot_wrapper is not None:
         robot = robot_wrapper(robot, clock)
-    recorder = live_view = None
-    old = signal.signal(signal.SIGTERM, _on_sigterm)
+    recorder = live_view = bar = None
     try:
         with haptic, robot:
             tp = Teleop(haptic, robot, params, estimator=estimator)
@@ -245,16 +244,22 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             interrupted = ""
             on_start = (recorder.set_t0 if recorder is not None else
                         live_view.ring.set_t0 if live_view is not None else None)
+            if progress:
+                bar = LoopProgress(tp, log, len(log.tick), params.rate_hz)
             try:
-                if sim_clock:
-                    run_stepped(tp, seconds, params.rate_hz, log, on_start=on_start, clock=clock)
-                else:
-                    run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us, on_start=on_start)
+                with STOP.polled():  # a signal sets STOP.signum; the loop ends after the tick under way
+                    if sim_clock:
+                        run_stepped(tp, seconds, params.rate_hz, log, on_start=on_start, clock=clock,
+                                    should_stop=STOP.requested, on_tick=bar and bar.on_tick)
+                    else:
+                        run_paced(tp, seconds, params.rate_hz, log, spin_us=spin_us, on_start=on_start,
+                                  should_stop=STOP.requested, on_tick=bar and bar.on_tick)
+                interrupted = STOP.name
             except KeyboardInterrupt:
-                interrupted = "SIGINT"
-            except _Terminate:
-                interrupted = "SIGTERM"
+                interrupted = STOP.name or "SIGINT"
             finally:
+                if bar is not None:
+                    bar.close()
                 gc.enable()
                 if realtime:
                     set_normal()
@@ -270,7 +275,6 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                                    fault_reason=tp.fault_reason, record=record, scheduling=scheduling,
                                    interrupted=interrupted)
     finally:
-        signal.signal(signal.SIGTERM, old)
         if live_view is not None:
             live_stats = live_view.close()
             if "result" in locals():

@@ -2,14 +2,22 @@
 argument types they call them with, before the loop starts: the first tick must not pay for a compile.
 
     seconds = warm_up(geom)        # once per process (later calls return 0.0 at once)
+    warm_up(say=None)              # silent (by default a cold cache is announced on stderr before compiling)
+    warm_up(on_group=report)       # report(name, seconds) after each group (`teleop warm`)
 
 A cold cache compiles each kernel (seconds, once per machine and source version); a warm one loads them
-(well under a second, most of it numba's own start-up).
+(well under a second, most of it numba's own start-up). The cache is cold when the kernels the last
+complete warm-up dispatched (listed in WARMED_FILE beside numba's cache) are not all in numba's on-disk cache
+for their current source, or when no warm-up completed there yet.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import sys
 import time
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -54,13 +62,77 @@ def kernels() -> list:
     return out
 
 
-def warm_up(geom=None) -> float:
-    """Run every hot-path kernel once with the loop's argument types (default geometry if None); seconds."""
+COLD_MESSAGE = "compiling kernels (first run only) ..."
+WARMED_FILE = "teleop_warmed_kernels.json"  # in numba's cache directory: the kernels a complete warm-up dispatched
+
+
+def _name(kernel) -> str:
+    return f"{kernel.py_func.__module__}:{kernel.py_func.__qualname__}"
+
+
+def _warmed_path() -> str:
+    return os.path.join(kernels()[0]._cache._cache_path, WARMED_FILE)
+
+
+def _cached(kernel) -> bool:
+    """True when numba's on-disk cache holds `kernel` compiled from its current source."""
+    try:
+        return bool(kernel._cache._cache_file._load_index())
+    except (AttributeError, OSError):
+        return False
+
+
+def cache_is_cold() -> bool:
+    """True when warming up will compile: no complete warm-up recorded in numba's cache directory, or one
+    of the kernels it dispatched is missing from the cache (first run, a new source version, another cache)."""
+    try:
+        with open(_warmed_path()) as f:
+            names = set(json.load(f))
+    except (OSError, ValueError):
+        return True
+    by_name = {_name(k): k for k in kernels()}
+    return not names <= set(by_name) or not all(_cached(by_name[n]) for n in names)
+
+
+def _record_warmed() -> None:
+    """Write the names of the kernels this process dispatched (after a complete warm-up) to WARMED_FILE."""
+    try:
+        with open(_warmed_path(), "w") as f:
+            json.dump(sorted(_name(k) for k in kernels() if k.signatures), f)
+    except OSError:  # a read-only cache: the next run says "compiling" again, nothing worse
+        pass
+
+
+def say_stderr(text: str) -> None:
+    """One line on stderr, flushed."""
+    print(text, file=sys.stderr, flush=True)
+
+
+def warm_up(geom=None, say=say_stderr, on_group=None) -> float:
+    """Run every hot-path kernel once with the loop's argument types (default geometry if None); seconds.
+
+    say(text) (default: a line on stderr; None: silent) is told COLD_MESSAGE before anything compiles when
+    the cache is cold; on_group(name, seconds) after each group of GROUPS."""
     if _done:
         return 0.0
+    if say is not None and cache_is_cold():
+        say(COLD_MESSAGE)
     geom = default_geometry() if geom is None else geom
     t0 = time.perf_counter()
-    n = len(geom.B)
+    s = SimpleNamespace(geom=geom, n=len(geom.B))
+    for name, group in GROUPS:
+        t = time.perf_counter()
+        group(s)
+        if on_group is not None:
+            on_group(name, time.perf_counter() - t)
+    _done.append(True)
+    _record_warmed()
+    return time.perf_counter() - t0
+
+
+def _loop(s) -> None:
+    """The loop's path: mapping, FSR counts, estimate + Kalman, render, for every estimator."""
+    geom, n = s.geom, s.n
     poly = tuple((0.0, 0.0) for _ in range(6))
     turn = TurnCompensation((AxisTurnFit(axis=2, duration=0.1, forward=poly, backward=poly),))
     dyn = DynamicParams(b=1.0, dahl_sigma=1e4, dahl_Fc=0.01)
@@ -82,7 +154,11 @@ def warm_up(geom=None) -> float:
             lt.estimate(np.full(n, 400.0), np.zeros(6), 1e-3)
             lt.render(0.1, 0.0, 0.0, 1e-3, 0.0, 0.0, 0.0)
             est.tick.estimate([0.0] * 6, [2.0] * n, 1e-3)
-    # the simulated robot's reading: forward kinematics, pose terms, tension distribution, capstan chain
+
+
+def _sim_robot(s) -> None:
+    """The simulated robot's reading: forward kinematics, pose terms, tension distribution, capstan chain."""
+    geom, n = s.geom, s.n
     q = np.zeros(6)
     L = pose2lengths(q, geom)
     forward_kinematics(np.ascontiguousarray(L), q.copy(), FREE_AXIAL, geom.r, geom.B, 1e-12, 12)
@@ -120,14 +196,23 @@ def warm_up(geom=None) -> float:
                           *FsrBranchLag(default_fsr_calibration(), n).kernel_args(), np.zeros((1, n)), 0,
                           np.empty(n, dtype=np.int64))
     KS.conductance_loop(np.full(n, P), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
-    # the distributed cable (sim://robot?plant=distributed): a reading, then a batch
+    s.q, s.L, s.A, s.P = q, L, A, P
+
+
+def _cables(s) -> None:
+    """The distributed cable (sim://robot?plant=distributed), a reading then a batch, and the FSR's lag."""
+    n, P = s.n, s.P
     cables = DistributedCables(TendonSheathParams(), n, P, 1e-3)
     cables.step(np.zeros(n), np.full(n, P), np.zeros(n))
     cables.run(np.zeros((2, n)), np.full((2, n), P), np.zeros((2, n)))
     lag = FsrBranchLag(default_fsr_calibration(), n)
     for _ in range(2):  # the first reading, then the lag
         lag.counts(np.full(n, P), np.zeros(n))
-    # the loop's safety monitors and finiteness checks (float and int arrays)
+
+
+def _safety(s) -> None:
+    """The loop's safety monitors and finiteness checks (float and int arrays)."""
+    n, P, L = s.n, s.P, s.L
     TensionRange(5.5, 0.2, 0.05, n).update(0.0, np.full(n, P))
     StuckCable(0.05, 0.3, 1e-7, n).update(0.0, np.full(n, P), np.zeros(n))
     tension_monitors(TensionRange(5.5, 0.2, 0.05, n), StuckCable(0.05, 0.3, 1e-7, n), 0.0, np.full(n, P), np.zeros(n))
@@ -141,7 +226,10 @@ def warm_up(geom=None) -> float:
     for a in (np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros((3, n))[1, :6]):  # the loop's estimate check
         all_finite(a)
     all_finite2(np.zeros(n), np.zeros((3, n))[1, :6])  # the loop's estimate check (tensions, wrench)
-    # the simulated operator (devices.simulated): one step with and without tremor
+
+
+def _operator(s) -> None:
+    """The simulated operator (devices.simulated): one step with and without tremor."""
     c = np.zeros(KO.N_CONST)
     c[[KO.H, KO.M, KO.K, KO.B, KO.PERIOD, KO.DUTY]] = 1e-3, 0.15, 150.0, 6.0, 2.0, 0.5
     c[KO.HI:KO.HI + 3] = 1.0
@@ -149,7 +237,12 @@ def warm_up(geom=None) -> float:
         KO.operator_steps(np.zeros(9), 0.0, 0.0, 0.0, 0, 1, c, np.zeros((1, 3)), 0, tremor, np.zeros((0, 3)),
                           np.zeros((0, 2)))
     KO.script_offset(KO.POKES, 0.1, 0.01, 2.0, 0.5)
-    # the recorder's tap: a reading's counts and steps as ints (inline robot) or floats (ProcessRobot)
+
+
+def _tap(s) -> None:
+    """The recorder's tap (a reading's counts and steps as ints, inline robot, or floats, ProcessRobot) and
+    teleop bench sim's log."""
+    n, L = s.n, s.L
     o, w = np.arange(29, dtype=np.int64) * 16, np.full(29, 6, dtype=np.int64)
     w[[KTap.STAGES, KTap.ORIENT, KTap.CP, KTap.CV, KTap.SETPOINT, KTap.SERVO_CF]] = 7, 9, 3, 3, 3, 3
     for dt in (np.int64, np.float64):
@@ -162,14 +255,26 @@ def warm_up(geom=None) -> float:
                     np.zeros((1, 4), dtype=np.int64), np.zeros(3), np.zeros((1, 3)), np.zeros(3), np.zeros((1, 3)), j,
                     L, np.zeros((1, n)), np.zeros(n, dtype=np.int64), np.zeros((1, n), dtype=np.int64), np.zeros(6),
                     np.zeros(1))
+
+
+def _around(s) -> None:
+    """What the loop and the devices call around the ticks: length checks, the tension solver, the stylus's
+    rotation, home lengths, the loop's first-engagement forward kinematics and its engage rule."""
+    geom, q, L, A, P = s.geom, s.q, s.L, s.A, s.P
+    f = -structure_matrix(q, geom) @ np.full(s.n, P)
     check_lengths(L, geom)
     TensionSolver(A, geom.t_min, geom.t_max, P).solve(f)
-    # what the loop and the devices call around the ticks: the stylus's rotation, home lengths, the loop's
-    # first-engagement forward kinematics and its engage rule
     rotation_zyx(0.0, 0.0, 0.0)
     poses2lengths(np.zeros((1, 6)), geom)
     lengths2pose(L, geom, guess=q)
     engage_count(0, 0.0, 0.0, 0.0, 0.2)
     KT.OK  # noqa: B018 - imported for the sim robot's status check
-    _done.append(True)
-    return time.perf_counter() - t0
+
+
+GROUPS = (("loop: mapping, estimators, rendering", _loop),
+          ("simulated robot: kinematics, sheath, readings", _sim_robot),
+          ("distributed cable, FSR lag", _cables),
+          ("safety monitors", _safety),
+          ("simulated operator", _operator),
+          ("recorder tap, bench log", _tap),
+          ("kinematics, tension solver, engage rule", _around))

@@ -14,6 +14,7 @@ the default 10 s run prints PASS/FAIL marked "not conclusive" and why. The exit 
 from __future__ import annotations
 
 import os
+import signal
 import tempfile
 
 import numpy as np
@@ -24,6 +25,7 @@ from teleop.apps.commands.session import add_live_arguments
 from teleop.core.errors import InputError
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 from teleop.io.outputs import save_figure, write_json
+from teleop.io.stop_signals import STOP, exit_code
 from teleop.loop.live.server import check_port
 from teleop.loop.params import LoopParams
 from teleop.loop.session import run_session
@@ -83,13 +85,15 @@ def bench_once(args, rate: float) -> dict:
         res = run_session(args.haptic, args.robot, args.seconds, record=record, params=params,
                           spin_us=spin_us, realtime=not args.no_realtime, robot_rt_priority=args.robot_rt or None,
                           robot_process_hz=args.robot_rate,
-                          live=(args.live_host, args.live) if args.live is not None else None)
+                          live=(args.live_host, args.live) if args.live is not None else None,
+                          progress=True)
     out = dict(res.timing)
     out["live"] = res.live or {"on": False}
     out["recording"] = {"on": record is not None, "drops": res.drops, "alarm": res.alarm}
     out["final_state"] = res.final_state
     out["fault_reason"] = res.fault_reason
     out["scheduling"] = res.scheduling
+    out["interrupted"] = res.interrupted or False  # "SIGINT", "SIGTERM", "SIGHUP" when a signal ended the run
     # what the pacing costs the core: spinning plus the median tick, against the real-time throttle's share
     out["spin_us"] = spin_us
     out["busy_fraction_p50"] = round((spin_us + out["tick_us"]["p50"]) * rate * 1e-6, 4)
@@ -138,6 +142,11 @@ def run(args) -> int:
         raise InputError("--seconds and --rate must be > 0")
     if args.live is not None:
         check_port(args.live_host, args.live)
+    with STOP.polled():  # a stop signal ends the run under way; what ran is reported, marked interrupted
+        return _run(args)
+
+
+def _run(args) -> int:
     if not args.find_max_rate:
         out = bench_once(args, args.rate)
         la = out["lateness_us"]
@@ -164,7 +173,7 @@ def run(args) -> int:
             write_json(args.json, out)
         if args.plot:
             plot_histogram(out, args.plot)
-        return 0
+        return exit_code(signal.Signals[out["interrupted"]]) if out["interrupted"] else 0
     trials = []
     best = None
     for rate in (1000.0, 1500.0, 2000.0, 3000.0, 4000.0, 5000.0, 6000.0, 8000.0):
@@ -175,13 +184,16 @@ def run(args) -> int:
                        "tick_us": out["tick_us"], "final_state": out["final_state"]})
         print(f"{rate:6.0f} Hz: misses {100 * out['miss_fraction']:.3f} %, tick p50 {out['tick_us']['p50']} us, "
               f"final {out['final_state']} -> {'ok' if ok else 'FAIL'}")
+        if out["interrupted"]:
+            break  # this rate's run was cut short: neither ok nor a failure of the rate
         if ok:
             best = rate
         elif out["miss_fraction"] > 0.5:
             break  # far past the limit: faster rates only miss more
+    interrupted = out["interrupted"]
     res = {"max_rate_hz": best, "criterion": "<= 0.1 % ticks more than half a period late (skipped ticks count)",
-           "trials": trials}
+           "trials": trials, "interrupted": interrupted}
     if args.json:
         write_json(args.json, res)
-    print(f"highest sustained rate: {best} Hz")
-    return 0
+    print(f"highest sustained rate: {best} Hz" + (f" (interrupted by {interrupted})" if interrupted else ""))
+    return exit_code(signal.Signals[interrupted]) if interrupted else 0

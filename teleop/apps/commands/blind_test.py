@@ -28,6 +28,7 @@ from teleop.core.errors import InputError
 from teleop.io.outputs import write_json
 from teleop.io.progress import progress
 from teleop.loop.live.study import StudyLiveView
+from teleop.loop.warm import warm_up
 
 DEFAULT_STATE = "blind_test_state.json"
 
@@ -164,7 +165,8 @@ def run_transparency(args) -> int:
 
 
 def _progress(total: int, desc: str):
-    return progress(total, desc, unit="participants")
+    """Participants done out of `total` on stderr, from a first line at once (tqdm's bar on a terminal)."""
+    return progress(total, desc, unit="participants", start_line=True)
 
 
 def run_sim(args) -> int:
@@ -174,6 +176,7 @@ def run_sim(args) -> int:
     params = participant_params(args)
     options = rig_options(args)
 
+    warm_up()  # compiled (saying so) or loaded before the progress starts: its ETA counts participants only
     with SimRig(options) as rig, _progress(args.participants, "blind test") as bar:
         try:
             result = run_simulated_study(rig, args.participants, args.seed, params, progress=bar.update)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import signal
 import sys
 from dataclasses import replace
@@ -17,6 +16,7 @@ from teleop.io.calfile import load_fsr
 from teleop.io.calibration_csv import load_fsr_calibration
 from teleop.io.model_io import load_model
 from teleop.io.outputs import write_json
+from teleop.io.stop_signals import STOP, exit_code
 from teleop.loop.live.server import check_port
 from teleop.loop.params import LOOP_RENDER, LoopParams
 from teleop.loop.session import default_estimator, frame_period, is_simulated_stylus, loop_estimator, run_session
@@ -114,15 +114,21 @@ def run(args) -> int:
     estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
     if "sensor=" in args.robot:  # sim://robot?sensor=fbg|one: the estimator reads that kind (loop_estimator)
         estimator = loop_estimator(args.robot, frame_period(params, robot_hz), cal) or estimator
-    with _CtrlC() as ctrl_c:
+    with STOP.polled():  # a stop signal ends the loop; the results below are written, marked interrupted
         res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
                           estimator=estimator, robot_process_hz=robot_hz, realtime=not args.no_realtime,
                           robot_rt_priority=args.robot_rt or None,
                           live=(args.live_host, args.live) if args.live is not None else None,
-                          robot_wrapper=wrapper, sim_clock=args.sim_clock)
+                          robot_wrapper=wrapper, sim_clock=args.sim_clock, progress=True)
+        return report(args, res, wrapper)
+
+
+def report(args, res, wrapper) -> int:
+    """Print the session's summary, write --json; 0, or 128 + the signal's number when one ended it."""
     t = res.timing
-    if ctrl_c.pressed:
-        print(f"session: INTERRUPTED (Ctrl-C) after {t['ticks'] / t['rate_hz']:.3f} s of {args.seconds:g} s")
+    if res.interrupted:
+        print(f"session: INTERRUPTED ({res.interrupted}) after {t['ticks'] / t['rate_hz']:.3f} s of "
+              f"{args.seconds:g} s")
     print(f"session: {t['ticks']} ticks at {t['rate_hz']:g} Hz, lateness p50/p99/max "
           f"{t['lateness_us']['p50']:.0f}/{t['lateness_us']['p99']:.0f}/{t['lateness_us']['max']:.0f} us, "
           f"{t['deadline_misses']} misses; final state {res.final_state}"
@@ -143,14 +149,14 @@ def run(args) -> int:
         write_json(args.json, {"timing": t, "events": res.events, "final_state": res.final_state,
                                "scheduling": res.scheduling,
                                "fault_reason": res.fault_reason, "drops": res.drops, "alarm": res.alarm,
-                               "live": res.live, "interrupted": ctrl_c.pressed,
+                               "live": res.live, "interrupted": res.interrupted or False,
                                "compensation": None if wrapper is None else
                                {"model": str(args.compensation), "backlash_width_mm": wrapper.width * 1e3}})
-    if ctrl_c.pressed:
+    if res.interrupted:
         closed = f"; {args.record} is closed and readable up to there" if args.record else ""
-        print(f"teleop: interrupted (Ctrl-C) after {t['ticks']} of {round(args.seconds * t['rate_hz'])} ticks"
-              f"{closed}", file=sys.stderr)
-        return 130
+        print(f"teleop: interrupted ({res.interrupted}) after {t['ticks']} of "
+              f"{round(args.seconds * t['rate_hz'])} ticks{closed}", file=sys.stderr)
+        return exit_code(signal.Signals[res.interrupted])
     return 0
 
 
@@ -163,33 +169,3 @@ def compensation_wrapper(path, period: float):
         return BacklashCompensatedRobot(robot, width, period, clock=clock)
     wrap.width = width  # [m]
     return wrap
-
-
-class _CtrlC:
-    """While active, Ctrl-C (SIGINT) is remembered in `.pressed` and stops the loop as KeyboardInterrupt
-    does (the loop ends its run, stops the devices and closes the recording); the caller then reports
-    the session as interrupted and exits 130.
-
-    A terminal sends Ctrl-C to every process of the session; the robot and recorder processes forked
-    while this is active inherit the handler and ignore it there, so they keep serving until this
-    process stops them in order (the recording is closed by its writer, not cut by the signal).
-    """
-
-    def __init__(self):
-        self.pressed = False
-        self._old = None
-        self._pid = os.getpid()
-
-    def _handler(self, signum, frame):
-        if os.getpid() != self._pid:  # a forked child: the parent shuts it down
-            return
-        self.pressed = True
-        raise KeyboardInterrupt
-
-    def __enter__(self):
-        self._old = signal.signal(signal.SIGINT, self._handler)
-        return self
-
-    def __exit__(self, *exc):
-        signal.signal(signal.SIGINT, self._old)
-        return False

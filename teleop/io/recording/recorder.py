@@ -28,6 +28,7 @@ from teleop.io.recording.ring import (ALARM_ERROR, ALARM_FULL, DROPS, DURABLE, F
                                    T0_NS, TAIL, WRITTEN, Ring)
 from teleop.io.recording.stats import SecondStats
 from teleop.io.recording.writer import SessionWriter
+from teleop.io.stop_signals import ignore_stop_signals
 
 
 def time_sharing(nice: int) -> None:
@@ -55,6 +56,7 @@ def drain_pipe(conn):
 def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict, t0_ns: int,
                    flush_interval: float, parent_pid: int, stream_factory=None) -> None:
     """Recorder process: drain the ring into the MCAP file until stopped or the loop process is gone."""
+    ignore_stop_signals()  # the group's SIGINT/SIGTERM/SIGHUP: the loop process closes the recording in order
     layout = Layout.from_json(layout_json)
     ctrl = ring.ctrl
     time_sharing(-10)  # behind the loop, ahead of the other time-sharing processes where the OS lets us

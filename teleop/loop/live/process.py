@@ -23,6 +23,7 @@ from teleop.io.recording.layout import Layout
 from teleop.io.recording.recorder import drain_pipe, time_sharing
 from teleop.io.recording.ring import HEAD, T0_NS, Cursor, Ring
 from teleop.io.recording.stats import SecondStats
+from teleop.io.stop_signals import ignore_stop_signals
 
 # shared counters of the live process (int64)
 PORT, SKIPPED, DROPPED, SENT, CLIENTS, STOP, READY, PUBLISHED, FAILED = range(9)
@@ -122,6 +123,7 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
 
 def _live_main(layout_json: str, ring: Ring, conn, host: str, port: int, st, scene: dict, parent_pid: int,
                backlog: int) -> None:
+    ignore_stop_signals()  # the group's SIGINT/SIGTERM/SIGHUP: the loop process closes the view
     time_sharing(5)  # behind the loop, the robot process and the recorder
     try:
         asyncio.run(_serve(Layout.from_json(layout_json), ring, conn, host, port, st, scene, parent_pid, backlog))

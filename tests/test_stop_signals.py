@@ -1,0 +1,109 @@
+"""SIGTERM, SIGINT and SIGHUP end a long command as Ctrl-C does (docs/safety.md): sent to the process or to its
+whole group (the recorder, robot and live-view processes get it too), once or repeated, a session stops its
+loop, writes its JSON marked with the signal's name, closes its recording whole and exits 128 + the number.
+Other commands get a KeyboardInterrupt (teleop.io.stop_signals) and exit the same way."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from teleop.io.recording import read_session
+from teleop.io.stop_signals import STOP, Stop, exit_code
+
+CASES = [  # (signal, to the group?, times sent, extra session arguments)
+    (signal.SIGTERM, False, 1, []),
+    (signal.SIGTERM, True, 1, ["--live", "0"]),
+    (signal.SIGINT, True, 1, []),
+    (signal.SIGINT, False, 3, []),
+    (signal.SIGHUP, True, 2, []),
+]
+
+
+def _start_session(tmp_path, extra):
+    argv = [sys.executable, "-m", "teleop.apps.cli", "session", "--seconds", "120", "--no-realtime",
+            "--json", str(tmp_path / "s.json"), "--record", str(tmp_path / "s.mcap"), *extra]
+    err = open(tmp_path / "err.txt", "w")
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=err, start_new_session=True)
+    deadline = time.monotonic() + 120
+    while "ticks (0 %)" not in (tmp_path / "err.txt").read_text():  # the loop's progress: it is running
+        assert proc.poll() is None and time.monotonic() < deadline, (tmp_path / "err.txt").read_text()
+        time.sleep(0.1)
+    time.sleep(1.0)
+    return proc
+
+
+@pytest.mark.parametrize("sig, group, times, extra", CASES,
+                         ids=[f"{c[0].name}-{'group' if c[1] else 'process'}-x{c[2]}" for c in CASES])
+def test_a_signal_ends_a_session_as_ctrl_c_does(tmp_path, sig, group, times, extra):
+    proc = _start_session(tmp_path, extra)
+    for _ in range(times):
+        if group:
+            os.killpg(proc.pid, sig)
+        else:
+            os.kill(proc.pid, sig)
+        time.sleep(0.05)
+    rc = proc.wait(60)
+    err = (tmp_path / "err.txt").read_text()
+    assert rc == 128 + sig, err
+    out = json.loads((tmp_path / "s.json").read_text())
+    assert out["interrupted"] == sig.name
+    assert 0 < out["timing"]["ticks"] < 120_000
+    s = read_session(tmp_path / "s.mcap")
+    assert s.complete and s.is_intact, s.damage
+    assert s.metadata["session_end"]["interrupted"] == sig.name
+    assert len(s.messages("/loop")) > 0
+    assert f"interrupted ({sig.name})" in err
+
+
+def test_a_session_that_runs_its_length_is_not_interrupted(tmp_path):
+    out = tmp_path / "s.json"
+    r = subprocess.run([sys.executable, "-m", "teleop.apps.cli", "session", "--seconds", "0.5", "--no-realtime",
+                        "--robot-inline", "--json", str(out)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(out.read_text())["interrupted"] is False
+
+
+def test_a_command_that_does_not_poll_gets_keyboard_interrupt():
+    stop = Stop()
+    stop.install()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            stop.handle(signal.SIGTERM)
+        assert stop.name == "SIGTERM"
+        stop.handle(signal.SIGINT)  # a repeat: no second interruption of the clean-up, the first name kept
+        assert (stop.name, stop.count) == ("SIGTERM", 2)
+    finally:
+        stop.uninstall()
+
+
+def test_a_polling_loop_only_sees_the_flag():
+    stop = Stop()
+    with stop.polled():
+        stop.handle(signal.SIGHUP)  # no exception mid-tick
+    assert stop.requested() and exit_code(stop.signum) == 129
+
+
+def test_a_forked_child_ignores_the_handler():
+    stop = Stop()
+    stop.pid = os.getpid() + 1  # as seen from a child forked after install
+    stop.handle(signal.SIGTERM)
+    assert not stop.requested()
+
+
+def test_blind_test_ends_on_sigterm_with_143(tmp_path):
+    err = open(tmp_path / "err.txt", "w")
+    proc = subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "blind-test", "--participants", "50"],
+                            stdout=subprocess.DEVNULL, stderr=err, start_new_session=True)
+    deadline = time.monotonic() + 120
+    while "blind test: 0/50" not in (tmp_path / "err.txt").read_text():
+        assert proc.poll() is None and time.monotonic() < deadline
+        time.sleep(0.1)
+    os.killpg(proc.pid, signal.SIGTERM)
+    assert proc.wait(60) == 143
+    assert "teleop: interrupted (SIGTERM)" in (tmp_path / "err.txt").read_text()
+    assert STOP.signum == 0  # this process's own request untouched
