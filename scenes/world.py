@@ -56,25 +56,29 @@ def _silence_banner_at_exit() -> None:
 
 
 @contextlib.contextmanager
-def _quiet_stdout():
-    """Silence C-level writes to fd 1 (pybullet's connect banner) without touching Python's sys.stdout."""
+def _quiet_fds(fds: tuple = (1,)):
+    """Silence C-level writes to the file descriptors `fds` (1: pybullet's connect banner; 2: its build-time
+    banner on import) without touching Python's sys.stdout and sys.stderr objects."""
     try:
         sys.stdout.flush()
-        saved = os.dup(1)
+        sys.stderr.flush()
+        saved = [os.dup(fd) for fd in fds]
     except (OSError, ValueError):
         yield
         return
     try:
         with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
+            for fd in fds:
+                os.dup2(null.fileno(), fd)
             yield
     finally:
         try:
-            ctypes.CDLL(None).fflush(None)  # push C-buffered text into /dev/null before restoring fd 1
+            ctypes.CDLL(None).fflush(None)  # push C-buffered text into /dev/null before restoring the fds
         except (OSError, AttributeError):
             pass
-        os.dup2(saved, 1)
-        os.close(saved)
+        for fd, copy in zip(fds, saved):
+            os.dup2(copy, fd)
+            os.close(copy)
 
 
 N_RING = 4  # square hole: each poke direction meets one flat wall (a 16-gon let the tip touch 3 faces)
@@ -143,7 +147,7 @@ class PadWorld:
 
     # lifecycle -------------------------------------------------------------------------------------
     def open(self) -> None:
-        with _quiet_stdout():  # the pybullet C library prints its build time on import, argv on connect
+        with _quiet_fds((1, 2)):  # the pybullet C library prints its build time on import, argv on connect
             import pybullet as pb  # heavy: loaded when a world opens (DIRECT, nothing at import)
             from pybullet_utils.bullet_client import BulletClient
         _silence_banner_at_exit()
@@ -151,7 +155,7 @@ class PadWorld:
             return
         p = self.params
         self.calibration = self._calibration or default_calibration(p, PadWorld)
-        with _quiet_stdout():
+        with _quiet_fds():
             c = BulletClient(connection_mode=pb.DIRECT)
         self.client, self._pb = c, pb
         c.setTimeStep(p.dt)

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from teleop.core.config import input_problem
-from teleop.io.outputs import output_problem
+from teleop.io.outputs import FIGURE_FORMATS, output_problem
 
 
 def _number(text: str, kind):
@@ -123,6 +124,15 @@ def output_file(text: str) -> str:
     return text
 
 
+def output_figure(text: str) -> str:
+    """A path a figure can be written to, its suffix naming a format `save_figure` writes (.png, .pdf, .svg)."""
+    suffix = Path(text).suffix
+    if suffix.lower() not in FIGURE_FORMATS:
+        raise argparse.ArgumentTypeError(f"'{text}': expected a figure file name ending in "
+                                         f"{', '.join(s for s in FIGURE_FORMATS if s)}, got '{suffix}'")
+    return output_file(text)
+
+
 def output_dir(text: str) -> str:
     """A path that is, or can be made, a writable directory."""
     problem = output_problem(text, directory=True)
@@ -134,5 +144,7 @@ def output_dir(text: str) -> str:
 # Options that name a result file or directory: every parser of the `teleop` command checks them with
 # these types when declared without one (teleop.apps.cli.TeleopArgumentParser), so each output is checked
 # before the work starts.
-OUTPUT_OPTIONS = {"--json": output_file, "--plot": output_file, "--csv": output_file, "--save-model": output_file,
+OUTPUT_OPTIONS = {"--json": output_file, "--plot": output_figure, "--csv": output_file, "--save-model": output_file,
                   "--record": output_file, "--state": output_file, "--build-dir": output_dir}
+# The types of an argument that names a result (teleop.apps.cli refuses one that is also an input).
+OUTPUT_TYPES = (output_file, output_figure, output_dir)

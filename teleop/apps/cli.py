@@ -17,8 +17,9 @@ import threading
 
 from devices.base import DeviceError
 from teleop import __version__
-from teleop.apps.argtypes import OUTPUT_OPTIONS, seed_int
+from teleop.apps.argtypes import OUTPUT_OPTIONS, OUTPUT_TYPES, seed_int
 from teleop.core.errors import InputError
+from teleop.io.outputs import same_file
 from teleop.io.stop_signals import STOP, exit_code, ignore_stop_signals
 
 
@@ -67,7 +68,26 @@ class TeleopArgumentParser(argparse.ArgumentParser):
         if extras:
             self.error(f"unrecognized argument{'s' if len(extras) > 1 else ''}: {' '.join(extras)}; "
                        f"expected only the arguments of {self.prog}")
+        self._refuse_output_on_input(namespace)
         return namespace, extras
+
+    def _refuse_output_on_input(self, namespace) -> None:
+        """Exit 2 naming both arguments when an output of this parser is the same file as one of its inputs
+        (the same path, a symbolic or a hard link): an output never overwrites an input. Outputs are the
+        options of OUTPUT_TYPES or OUTPUT_OPTIONS; every other path-valued argument naming a file is an input."""
+        outputs, inputs = [], []
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction) or action.choices is not None:
+                continue
+            value = getattr(namespace, action.dest, None)
+            paths = [v for v in (value if isinstance(value, list) else [value]) if isinstance(v, str) and v]
+            is_output = action.type in OUTPUT_TYPES or any(n in OUTPUT_OPTIONS for n in action.option_strings)
+            (outputs if is_output else inputs).extend((argparse._get_action_name(action), v) for v in paths)
+        for out_name, out in outputs:
+            for in_name, source in inputs:
+                if same_file(out, source):
+                    self.error(f"argument {out_name}: '{out}' is the input {in_name} '{source}' (the same file); "
+                               f"expected an output that does not overwrite an input")
 
     def error(self, message: str):
         """Print ``<prog>: error: <message> (see <prog> --help)`` on one line and exit 2."""

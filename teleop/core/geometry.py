@@ -144,16 +144,16 @@ def load_geometry(path: str | Path) -> Geometry:
     r = np.array(get_vectors(g, "platform_anchors_mm", where, N_CABLES)) * mm
     tip = np.array(get_vectors({"tip": [g["tip_mm"]]}, "tip", f"{where} tip_mm", 1)[0]) * mm if "tip_mm" in g \
         else d.tip
+    values = dict(  # each error names `where` (the path and table) itself
+        theta0=np.deg2rad(get_number(g, "theta0_deg", where, np.rad2deg(d.theta0), nonnegative=True)),
+        mu=get_number(g, "mu", where, d.mu, nonnegative=True),
+        t_min=get_number(g, "t_min_N", where, d.t_min, nonnegative=True),
+        t_max=get_number(g, "t_max_N", where, d.t_max, positive=True),
+        l_min=get_number(g, "l_min_mm", where, d.l_min / mm, positive=True) * mm,
+        l_max=get_number(g, "l_max_mm", where, d.l_max / mm, positive=True) * mm,
+        v_max=get_number(g, "v_max_mm_s", where, d.v_max / mm, positive=True) * mm,
+    )
     try:
-        return Geometry(
-            B=B, r=r, tip=tip,
-            theta0=np.deg2rad(get_number(g, "theta0_deg", where, np.rad2deg(d.theta0), nonnegative=True)),
-            mu=get_number(g, "mu", where, d.mu, nonnegative=True),
-            t_min=get_number(g, "t_min_N", where, d.t_min, nonnegative=True),
-            t_max=get_number(g, "t_max_N", where, d.t_max, positive=True),
-            l_min=get_number(g, "l_min_mm", where, d.l_min / mm, positive=True) * mm,
-            l_max=get_number(g, "l_max_mm", where, d.l_max / mm, positive=True) * mm,
-            v_max=get_number(g, "v_max_mm_s", where, d.v_max / mm, positive=True) * mm,
-        )
-    except InputError as exc:
+        return Geometry(B=B, r=r, tip=tip, **values)
+    except InputError as exc:  # the geometry's own checks do not know the file
         raise InputError(f"{path}: {exc}") from None

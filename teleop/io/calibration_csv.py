@@ -27,7 +27,7 @@ from teleop.core.errors import InputError
 from teleop.core.sensors import (LOADING, UNLOADING, FsrCalibration, FsrCalibrationData, default_fsr_calibration,
                                  fit_fsr_calibration)
 from teleop.io.outputs import atomic_write
-from teleop.io.recording_io import read_recording
+from teleop.io.recording_io import MAX_INPUT_MB, read_recording
 from teleop.io.table import read_table
 
 _CSV_COLUMNS = ("tension_N", "conductance_uS", "branch")
@@ -109,9 +109,11 @@ def read_fbg_steps(path: str | Path) -> FbgData:
                    source=meta.get("source", str(path)))
 
 
-def read_one_sensor(path: str | Path, column_map: str | None = None) -> tuple[np.ndarray, np.ndarray, str, str]:
-    """(Fp, Fd, unit, source) from a recording with motor and tip force (interchange CSV or `column_map`)."""
-    rec = read_recording(path, column_map)
+def read_one_sensor(path: str | Path, column_map: str | None = None,
+                    max_mb: float | None = MAX_INPUT_MB) -> tuple[np.ndarray, np.ndarray, str, str]:
+    """(Fp, Fd, unit, source) from a recording with motor and tip force (interchange CSV or `column_map`;
+    larger than `max_mb` [MB] refused, None: no limit)."""
+    rec = read_recording(path, column_map, max_mb)
     for name in ("motor_force", "tip_force"):
         if name not in rec.channels:
             raise InputError(f"{path}: no {name} column (expected {name}_N or {name}_Nm: one cable's "

@@ -29,11 +29,40 @@ def _default(obj: Any):
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
+# The figure formats `save_figure` writes, by file suffix (no suffix: PNG).
+FIGURE_FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg", "": "png"}
+
+
+def same_file(a: str | Path, b: str | Path) -> bool:
+    """True when paths `a` and `b` name one existing file (the same path, a link to it, or a hard link)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet): no file to overwrite
+        return False
+
+
+def _probe(parent: Path, missing: Path | None) -> str | None:
+    """Why nothing can be created in directory `parent` (first directory to create: `missing`), or None.
+
+    A probe is made and removed at once: the permission bits say nothing for root, nor on a read-only or
+    virtual file system (/proc)."""
+    try:
+        if missing is not None:
+            os.mkdir(missing)
+            os.rmdir(missing)
+        else:
+            os.unlink(_create_temp(parent / "probe"))
+    except OSError as exc:
+        return f"cannot be created: {missing or parent}: {exc.strerror or exc}"
+    return None
+
+
 def output_problem(path: str | Path, directory: bool = False) -> str | None:
     """Why `path` cannot be written as a result file (or, with `directory`, made a directory), or None.
 
     The path must not be an existing directory (a file) or file (a directory), and its nearest existing
-    ancestor must be a directory this process may write into (missing directories are created at write time).
+    ancestor must be a directory this process may write into (missing directories are created at write time;
+    a probe file or directory is created there and removed at once to find out).
     """
     path = Path(path)
     if str(path) == "" or path.name in ("", ".", ".."):
@@ -46,16 +75,16 @@ def output_problem(path: str | Path, directory: bool = False) -> str | None:
         if not os.access(path, os.W_OK):
             return "is not writable"
         return None
-    parent = path.absolute().parent
+    parent, missing = path.absolute().parent, None
     while not parent.exists():
         if parent.parent == parent:
             break
-        parent = parent.parent
+        parent, missing = parent.parent, parent
     if not parent.is_dir():
         return f"cannot be created: {parent} is not a directory"
     if not os.access(parent, os.W_OK | os.X_OK):
         return f"cannot be created: directory {parent} is not writable"
-    return None
+    return _probe(parent, missing)
 
 
 def check_output(path: str | Path, what: str = "output") -> Path:
@@ -121,10 +150,14 @@ def write_json(path: str | Path, obj: Any, sort_keys: bool = False) -> Path:
 
 
 def save_figure(fig, path: str | Path, dpi: int = 120) -> Path:
-    """Save a matplotlib figure to PNG atomically and close it."""
+    """Save a matplotlib figure atomically in the format its suffix names (FIGURE_FORMATS) and close it."""
     import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
+    fmt = FIGURE_FORMATS.get(Path(path).suffix.lower())
     try:
-        return atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=dpi, format="png", bbox_inches="tight"))
+        if fmt is None:
+            raise InputError(f"{path}: a figure is written as {', '.join(s for s in FIGURE_FORMATS if s)}, "
+                             f"not {Path(path).suffix}")
+        return atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=dpi, format=fmt, bbox_inches="tight"))
     finally:
         plt.close(fig)

@@ -36,6 +36,11 @@ QUANTITIES = {
     "indentation": ("m",), "force": ("N",),
 }
 MAX_NAN_GAP = 3  # isolated gaps up to this many samples are interpolated; longer NaN runs are an error
+# A text recording larger than this [MB] is refused before it is read (its numbers take several times the
+# file's size in memory); the commands that read recordings lift it with --max-input-mb.
+MAX_INPUT_MB = 512.0
+SNIFF_BYTES = 4096  # the first block, looked at before a file is read
+MCAP_MAGIC = b"\x89MCAP"
 
 
 @dataclass(frozen=True)
@@ -137,7 +142,36 @@ def _build(path: Path, t: np.ndarray, chans: dict, units: dict, meta: dict, extr
     return Recording(str(path), t, chans, units, meta, extra)
 
 
-def _read_lines(path: Path) -> list[str]:
+def sniff(path: str | Path, max_mb: float | None = MAX_INPUT_MB) -> None:
+    """Refuse `path` before it is read, with one line that shows none of its bytes: larger than `max_mb`
+    [MB] (None: no limit), an MCAP session recording (`teleop export` turns one into the interchange CSV),
+    or binary (a NUL byte, or not UTF-8, in the first SNIFF_BYTES)."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        with path.open("rb") as fh:
+            head = fh.read(SNIFF_BYTES)
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    if max_mb is not None and size > max_mb * 1e6:
+        raise InputError(f"{path}: {size / 1e6:.0f} MB, larger than the {max_mb:g} MB a recording may have "
+                         f"(lift the limit with --max-input-mb)")
+    if head.startswith(MCAP_MAGIC):
+        raise InputError(f"{path}: an MCAP session recording, not a text recording; write one cable as the "
+                         f"interchange CSV first: teleop export {path} --csv OUT.csv [--cable N]")
+    if b"\0" in head:
+        raise InputError(f"{path}: binary content (NUL bytes in the first {len(head)} bytes), expected a text "
+                         f"recording (CSV)")
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        if exc.start < len(head) - 3 or len(head) == size:  # not a character cut by the block's end
+            raise InputError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}), expected a text "
+                             f"recording (CSV)") from None
+
+
+def _read_lines(path: Path, max_mb: float | None = MAX_INPUT_MB) -> list[str]:
+    sniff(path, max_mb)
     try:
         return path.read_text(encoding="utf-8").splitlines()
     except FileNotFoundError:
@@ -146,14 +180,24 @@ def _read_lines(path: Path) -> list[str]:
         raise InputError(f"{path}: not UTF-8 text ({exc.reason})") from None
 
 
-def read_interchange(path: str | Path) -> Recording:
+def _delimiter_hint(header: list[str]) -> str:
+    """'; semicolon-separated, expected commas' when a one-cell header holds another delimiter, else ''."""
+    if len(header) != 1:
+        return ""
+    for delim, name in ((";", "semicolon"), ("\t", "tab"), ("|", "pipe")):
+        if delim in header[0]:
+            return f"; the file is {name}-separated, expected commas (or a column map: --map MAP.toml)"
+    return ""
+
+
+def read_interchange(path: str | Path, max_mb: float | None = MAX_INPUT_MB) -> Recording:
     """Read the interchange CSV: `# key = value` lines, a header of `quantity_unit` names, numbers."""
     path = Path(path)
     meta: dict = {}
     header: list[str] | None = None
     header_line = 0
     rows: list[tuple[int, str]] = []
-    for lineno, line in enumerate(_read_lines(path), start=1):
+    for lineno, line in enumerate(_read_lines(path, max_mb), start=1):
         s = line.strip()
         if not s:
             continue
@@ -170,6 +214,9 @@ def read_interchange(path: str | Path) -> Recording:
     if header is None:
         raise InputError(f"{path}: no header row (expected CSV with a 't_s' column)")
     if "t_s" not in header:
+        hint = _delimiter_hint(header)
+        if hint:
+            raise InputError(f"{path}:{header_line}: one column only{hint}")
         shown = ", ".join(header)
         shown = shown if len(shown) <= 80 else shown[:77] + "..."
         raise InputError(f"{path}:{header_line}: missing time column 't_s' (header: {shown}; other layouts "
@@ -276,12 +323,12 @@ def builtin_map(name: str) -> Path:
     return path
 
 
-def read_mapped(path: str | Path, cmap: ColumnMap) -> Recording:
+def read_mapped(path: str | Path, cmap: ColumnMap, max_mb: float | None = MAX_INPUT_MB) -> Recording:
     """Read any delimited text file through a column map."""
     path = Path(path)
     rows = []
     seen_header = not cmap.header
-    for lineno, line in enumerate(_read_lines(path), start=1):
+    for lineno, line in enumerate(_read_lines(path, max_mb), start=1):
         s = line.strip()
         if lineno <= cmap.skip_lines or not s or (cmap.comment and s.startswith(cmap.comment)):
             continue
@@ -295,7 +342,8 @@ def read_mapped(path: str | Path, cmap: ColumnMap) -> Recording:
     ncol = len(first.split(cmap.delimiter) if cmap.delimiter else first.split())
     need = max(s.index for s in cmap.columns)
     if ncol < need:
-        raise InputError(f"{path}:{rows[0][0]}: {ncol} columns but map {cmap.path} uses column {need}")
+        raise InputError(f"{path}:{rows[0][0]}: {ncol} columns (split at the map's delimiter "
+                         f"{cmap.delimiter or 'whitespace'!r}) but map {cmap.path} uses column {need}")
     data = _parse_rows(path, rows, cmap.delimiter, ncol, [f"#{k + 1}" for k in range(ncol)])
     linenos = [r[0] for r in rows]
     chans, units, t = {}, {}, None
@@ -313,12 +361,14 @@ def read_mapped(path: str | Path, cmap: ColumnMap) -> Recording:
     return _build(path, t, chans, units, meta, {}, linenos)
 
 
-def read_recording(path: str | Path, column_map: str | Path | None = None) -> Recording:
-    """Read `path` as interchange CSV, or through `column_map` (a .toml path or a shipped map name)."""
+def read_recording(path: str | Path, column_map: str | Path | None = None,
+                   max_mb: float | None = MAX_INPUT_MB) -> Recording:
+    """Read `path` as interchange CSV, or through `column_map` (a .toml path or a shipped map name); a file
+    larger than `max_mb` [MB] (None: no limit), binary or an MCAP session is refused before it is read."""
     if column_map is None:
-        return read_interchange(path)
+        return read_interchange(path, max_mb)
     cm = Path(column_map) if str(column_map).endswith(".toml") else builtin_map(str(column_map))
-    return read_mapped(path, load_column_map(cm))
+    return read_mapped(path, load_column_map(cm), max_mb)
 
 
 # SI unit -> interchange suffix used when writing

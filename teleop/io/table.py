@@ -13,6 +13,7 @@ import numpy as np
 
 from teleop.core.config import check_input
 from teleop.core.errors import InputError
+from teleop.io.recording_io import sniff
 
 
 def read_table(path: str | Path, required: tuple[str, ...], optional: tuple[str, ...] = (),
@@ -24,6 +25,7 @@ def read_table(path: str | Path, required: tuple[str, ...], optional: tuple[str,
     Returns ({column: (n,) float}, {key: text}); columns absent from the file are left out.
     """
     path = check_input(path)
+    sniff(path, max_mb=None)  # binary or an MCAP session: refused before it is read (its size: the caller's)
     words = words or {}
     try:
         text = path.read_text(encoding="utf-8")

@@ -36,7 +36,7 @@ from teleop.core.config import check_keys, get_number
 from teleop.core.errors import InputError
 from teleop.diagnosis.diagnose import HOLDOUT, baseline_effects, diagnose
 from teleop.io.outputs import atomic_write, save_figure
-from teleop.io.recording_io import builtin_map, read_recording
+from teleop.io.recording_io import MAX_INPUT_MB, builtin_map, read_recording
 
 KIND = "diagnose"
 
@@ -131,12 +131,13 @@ def execute(identity: dict) -> dict:
 
 
 def _diagnose_file(item):
-    """Read and diagnose one file where the scheduler runs it: item = (path, map, holdout, options)."""
-    path, cmap, holdout, options = item
-    return diagnose(read_recording(path, cmap), holdout, **options)
+    """Read and diagnose one file where the scheduler runs it: item = (path, map, holdout, max_mb, options)."""
+    path, cmap, holdout, max_mb, options = item
+    return diagnose(read_recording(path, cmap, max_mb), holdout, **options)
 
 
-def diagnose_files(paths: list, column_map, holdout: float, scheduler: str, **options) -> list:
+def diagnose_files(paths: list, column_map, holdout: float, scheduler: str, max_mb: float | None = MAX_INPUT_MB,
+                   **options) -> list:
     """Diagnosis of each of `paths` (in that order), each file read and diagnosed where `scheduler` runs
     tasks (`teleop diagnose REC... --scheduler`), as `diagnose(read_recording(path, column_map), holdout,
     **options)` (seed, baseline, ...) would give here. Workers get absolute paths; each Diagnosis comes
@@ -144,7 +145,7 @@ def diagnose_files(paths: list, column_map, holdout: float, scheduler: str, **op
     cmap = column_map
     if cmap is not None and str(cmap).endswith(".toml"):
         cmap = str(Path(cmap).absolute())
-    items = [(str(Path(p).absolute()), cmap, holdout, options) for p in paths]
+    items = [(str(Path(p).absolute()), cmap, holdout, max_mb, options) for p in paths]
     done = {}
     with open_scheduler(scheduler) as sched, TaskProgress(len(items), "diagnose") as progress:
         for item, outcome in sched.run(_diagnose_file, items):

@@ -22,7 +22,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from teleop import __version__
-from teleop.apps.argtypes import input_file, output_file
+from teleop.apps.argtypes import input_file, output_file, positive_float
 from teleop.core.calibration.fbg import fit_fbg, plot_fbg_fit
 from teleop.core.calibration.fsr import BRANCHES, fit_fsr, plot_fsr_fit
 from teleop.core.calibration.one_sensor import fit_one_sensor, plot_one_sensor_fit
@@ -30,7 +30,8 @@ from teleop.core.errors import InputError
 from teleop.core.sensors import eq2_roots
 from teleop.io import calfile
 from teleop.io.calibration_csv import read_fbg_steps, read_fsr_steps, read_one_sensor
-from teleop.io.outputs import check_output, save_figure, write_json
+from teleop.io.outputs import check_output, same_file, save_figure, write_json
+from teleop.io.recording_io import MAX_INPUT_MB, sniff
 
 KINDS = ("fsr", "fbg", "one-sensor")
 
@@ -43,6 +44,8 @@ def register(subparsers) -> None:
     p.add_argument("--plot", metavar="PNG", help="fit and residual plot (default: FILE with suffix .png)")
     p.add_argument("--json", metavar="F", help="write the fitted values and uncertainties as JSON")
     p.add_argument("--map", metavar="MAP", help="one-sensor: column map of the recording (shipped name or .toml)")
+    p.add_argument("--max-input-mb", type=positive_float, default=MAX_INPUT_MB, metavar="MB",
+                   help=f"refuse a recording larger than this before reading it ({MAX_INPUT_MB:g})")
     p.set_defaults(func=run)
 
 
@@ -54,6 +57,10 @@ def _fmt(value: float, err: float | None = None, unit: str = "") -> str:
 def run(args) -> int:
     plot_path = Path(args.plot) if args.plot else Path(args.out).with_suffix(".png")
     check_output(plot_path, "--plot")
+    if same_file(plot_path, args.csv):
+        raise InputError(f"--plot: {plot_path} is the input CSV {args.csv} (the same file); expected an output "
+                         f"that does not overwrite an input")
+    sniff(args.csv, args.max_input_mb)
     if args.map and args.kind != "one-sensor":
         raise InputError(f"--map: only for one-sensor (a column map of its recording), not {args.kind}")
     comment = f"written by teleop calibrate {args.kind} {args.csv} (cdpr-teleop {__version__})"
@@ -99,7 +106,7 @@ def run(args) -> int:
                   f"{v['force_error_N']:.3f} N   (seed: 12.59 pm = 0.37 N)"]
         source = fit.data.source
     else:
-        Fp, Fd, unit, source = read_one_sensor(args.csv, args.map)
+        Fp, Fd, unit, source = read_one_sensor(args.csv, args.map, max_mb=None)  # its size checked above
         fit = fit_one_sensor(Fp, Fd, unit, source)
         summary = fit.summary()
         m = fit.model
@@ -128,5 +135,5 @@ def run(args) -> int:
     print(f"{args.kind} calibration from {args.csv}")
     for line in lines:
         print("  " + line)
-    print(f"wrote {args.out} and {plot_path}")
+    print(f"wrote {args.out}, {plot_path}" + (f" and {args.json}" if args.json else ""))
     return 0

@@ -378,9 +378,16 @@ class PalpationResult:
             lines.append(f"{n:<16} {s['mean_abs_error_N']:8.3f} {s['rmse_N']:9.3f}")
         if self.params.get("sensor", "fsr") != "fsr":
             lines += sensor_lines(self)
-        for key in ("ranks_correctly", "contrast"):
-            if key in self.extra:
-                lines.append(f"{key}: {self.extra[key]}")
+        if "ranks_correctly" in self.extra:
+            lines.append("ranks the pads in their true stiffness order: " + ", ".join(
+                f"{n} {'yes' if ok else 'no'}" for n, ok in self.extra["ranks_correctly"].items()))
+        if "contrast" in self.extra:
+            lines += ["", "scan contrast: mean force over the letters (rigid) and the silicone",
+                      f"{'estimator':<16} {'rigid [N]':>9} {'silicone [N]':>12} {'ratio':>6}"]
+            for n, c in self.extra["contrast"].items():
+                cells = [c["rigid_mean_N"], c["silicone_mean_N"], c["ratio"]]
+                shown = ["-" if v is None else f"{v:.3f}" for v in cells]
+                lines.append(f"{n:<16} {shown[0]:>9} {shown[1]:>12} {shown[2]:>6}")
         if "load_response" in self.extra:
             lr, sd = self.extra["load_response"], self.extra["seed_table1_load_response"]
             lines.append("load response (estimate = offset + gain x truth): "
