@@ -41,3 +41,19 @@ def test_not_a_terminal_gets_plain_lines():
     out = io.StringIO()  # isatty() is False
     bar = progress(5, "diagnose", unit="fits", stream=out, leave=False)
     assert isinstance(bar, PlainProgress)
+
+
+def test_a_start_line_at_once_and_a_time_left_from_the_work_done():
+    clock, out = Clock(), io.StringIO()
+    bar = PlainProgress(10, "blind test", "participants", stream=out, interval_s=5.0, clock=clock, start_line=True)
+    assert out.getvalue() == "blind test: 0/10 participants (0 %), 0 s elapsed\n"  # before the first participant
+    clock.t += 6.0
+    bar.update()  # one participant in 6 s: nine left, 54 s
+    bar.set_postfix_str("note")
+    clock.t += 6.0
+    bar.update()
+    bar.close()
+    assert out.getvalue().splitlines()[1:] == ["blind test: 1/10 participants (10 %), 6 s elapsed, about 54 s left",
+                                               "blind test: 2/10 participants (20 %), 12 s elapsed, about 48 s left, "
+                                               "note",
+                                               "blind test: done, 2 participants in 12 s, note"]
