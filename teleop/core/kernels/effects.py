@@ -22,7 +22,7 @@ import math
 from teleop.core.kernels.friction import clamp, coulomb_force, dahl_step, play_mix_start, play_mix_step, \
     stribeck_force, viscous_force
 from teleop.core.kernels.jit import njit
-from teleop.core.kernels.sheath import N_CONST, N_STATE, motor_force
+from teleop.core.kernels.sheath import F, MU, N_CONST, STICK_K, X, forward_step
 
 
 # ------------------------------------------------------------------ position links
@@ -85,7 +85,9 @@ def capstan_friction_step(s, u, p):
     s = the sheath's state of one cable (N_STATE,). Motor force [N] of the sheath's forward law on the tension
     load + preload, read from the preload."""
     P = p[N_CONST]
-    return motor_force(s.reshape((N_STATE, 1)), 0, u[0], u[1] + P, u[2], p) - P
+    f = forward_step(s[X], s[F], u[0], u[1] + P, p[MU] * u[2], p[STICK_K])
+    s[F], s[X] = f, u[0]
+    return f - P
 
 
 @njit

@@ -136,16 +136,21 @@ def capstan_tip_step(F_tip, F_motor, mu_theta):
     return clamp(F_tip, lo, hi)
 
 
+@njit
+def forward_step(x_prev, f, x, t_tip, mu_theta, k):
+    """The forward law's sample: the FSR-side force [N] at motor position x [m] and tip tension t_tip [N]
+    from the force f [N] at x_prev [m] (NaN: the cable's first sample, which starts on the tip tension)."""
+    if x_prev != x_prev:
+        return start_on_tip(t_tip, mu_theta, k)
+    return capstan_play_step(f, x - x_prev, t_tip, mu_theta, k)
+
+
 # ------------------------------------------------------------------ per cable, on the state and constants
 @njit
 def motor_force(st, i, x, t_tip, theta, c):
     """The forward law: cable i's FSR-side force [N] at motor position x [m] and tip tension t_tip [N] over
     the wrap theta [rad]; st (N_STATE, n) its state (X, F updated), c the sheath's constants."""
-    mt = c[MU] * theta
-    if st[X, i] != st[X, i]:  # the cable's first sample
-        f = start_on_tip(t_tip, mt, c[STICK_K])
-    else:
-        f = capstan_play_step(st[F, i], x - st[X, i], t_tip, mt, c[STICK_K])
+    f = forward_step(st[X, i], st[F, i], x, t_tip, c[MU] * theta, c[STICK_K])
     st[F, i], st[X, i] = f, x
     return f
 
