@@ -239,12 +239,18 @@ def pulley_elongation_run(s, U, p, out):
 
 # ------------------------------------------------------------------ sensors
 @njit
+def hysteresis_switch(z, F, h, d):
+    """(z, offset): the loading switch z, the play of the force F [N] of half-width d [N] (z NaN: none yet,
+    it starts at F, neutral), and the reading's offset h (F - z) / d [N]."""
+    z = F if z != z else clamp(z, F - d, F + d)
+    return z, h * (F - z) / d
+
+
+@njit
 def hysteresis_offset_step(s, u, p):
-    """u = (force,); p = (h, delta); s = (z,): the reading's offset h (F - z) / delta [N], z the play of the
-    force of half-width delta, starting at the first force (neutral)."""
-    F, d = u[0], p[1]
-    s[0] = F if s[0] != s[0] else clamp(s[0], F - d, F + d)
-    return p[0] * (F - s[0]) / d
+    """u = (force,); p = (h, delta); s = (z,): the reading's offset, hysteresis_switch."""
+    s[0], off = hysteresis_switch(s[0], u[0], p[0], p[1])
+    return off
 
 
 @njit
@@ -257,8 +263,9 @@ def hysteresis_offset_run(s, U, p, out):
 
 @njit
 def sensor_hysteresis_step(s, u, p):
-    """u = (force,); p = (h, delta); s = (z,): force + hysteresis_offset_step."""
-    return u[0] + hysteresis_offset_step(s, u, p)
+    """u = (force,); p = (h, delta); s = (z,): force + the offset of hysteresis_switch."""
+    s[0], off = hysteresis_switch(s[0], u[0], p[0], p[1])
+    return u[0] + off
 
 
 @njit
