@@ -12,7 +12,8 @@ A step kernel is `step(s, u, p) -> y` (python-control's update function, the sta
 Each step has its array form beside it, `<name>_run(s, U, p, out)`: the step along U (n, k) from the state s
 (left at the last sample's) into out (n,), nothing else (numba inlines the step into the loop; a loop over a
 step passed as a first-class function would be cached once for all, but its indirect call per sample made
-the diagnosis's fits several times slower).
+the diagnosis's fits several times slower). An effect whose vectorised closed form is several times faster
+than such a loop keeps the closed form as its one home instead (cable_compliance: physics.compliance).
 """
 
 from __future__ import annotations
@@ -61,20 +62,6 @@ def backlash_run(s, U, p, out):
     else:
         for i in range(U.shape[0]):
             out[i] = general_play_step(s, U[i], p)
-    return out
-
-
-@njit
-def cable_compliance_step(s, u, p):
-    """u = (x, load); p = (k,): tip position x - load / k [m]; no state."""
-    return u[0] - u[1] / p[0]
-
-
-@njit
-def cable_compliance_run(s, U, p, out):
-    """out (n,): cable_compliance_step along U (n, k) from the state s."""
-    for i in range(U.shape[0]):
-        out[i] = cable_compliance_step(s, U[i], p)
     return out
 
 
