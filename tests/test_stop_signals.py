@@ -107,3 +107,21 @@ def test_blind_test_ends_on_sigterm_with_143(tmp_path):
     assert proc.wait(60) == 143
     assert "teleop: interrupted (SIGTERM)" in (tmp_path / "err.txt").read_text()
     assert STOP.signum == 0  # this process's own request untouched
+
+
+def test_sighup_with_the_terminal_gone_still_writes_the_json_and_closes_the_recording(tmp_path):
+    """A closed terminal: every print fails (here: pipes whose reader is gone), then SIGHUP to the group."""
+    argv = [sys.executable, "-m", "teleop.apps.cli", "session", "--seconds", "120", "--no-realtime",
+            "--json", str(tmp_path / "s.json"), "--record", str(tmp_path / "s.mcap")]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    while "ticks (0 %)" not in proc.stderr.readline():
+        assert proc.poll() is None
+    time.sleep(1.0)
+    proc.stdout.close()
+    proc.stderr.close()
+    time.sleep(1.0)  # the progress writes fail meanwhile: the loop goes on
+    os.killpg(proc.pid, signal.SIGHUP)
+    assert proc.wait(60) == 129
+    assert json.loads((tmp_path / "s.json").read_text())["interrupted"] == "SIGHUP"
+    s = read_session(tmp_path / "s.mcap")
+    assert s.complete and s.is_intact and s.metadata["session_end"]["interrupted"] == "SIGHUP"

@@ -161,6 +161,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"teleop: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
         return exit_code(signum)
     except OSError as exc:
+        if STOP.signum:  # stopped, and the output failed on the way out (SIGHUP: the terminal is gone)
+            return exit_code(STOP.signum)
         if exc.filename is None:
             raise
         # a file the command was given (or its directory) failed under it: name it, no traceback

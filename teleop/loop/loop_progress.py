@@ -3,7 +3,8 @@ state, deadline misses and faults so far, on stderr: a tqdm bar on a terminal, a
 off one (teleop.io.progress).
 
 The loop calls `on_tick` after every tick; it looks at the timing log only every CHECK_EVERY ticks (a slice
-of the lateness since the last look), so a tick pays one modulo and a call.
+of the lateness since the last look), so a tick pays one modulo and a call. A stderr that fails (the terminal
+closed: SIGHUP) ends the reporting, never the loop.
 """
 
 from __future__ import annotations
@@ -28,13 +29,14 @@ class LoopProgress:
         self.late_ns = late_threshold_ns(rate_hz)
         self.bar = bar if bar is not None else progress(total, desc, unit="ticks", start_line=True,
                                                         mininterval=0.5)
+        self.silent = False  # set when the stream failed
         self.seen = 0  # ticks of the log already counted
         self.misses = 0  # ticks more than half a period late among them (skipped deadlines added at each look)
         self._closed = False
 
     def on_tick(self, k: int, lateness_ns: int) -> None:
         """After tick k (run_paced / run_stepped's on_tick)."""
-        if k % CHECK_EVERY == 0:
+        if k % CHECK_EVERY == 0 and not self.silent:
             self.look()
 
     def look(self) -> None:
@@ -42,14 +44,21 @@ class LoopProgress:
         n = self.log.n
         self.misses += int(np.count_nonzero(self.log.lateness[self.seen:n] > self.late_ns))
         faults = sum(1 for e in self.tp.events if e.dst == State.FAULT.name)
-        self.bar.set_postfix_str(f"{self.tp.state.name}, {self.misses + self.log.skipped} misses, "
-                                 f"{faults} faults", refresh=False)
-        self.bar.update(n - self.seen)
+        try:
+            self.bar.set_postfix_str(f"{self.tp.state.name}, {self.misses + self.log.skipped} misses, "
+                                     f"{faults} faults", refresh=False)
+            self.bar.update(n - self.seen)
+        except (OSError, ValueError):  # stderr closed or gone: report no more
+            self.silent = True
         self.seen = n
 
     def close(self) -> None:
         """A last look, then the reporter's last line."""
         if not self._closed:
             self._closed = True
-            self.look()
-            self.bar.close()
+            if not self.silent:
+                self.look()
+            try:
+                self.bar.close()
+            except (OSError, ValueError):
+                pass

@@ -258,8 +258,6 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             except KeyboardInterrupt:
                 interrupted = STOP.name or "SIGINT"
             finally:
-                if bar is not None:
-                    bar.close()
                 gc.enable()
                 if realtime:
                     set_normal()
@@ -270,6 +268,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                         robot.stop()
                     except Exception:  # noqa: BLE001 - closing anyway; the robot's own watchdog stops it
                         pass
+                if bar is not None:  # after the devices: a terminal gone (SIGHUP) cannot keep them running
+                    bar.close()
             timing = log.summary(params.rate_hz)
             result = SessionResult(timing=timing, events=[vars(e) for e in tp.events], final_state=tp.state.name,
                                    fault_reason=tp.fault_reason, record=record, scheduling=scheduling,

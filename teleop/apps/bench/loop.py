@@ -149,6 +149,8 @@ def run(args) -> int:
 def _run(args) -> int:
     if not args.find_max_rate:
         out = bench_once(args, args.rate)
+        if args.json:  # first: a terminal gone (SIGHUP) may fail the prints below
+            write_json(args.json, out)
         la = out["lateness_us"]
         print(f"loop {out['rate_hz']:g} Hz, {out['ticks']} ticks: lateness p50 {la['p50']} us, p99 {la['p99']} us, "
               f"p99.9 {la['p999']} us, max {la['max']} us; misses {out['deadline_misses']} "
@@ -169,8 +171,6 @@ def _run(args) -> int:
               f"min {pe['min']} us")
         print(format_histogram(out["period_histogram"]))
         print(verdict_line(out["budget"]))
-        if args.json:
-            write_json(args.json, out)
         if args.plot:
             plot_histogram(out, args.plot)
         return exit_code(signal.Signals[out["interrupted"]]) if out["interrupted"] else 0

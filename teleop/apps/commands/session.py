@@ -124,8 +124,15 @@ def run(args) -> int:
 
 
 def report(args, res, wrapper) -> int:
-    """Print the session's summary, write --json; 0, or 128 + the signal's number when one ended it."""
+    """Write --json, print the session's summary; 0, or 128 + the signal's number when one ended it."""
     t = res.timing
+    if args.json:  # first: a terminal gone (SIGHUP) may fail the prints below
+        write_json(args.json, {"timing": t, "events": res.events, "final_state": res.final_state,
+                               "scheduling": res.scheduling,
+                               "fault_reason": res.fault_reason, "drops": res.drops, "alarm": res.alarm,
+                               "live": res.live, "interrupted": res.interrupted or False,
+                               "compensation": None if wrapper is None else
+                               {"model": str(args.compensation), "backlash_width_mm": wrapper.width * 1e3}})
     if res.interrupted:
         print(f"session: INTERRUPTED ({res.interrupted}) after {t['ticks'] / t['rate_hz']:.3f} s of "
               f"{args.seconds:g} s")
@@ -145,13 +152,6 @@ def report(args, res, wrapper) -> int:
         print(f"recorded {args.record}" + (f"; ALARM: {res.alarm}" if res.alarm else f", {res.drops} ticks dropped"))
     if res.alarm:
         print(f"teleop: warning: {res.alarm}", file=sys.stderr)
-    if args.json:
-        write_json(args.json, {"timing": t, "events": res.events, "final_state": res.final_state,
-                               "scheduling": res.scheduling,
-                               "fault_reason": res.fault_reason, "drops": res.drops, "alarm": res.alarm,
-                               "live": res.live, "interrupted": res.interrupted or False,
-                               "compensation": None if wrapper is None else
-                               {"model": str(args.compensation), "backlash_width_mm": wrapper.width * 1e3}})
     if res.interrupted:
         closed = f"; {args.record} is closed and readable up to there" if args.record else ""
         print(f"teleop: interrupted ({res.interrupted}) after {t['ticks']} of "
