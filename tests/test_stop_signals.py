@@ -125,3 +125,19 @@ def test_sighup_with_the_terminal_gone_still_writes_the_json_and_closes_the_reco
     assert json.loads((tmp_path / "s.json").read_text())["interrupted"] == "SIGHUP"
     s = read_session(tmp_path / "s.mcap")
     assert s.complete and s.is_intact and s.metadata["session_end"]["interrupted"] == "SIGHUP"
+
+
+def test_sigterm_ends_bench_loop_with_its_json_marked(tmp_path):
+    err = open(tmp_path / "err.txt", "w")
+    proc = subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "bench", "loop", "--seconds", "120",
+                             "--no-realtime", "--json", str(tmp_path / "b.json")],
+                            stdout=subprocess.DEVNULL, stderr=err, start_new_session=True)
+    deadline = time.monotonic() + 120
+    while "bench loop 1000 Hz: 0/120000 ticks" not in (tmp_path / "err.txt").read_text():
+        assert proc.poll() is None and time.monotonic() < deadline, (tmp_path / "err.txt").read_text()
+        time.sleep(0.1)
+    time.sleep(1.0)
+    os.killpg(proc.pid, signal.SIGTERM)
+    assert proc.wait(60) == 143
+    out = json.loads((tmp_path / "b.json").read_text())
+    assert out["interrupted"] == "SIGTERM" and 0 < out["ticks"] < 120_000

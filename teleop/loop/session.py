@@ -174,7 +174,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 robot_process_hz: float | None = 1000.0, realtime: bool = True,
                 robot_rt_priority: int | None = None, live: tuple | None = None,
                 live_scene: dict | None = None, robot_wrapper=None, sim_clock: bool = False,
-                progress: bool = False) -> SessionResult:
+                progress: str = "") -> SessionResult:
     """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
 
     With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
@@ -188,8 +188,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     `sim_clock` ticks on a simulated clock instead (timing.run_stepped: tick k at k periods, no waiting; the
     same inputs give the same session on any machine); it needs the robot inline (robot_process_hz None) and a
     simulated stylus (sim://, opened here on that clock); `robot_wrapper(robot, clock)` is handed the clock
-    (None: the wall clock). `progress` shows the run's ticks, state, misses and faults on stderr
-    (teleop.loop.loop_progress).
+    (None: the wall clock). `progress`, a name ("session"), shows the run's ticks, state, misses and faults
+    on stderr under that name (teleop.loop.loop_progress; "": none).
 
     A stop signal (teleop.io.stop_signals: SIGINT, SIGTERM, SIGHUP, with the CLI's handler installed) ends the
     loop between two ticks; the devices are stopped, the recording closed with the signal's name in its
@@ -245,7 +245,7 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             on_start = (recorder.set_t0 if recorder is not None else
                         live_view.ring.set_t0 if live_view is not None else None)
             if progress:
-                bar = LoopProgress(tp, log, len(log.tick), params.rate_hz)
+                bar = LoopProgress(tp, log, len(log.tick), params.rate_hz, desc=progress)
             try:
                 with STOP.polled():  # a signal sets STOP.signum; the loop ends after the tick under way
                     if sim_clock:

@@ -86,7 +86,7 @@ def bench_once(args, rate: float) -> dict:
                           spin_us=spin_us, realtime=not args.no_realtime, robot_rt_priority=args.robot_rt or None,
                           robot_process_hz=args.robot_rate,
                           live=(args.live_host, args.live) if args.live is not None else None,
-                          progress=True)
+                          progress=f"bench loop {rate:g} Hz")
     out = dict(res.timing)
     out["live"] = res.live or {"on": False}
     out["recording"] = {"on": record is not None, "drops": res.drops, "alarm": res.alarm}

@@ -119,7 +119,7 @@ def run(args) -> int:
                           estimator=estimator, robot_process_hz=robot_hz, realtime=not args.no_realtime,
                           robot_rt_priority=args.robot_rt or None,
                           live=(args.live_host, args.live) if args.live is not None else None,
-                          robot_wrapper=wrapper, sim_clock=args.sim_clock, progress=True)
+                          robot_wrapper=wrapper, sim_clock=args.sim_clock, progress="session")
         return report(args, res, wrapper)
 
 
