@@ -15,7 +15,8 @@ class Clock:
 
 def test_plain_line_every_interval_and_a_last_line():
     clock, out = Clock(), io.StringIO()
-    with PlainProgress(10, "blind test", "participants", stream=out, interval_s=5.0, clock=clock) as bar:
+    with PlainProgress(10, "blind test", "participants", stream=out, interval_s=5.0, clock=clock,
+                       first_s=5.0) as bar:
         for k in range(10):
             clock.t += 2.0  # 2 s per participant: a line at 6 s (k=2), 12 s (k=5), 18 s (k=8)
             bar.update()
@@ -30,11 +31,20 @@ def test_a_short_run_stays_silent_and_counts_add_up():
     clock, out = Clock(), io.StringIO()
     bar = PlainProgress(None, "palpate z", "ticks", stream=out, interval_s=5.0, clock=clock)
     for _ in range(4):
-        clock.t += 1.0
+        clock.t += 0.45  # under FIRST_LINE_S in all
         bar.update(1000)
     bar.close()
     bar.close()
     assert out.getvalue() == "" and bar.n == 4000
+
+
+def test_a_longer_run_says_what_it_does_within_two_seconds():
+    clock, out = Clock(), io.StringIO()
+    bar = PlainProgress(None, "palpate z", "ticks", stream=out, interval_s=5.0, clock=clock)
+    for _ in range(8):
+        clock.t += 1.0
+        bar.update(1000)
+    assert out.getvalue().splitlines() == ["palpate z: 2000 ticks, 2 s elapsed", "palpate z: 7000 ticks, 7 s elapsed"]
 
 
 def test_not_a_terminal_gets_plain_lines():

@@ -13,23 +13,25 @@ import time
 from tqdm import tqdm
 
 PLAIN_INTERVAL_S = 5.0  # [s] between plain lines when stderr is not a terminal
+FIRST_LINE_S = 2.0  # [s] of a run before its first plain line: a longer run says what it does within this
 
 
 class PlainProgress:
-    """``desc: k/total unit (p %), t s elapsed[, about s left][, postfix]`` on `stream` at most every
-    `interval_s` seconds of `clock`, and a last line on close when at least one line was written (a short run
-    stays silent, unless `start_line` asks for a first line at once). The time left is the elapsed time per
-    unit done so far times the units left."""
+    """``desc: k/total unit (p %), t s elapsed[, about s left][, postfix]`` on `stream`: the first at the first
+    update `first_s` seconds of `clock` into the run (or at once with `start_line`), then at most every
+    `interval_s` seconds, and a last line on close when at least one line was written (a run shorter than
+    `first_s` stays silent). The time left is the elapsed time per unit done so far times the units left."""
 
     def __init__(self, total: int | None, desc: str, unit: str = "it", stream=None,
-                 interval_s: float = PLAIN_INTERVAL_S, clock=time.monotonic, start_line: bool = False):
+                 interval_s: float = PLAIN_INTERVAL_S, clock=time.monotonic, start_line: bool = False,
+                 first_s: float = FIRST_LINE_S):
         self.total, self.desc, self.unit = total, desc, unit
         self.stream = stream if stream is not None else sys.stderr
         self.interval_s, self.clock = interval_s, clock
         self.n = 0
         self.lines = 0
         self.t0 = self.clock()
-        self._last = self.t0
+        self._last = self.t0 - (0.0 if start_line else max(0.0, interval_s - first_s))  # first line first_s in
         self._closed = False
         self.postfix = ""
         if start_line:

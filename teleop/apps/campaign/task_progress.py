@@ -31,7 +31,8 @@ class TaskProgress:
         if bar:
             self.reporter = tqdm(total=total, desc=desc, unit="task", file=self.stream, dynamic_ncols=True)
         else:
-            self.reporter = PlainProgress(total, desc, "tasks", stream=self.stream, interval_s=interval, clock=clock)
+            self.reporter = PlainProgress(total, desc, "tasks", stream=self.stream, interval_s=interval, clock=clock,
+                                          first_s=interval)  # the campaign says its plan at once already
         self._stop = None
         if not bar and ticker:
             self._stop = threading.Event()
