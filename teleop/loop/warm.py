@@ -96,9 +96,12 @@ def cache_is_cold() -> bool:
 
 def _record_warmed() -> None:
     """Write the names of the kernels this process dispatched (after a complete warm-up) to WARMED_FILE."""
+    path = _warmed_path()
+    tmp = f"{path}.{os.getpid()}"
     try:
-        with open(_warmed_path(), "w") as f:
+        with open(tmp, "w") as f:
             json.dump(sorted(_name(k) for k in kernels() if k.signatures), f)
+        os.replace(tmp, path)  # whole or not at all: processes warming at once never read half a list
     except OSError:  # a read-only cache: the next run says "compiling" again, nothing worse
         pass
 
