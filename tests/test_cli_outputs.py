@@ -233,3 +233,22 @@ def test_every_key_of_the_session_json_is_documented(tmp_path, capsys):
     entry = entry[:entry.index("\n- ")]
     for key in list(doc) + list(doc["compensation"]):
         assert f'"{key}"' in entry, key
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["bench", "feedforward", "--compensation", "bogus://"], "--compensation"),
+    (["bench", "blind-jnd", "--speed-mm-s", "-1"], "--speed-mm-s"),
+    (["blind-test", "--depth-mm", "0"], "--depth-mm"),
+])
+def test_a_bad_option_value_is_one_line_naming_the_option(capsys, argv, named):
+    assert main(argv) == 2
+    err = _one_error_line(capsys)
+    assert f"argument {named}" in err and argv[-1] in err
+
+
+def test_a_binary_link_model_is_one_line(tmp_path, capsys):
+    model = tmp_path / "binary.json"
+    model.write_bytes(b"{" + bytes(range(128, 256)))
+    assert main(["bench", "feedforward", "--compensation", str(model)]) == 2
+    err = _one_error_line(capsys)
+    assert str(model) in err and "not UTF-8" in err

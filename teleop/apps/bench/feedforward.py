@@ -74,7 +74,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("feedforward",
                               help="tip tracking error on the robot with backlash, without and with the feed-forward")
     p.add_argument("--backlash-mm", type=float, default=0.5, help="each cable's play width [mm] (default 0.5)")
-    p.add_argument("--compensation", metavar="MODEL",
+    p.add_argument("--compensation", type=input_file, metavar="MODEL",
                    help="link model (JSON) whose backlash width the feed-forward uses (teleop diagnose --save-model, "
                         "or hand-written: docs/feedforward.md); default: the plant's own width")
     p.add_argument("--seconds", type=float, default=10.0, help="simulated session length [s] (default 10)")

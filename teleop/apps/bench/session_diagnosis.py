@@ -184,7 +184,7 @@ def run(args) -> int:
     if len({name for name, _ in effects}) != len(effects):
         raise InputError("--effect: each effect at most once")
     if args.out:
-        work = Path(args.out)
+        work = Path(args.out).absolute()  # the child commands' arguments never start with '-'
         if work.exists() and not work.is_dir():
             raise InputError(f"--out {args.out}: exists and is not a directory")
         work.mkdir(parents=True, exist_ok=True)

@@ -16,7 +16,7 @@ import numpy as np
 
 from scenes.pads import blind_area_centres
 from scenes.sim_robot import PLANTS
-from teleop.apps.argtypes import jnd_fraction, positive_int
+from teleop.apps.argtypes import jnd_fraction, positive_float, positive_int
 from teleop.apps.commands.session import add_live_arguments
 from teleop.apps.protocols.blind.human import Coordinator, run_human_study
 from teleop.apps.protocols.blind.participants import ParticipantParams
@@ -45,9 +45,9 @@ def add_rig_options(p) -> None:
                    help="-3 dB bandwidth of the estimator's Kalman filter [Hz] (default: the rig's, 80 Hz)")
     p.add_argument("--robot-substeps", type=int, default=None, metavar="N",
                    help="physics steps of 1 ms per robot-link exchange (default 1: the link at 1 kHz)")
-    p.add_argument("--depth-mm", type=float, default=None, metavar="MM",
+    p.add_argument("--depth-mm", type=positive_float, default=None, metavar="MM",
                    help="participants' mean stylus push depth [mm]")
-    p.add_argument("--speed-mm-s", type=float, default=None, metavar="MM_S",
+    p.add_argument("--speed-mm-s", type=positive_float, default=None, metavar="MM_S",
                    help="participants' mean stylus push speed [mm/s]")
     p.add_argument("--sensor", default="fsr", choices=("fsr", "fbg", "one"),
                    help="the robot's tension sensors: fsr (the FSR array, default), fbg (seed 001's distal FBG on "
