@@ -17,6 +17,7 @@ import numpy as np
 from teleop.core.config import check_keys, load_toml
 from teleop.core.errors import InputError
 from teleop.io.outputs import atomic_write
+from teleop.io.recording import MAGIC as MCAP_MAGIC
 
 # unit suffix -> (SI unit, factor to SI); angles go to rad, lengths to m, torques to N m
 UNITS = {
@@ -40,7 +41,6 @@ MAX_NAN_GAP = 3  # isolated gaps up to this many samples are interpolated; longe
 # file's size in memory); the commands that read recordings lift it with --max-input-mb.
 MAX_INPUT_MB = 512.0
 SNIFF_BYTES = 4096  # the first block, looked at before a file is read
-MCAP_MAGIC = b"\x89MCAP"
 
 
 @dataclass(frozen=True)
