@@ -4,8 +4,8 @@ import importlib.util
 
 import numpy as np
 import pytest
-from _fake_sdks import install_omega, install_touch
-from _fakes import FakeRobot, record_session
+from tests.devices._fake_sdks import install_omega, install_touch
+from tests.devices._fakes import FakeRobot, record_session
 
 from devices.conformance import ConformanceError, check_haptic, check_robot
 from devices.replay import ReplayRobot, ReplayStylus

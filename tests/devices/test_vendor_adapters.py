@@ -4,7 +4,7 @@ import sys
 
 import numpy as np
 import pytest
-from _fake_sdks import install_omega, install_touch
+from tests.devices._fake_sdks import install_omega, install_touch
 
 from devices.base import DeviceError, DeviceUnavailable
 from teleop.apps.cli import main

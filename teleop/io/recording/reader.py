@@ -1,7 +1,7 @@
 """Read a session recording with the `mcap` package's StreamReader; never crash on a damaged file.
 
 The library parses every record and checks the chunk and data-section CRCs. Measured against the bare
-`StreamReader(validate_crcs=True)` (mcap 1.6.0) on the file of tests/test_recording.py's damage tests
+`StreamReader(validate_crcs=True)` (mcap 1.6.0) on the file of tests/io/recording/test_recording.py's damage tests
 (`write_file(10, flush_every=2, layout=SMALL)`, 7440 bytes, the same seeded trials): a cut at each of its
 7432 byte offsets always raised (good), but of the 3000 bit-flip trials 693 raised nothing (flips in the
 summary section: repeated schemas and channels, chunk indexes, statistics, metadata index, summary offsets,

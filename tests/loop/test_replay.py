@@ -7,9 +7,8 @@ import sys
 import numpy as np
 import pytest
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "devices"))
 
-from _fakes import LinearEstimator, record_session  # noqa: E402
+from tests.devices._fakes import LinearEstimator, record_session  # noqa: E402
 
 from teleop.apps.cli import main  # noqa: E402
 from teleop.loop.replay import replay_session  # noqa: E402

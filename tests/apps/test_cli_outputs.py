@@ -23,7 +23,7 @@ from teleop.io.outputs import output_problem, save_figure
 from teleop.io.recording_io import MCAP_MAGIC, read_recording
 from teleop.io.table import read_table
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "recording.csv"
 
 

@@ -28,7 +28,7 @@ from teleop.apps import argtypes
 from teleop.apps.cli import build_parser, main
 from teleop.loop.session import run_session as REAL_RUN_SESSION
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 # commands cheap enough to run for real on any arguments (the rest only get their checks fuzzed)
 CHEAP = {("geometry",), ("export",), ("replay",)}

@@ -8,9 +8,9 @@ import subprocess
 import sys
 
 from teleop.loop.live import study
-from tests.live._client import receive_until_closed, subscribe_all
+from tests.loop.live._client import receive_until_closed, subscribe_all
 
-P1 = ["h", "s", "h", "r", "h", "s", "h", "10 7 4 2"]  # the answers of tests/protocols/test_blind_human.py's P1
+P1 = ["h", "s", "h", "r", "h", "s", "h", "10 7 4 2"]  # the answers of tests/apps/protocols/test_blind_human.py's P1
 
 
 def test_experimenter_screen(tmp_path):

@@ -10,9 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "devices"))
 
-from _fakes import FakeRobot, LinearEstimator  # noqa: E402
+from tests.devices._fakes import FakeRobot, LinearEstimator  # noqa: E402
 
 from devices.base import TOUCH_SPEC  # noqa: E402
 from devices.simulated import OperatorParams, Script, SimulatedStylus  # noqa: E402

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from teleop.loop.live import channels as lc
 
-LAYOUT = Path(__file__).resolve().parents[2] / "examples" / "foxglove-layout.json"
+LAYOUT = Path(__file__).resolve().parents[3] / "examples" / "foxglove-layout.json"
 
 
 def leaves(node):

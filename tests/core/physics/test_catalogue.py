@@ -168,7 +168,7 @@ def test_the_docs_catalogue_table_is_the_registry():
 
     from teleop.core.physics.catalogue import catalogue_rows, with_table
 
-    doc = Path(__file__).resolve().parents[2] / "docs" / "diagnosis.md"
+    doc = Path(__file__).resolve().parents[3] / "docs" / "diagnosis.md"
     text = doc.read_text(encoding="utf-8")
     assert with_table(text) == text, "docs/diagnosis.md's catalogue table differs from the registry"
     assert [r["effect"] for r in catalogue_rows()] == list(REGISTRY)

@@ -10,7 +10,7 @@ import numpy as np
 
 from teleop.loop.live import channels as lc
 from teleop.io.recording import read_session
-from tests.live._client import receive_until_closed, start_session, subscribe_all
+from tests.loop.live._client import receive_until_closed, start_session, subscribe_all
 
 
 def run_client(port: int, **kw):

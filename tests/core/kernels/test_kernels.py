@@ -11,7 +11,7 @@ import pytest
 
 from teleop.core.kernels import jit
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _run(code: str, **env) -> subprocess.CompletedProcess:

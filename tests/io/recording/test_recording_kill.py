@@ -11,6 +11,8 @@ import sys
 import textwrap
 import time
 
+from pathlib import Path
+
 import numpy as np
 
 from teleop.loop.tap import session_layout
@@ -66,8 +68,8 @@ def test_sigkill_recorder_many_times(tmp_path):
 
 SESSION = textwrap.dedent("""
     import sys
-    sys.path.insert(0, {fakes!r})
-    from _fakes import FakeRobot, LinearEstimator
+    sys.path.insert(0, {repo!r})
+    from tests.devices._fakes import FakeRobot, LinearEstimator
     from teleop.loop.session import run_session
     run_session("sim://?script=pokes", "fake", 30.0, record={path!r}, robot=FakeRobot(),
                 estimator=LinearEstimator(), robot_process_hz=None)
@@ -75,11 +77,11 @@ SESSION = textwrap.dedent("""
 
 
 def test_sigkill_whole_session(tmp_path):
-    fakes = os.path.join(os.path.dirname(__file__), "devices")
+    repo = str(Path(__file__).resolve().parents[3])   # the tests package: tests.devices._fakes
     rng = np.random.default_rng(5)
     for trial in range(2):
         path = tmp_path / f"session{trial}.mcap"
-        proc = subprocess.Popen([sys.executable, "-c", SESSION.format(fakes=fakes, path=str(path))],
+        proc = subprocess.Popen([sys.executable, "-c", SESSION.format(repo=repo, path=str(path))],
                                 start_new_session=True, stderr=subprocess.PIPE)
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and (not path.exists() or path.stat().st_size < 20000):
