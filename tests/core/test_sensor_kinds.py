@@ -151,7 +151,7 @@ def test_one_estimator_loop_protocol():
 
 @pytest.mark.parametrize("url, what", [("sim://robot?sensor=strain", "unknown sensor kind 'strain'"),
                                        ("sim://robot?sensor=one&cable=7", "cable index 0..5"),
-                                       ("sim://robot?cable=x", "cable must be a cable index")])
+                                       ("sim://robot?cable=x", "cable must be the FBG.s cable index")])
 def test_bad_sensor_options(url, what):
     with pytest.raises(InputError, match=what):
         open_device(url)
