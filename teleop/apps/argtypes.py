@@ -22,20 +22,22 @@ def _number(text: str, kind):
     return v
 
 
+def _checked(text: str, kind: type, ok, expected: str, shown=None):
+    """`text` as a `kind` number for which ok(v) holds; else 'expected <expected>, got <shown or v>'."""
+    v = _number(text, kind)
+    if not ok(v):
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {v if shown is None else shown}")
+    return v
+
+
 def positive_int(text: str) -> int:
     """A whole number >= 1 (counts: participants, trials, round trips)."""
-    v = _number(text, int)
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {v}")
-    return v
+    return _checked(text, int, lambda v: v >= 1, "a whole number >= 1")
 
 
 def seed_int(text: str) -> int:
     """A whole number >= 0 (what numpy's random generators accept)."""
-    v = _number(text, int)
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0 (a random generator seed), got {v}")
-    return v
+    return _checked(text, int, lambda v: v >= 0, "a whole number >= 0 (a random generator seed)")
 
 
 def finite_float(text: str) -> float:
@@ -45,19 +47,13 @@ def finite_float(text: str) -> float:
 
 def positive_float(text: str) -> float:
     """A finite number > 0 (durations [s], rates [Hz])."""
-    v = _number(text, float)
-    if v <= 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text}")
-    return v
+    return _checked(text, float, lambda v: v > 0, "a number > 0", text)
 
 
 def float_in(lo: float, hi: float, unit: str = ""):
     """An argparse type: a finite number in [lo, hi] (`unit` is shown in the message)."""
     def check(text: str) -> float:
-        v = _number(text, float)
-        if not lo <= v <= hi:
-            raise argparse.ArgumentTypeError(f"expected a number from {lo:g} to {hi:g}{unit}, got {text}")
-        return v
+        return _checked(text, float, lambda v: lo <= v <= hi, f"a number from {lo:g} to {hi:g}{unit}", text)
 
     check.__name__ = f"float_in_{lo:g}_{hi:g}"
     return check
@@ -73,18 +69,12 @@ SESSION_SECONDS = float_in(0.001, 4 * 3600.0, " s")
 
 def nonnegative_float(text: str) -> float:
     """A finite number >= 0."""
-    v = _number(text, float)
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text}")
-    return v
+    return _checked(text, float, lambda v: v >= 0, "a number >= 0", text)
 
 
 def rt_priority(text: str) -> int:
     """A SCHED_FIFO priority 1-99, or 0 for time-sharing."""
-    v = _number(text, int)
-    if not 0 <= v <= 99:
-        raise argparse.ArgumentTypeError(f"expected 0 (time-sharing) or a SCHED_FIFO priority 1-99, got {v}")
-    return v
+    return _checked(text, int, lambda v: 0 <= v <= 99, "0 (time-sharing) or a SCHED_FIFO priority 1-99")
 
 
 # A person's stiffness JND as a Weber fraction: a participant who cannot tell two stiffnesses 2x apart
