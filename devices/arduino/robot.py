@@ -65,6 +65,11 @@ class ArduinoRobot(ContextDevice):
                  timeout_s: float = 0.25, boot_timeout_s: float = 3.0, home_lengths=None):
         if baud <= 0 or timeout_s <= 0 or boot_timeout_s <= 0:
             raise InputError(f"serial robot '{port}': baud, timeout and boot timeout must be positive")
+        travel = (spec.l_max - spec.l_min) * spec.steps_per_m
+        if travel > msg.STEP_LIMIT:  # every commanded length, from any home in range, within the firmware's steps
+            raise InputError(f"serial robot '{port}': cable lengths {spec.l_min * 1e3:g} to {spec.l_max * 1e3:g} mm "
+                             f"span {travel:.0f} motor steps; the firmware holds +-{msg.STEP_LIMIT} "
+                             f"({msg.STEP_LIMIT / spec.steps_per_m * 1e3:.0f} mm): narrow l_min_mm..l_max_mm")
         self.port, self.baud, self.spec = port, int(baud), spec
         self.home_lengths = None
         if home_lengths is not None:
@@ -118,6 +123,7 @@ class ArduinoRobot(ContextDevice):
             if self.hello.protocol != msg.PROTOCOL_VERSION:
                 raise DeviceError(f"serial robot '{self.port}': firmware speaks protocol {self.hello.protocol}, "
                                   f"host speaks {msg.PROTOCOL_VERSION}")
+            check_speed_limit(self.spec, self.hello, self.port)
         except Exception:
             self._transport.close()
             self._transport = None
@@ -352,10 +358,33 @@ class ArduinoRobot(ContextDevice):
             self._cond.notify_all()
 
 
+def spec_for(geometry) -> RobotSpec:
+    """The robot's limits for a geometry (teleop.core.geometry.Geometry): its cable length range l_min..l_max
+    [m] and cable speed v_max [m/s], the motors' steps per metre unchanged (devices.base.RobotSpec)."""
+    return RobotSpec(l_min=float(geometry.l_min), l_max=float(geometry.l_max), v_max=float(geometry.v_max))
+
+
+def check_speed_limit(spec: RobotSpec, hello: msg.HelloReply, port: str) -> None:
+    """InputError when the host's cable speed `spec.v_max` [m/s] is faster than the firmware moves a motor
+    (HELLO_REPLY's v_max [steps/s], V_MAX_STEPS of firmware/protocol.h, one step/s of rounding allowed): the
+    commands would outrun the motors and the realized lengths lag the commanded ones."""
+    asked = spec.v_max * spec.steps_per_m
+    if asked > hello.v_max_steps_per_s + 1:
+        raise InputError(f"serial robot '{port}': geometry v_max_mm_s {spec.v_max * 1e3:g} is faster than the "
+                         f"firmware's {hello.v_max_steps_per_s / spec.steps_per_m * 1e3:.3g} mm/s "
+                         f"({hello.v_max_steps_per_s} steps/s, V_MAX_STEPS in firmware/protocol.h): lower "
+                         "v_max_mm_s or rebuild the firmware")
+
+
 def from_url(parsed, options: dict) -> ArduinoRobot:
     """``serial:///dev/ttyACM0?baud=1000000&timeout=0.25&home_mm=30,30,30,30,30,30`` -> ArduinoRobot
-    (not opened; with home_mm, open() declares those cable lengths as home)."""
-    allowed = {"baud", "timeout", "home_mm"}
+    (not opened; with home_mm, open() declares those cable lengths as home). The option `geometry`, a
+    teleop.core.geometry.Geometry given by the wiring (teleop.loop.devices_by_url, `--geometry`), not by the
+    URL, sets the length and speed limits (`spec_for`; the default: RobotSpec's, the seed robot's)."""
+    geometry = options.get("geometry")
+    if isinstance(geometry, str):
+        raise InputError("serial URL: geometry is not a URL option; give the geometry file with --geometry")
+    allowed = {"baud", "timeout", "home_mm", "geometry"}
     unknown = sorted(set(options) - allowed)
     if unknown:
         raise InputError(f"serial URL: unknown option(s) {', '.join(unknown)} (expected: baud, timeout, home_mm)")
@@ -375,4 +404,5 @@ def from_url(parsed, options: dict) -> ArduinoRobot:
         except ValueError:
             raise InputError(f"serial URL: home_mm must be comma-separated numbers [mm], "
                              f"got {options['home_mm']!r}") from None
-    return ArduinoRobot(port, baud=baud, timeout_s=timeout, home_lengths=home)
+    spec = RobotSpec() if geometry is None else spec_for(geometry)
+    return ArduinoRobot(port, baud=baud, spec=spec, timeout_s=timeout, home_lengths=home)

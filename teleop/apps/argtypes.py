@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 
 from teleop.core.config import input_problem
+from teleop.core.geometry import Geometry, default_geometry, load_geometry
 from teleop.io.outputs import FIGURE_FORMATS, output_problem
 
 
@@ -104,6 +105,21 @@ def input_file(text: str) -> str:
     if problem:
         raise argparse.ArgumentTypeError(f"'{text}': {problem}")
     return text
+
+
+def add_geometry_option(p) -> None:
+    """--geometry TOML on every command that builds the robot (read with `geometry_of`)."""
+    p.add_argument("--geometry", type=input_file, default=None, metavar="TOML",
+                   help="the robot's geometry: anchors, tip, sheath bend and friction, tension, length and speed "
+                        "limits (a [geometry] table, docs/formats.md; default: the seed robot, written out in "
+                        "examples/geometry.toml)")
+
+
+def geometry_of(args) -> Geometry:
+    """The geometry `--geometry` names (teleop.core.geometry.load_geometry: a bad file or key is an InputError
+    naming both), or the seed robot's when the option is absent or not given."""
+    path = getattr(args, "geometry", None)
+    return load_geometry(path) if path else default_geometry()
 
 
 def output_file(text: str) -> str:

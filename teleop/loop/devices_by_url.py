@@ -4,10 +4,15 @@
 ``serial:///dev/ttyACM0?baud=1000000`` (devices.arduino), ``replay://session.mcap``. A backend is an entry in
 ``BACKENDS``: scheme (and optional host) -> "module:factory", imported when a URL names it (vendor SDKs and
 pybullet load only for the devices used).
+
+A robot is built for a geometry (teleop.core.geometry.Geometry, `--geometry`) with ``open_device(url,
+geometry=g)``: the simulated robot's `SimRobotParams.geometry`, the serial robot's length and speed limits
+(checked against its firmware's); a stylus or a replayed robot has none to take.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib
 from typing import Callable
@@ -29,11 +34,16 @@ BACKENDS: dict[str, str] = {
 }
 
 
-def open_device(url: str, **overrides):
+# backends that build a robot for a given geometry (open_device's `geometry`)
+GEOMETRY_BACKENDS = ("sim/robot", "serial")
+
+
+def open_device(url: str, geometry=None, **overrides):
     """Build (not open) the device a URL names; use it as a context manager to open it.
 
-    Raises InputError for an unknown scheme or malformed URL, DeviceUnavailable when the backend cannot
-    be used on this machine.
+    `geometry` (teleop.core.geometry.Geometry; None: the backend's default, the seed robot) is the robot's:
+    accepted by the backends of GEOMETRY_BACKENDS only. Raises InputError for an unknown scheme, a malformed
+    URL or a geometry the device cannot take, DeviceUnavailable when the backend cannot be used on this machine.
     """
     parsed = urlparse(url)
     if not parsed.scheme:
@@ -50,7 +60,23 @@ def open_device(url: str, **overrides):
     factory: Callable = getattr(module, factory_name)
     options = {k: v[-1] for k, v in parse_qs(parsed.query).items()}
     options.update(overrides)
-    return factory(parsed, options)
+    if geometry is not None and key not in GEOMETRY_BACKENDS:
+        raise InputError(f"device URL '{url}': a geometry applies to a robot built here "
+                         f"({', '.join(GEOMETRY_BACKENDS)}), not to {key}")
+    if geometry is not None and key == "serial":
+        options["geometry"] = geometry  # devices.arduino.robot.from_url: the limits, checked against the firmware's
+    device = factory(parsed, options)
+    if geometry is not None and key == "sim/robot":
+        device = _sim_robot_on(device, geometry)
+    return device
+
+
+def _sim_robot_on(robot, geometry):
+    """The simulated robot `robot` (scenes.sim_robot.SimRobot, built, not opened) rebuilt with `geometry` in its
+    params (SimRobotParams.geometry, whose checks run again: a pretension or play the geometry cannot hold is
+    an InputError); its pad, seed, FSR calibration and link model kept."""
+    params = dataclasses.replace(robot.params, geometry=geometry)
+    return type(robot)(robot.pad, params, seed=robot.seed, calibration=robot.cal, model=robot.model)
 
 
 def process_robot(url: str, rate_hz: float = 1000.0, start_timeout: float = 30.0, rt_priority: int | None = None,

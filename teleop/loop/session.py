@@ -23,7 +23,7 @@ from scenes.sensor_identification import identify_one_sensor_on
 from teleop.core.estimation.kalman import KalmanNoise
 from teleop.core.estimation.reading import ReadingEstimator
 from teleop.core.estimation.sensor_reading import make_estimator
-from teleop.core.geometry import default_geometry
+from teleop.core.geometry import Geometry, default_geometry
 from teleop.core.kinematics import pose2lengths
 from teleop.io.recording import Recorder, Ring
 from teleop.io.stop_signals import STOP
@@ -62,8 +62,11 @@ def software_version() -> str:
     return f"cdpr-teleop {teleop.__version__}" + (f" ({rev})" if rev else "")
 
 
-def session_metadata(tp: Teleop, haptic_url: str, robot_url: str, seconds: float, seed: int | None) -> dict:
-    """Configuration, calibration, firmware and software versions of a session (stored in the recording)."""
+def session_metadata(tp: Teleop, haptic_url: str, robot_url: str, seconds: float, seed: int | None,
+                     geometry_file: str | None = None) -> dict:
+    """Configuration, calibration, firmware and software versions of a session (stored in the recording): the
+    geometry the loop ran on (SI, teleop.core.geometry.Geometry's fields) and the file it came from
+    (`geometry_file`, None: the built-in seed robot)."""
     g = tp.geom
     robot = tp.robot
     return {
@@ -72,6 +75,7 @@ def session_metadata(tp: Teleop, haptic_url: str, robot_url: str, seconds: float
                           "geometry": {"B": g.B.tolist(), "r": g.r.tolist(), "theta0": g.theta0, "mu": g.mu,
                                        "t_min": g.t_min, "t_max": g.t_max, "tip": g.tip.tolist(),
                                        "l_min": g.l_min, "l_max": g.l_max, "v_max": g.v_max},
+                          "geometry_file": None if geometry_file is None else str(geometry_file),
                           "haptic_spec": vars(tp.haptic.spec) if hasattr(tp.haptic.spec, "__dict__") else
                           str(tp.haptic.spec),
                           "robot_spec": vars(robot.spec) if hasattr(robot.spec, "__dict__") else str(robot.spec),
@@ -145,20 +149,21 @@ def frame_period(params: LoopParams, robot_process_hz: float | None) -> float:
     return max(params.dt, 1.0 / robot_process_hz) if robot_process_hz else params.dt * params.robot_every
 
 
-def default_estimator(frame_dt: float, cal=None):
-    """The session's estimator: "dynamic" with its Kalman gain designed for `frame_dt` [s]."""
-    return ReadingEstimator(default_geometry(), "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt))
+def default_estimator(frame_dt: float, cal=None, geometry: Geometry | None = None):
+    """The session's estimator: "dynamic" on `geometry` (None: the seed robot's) with its Kalman gain designed
+    for `frame_dt` [s]."""
+    return ReadingEstimator(geometry or default_geometry(), "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt))
 
 
-def loop_estimator(robot_url: str, frame_dt: float, cal=None):
+def loop_estimator(robot_url: str, frame_dt: float, cal=None, geometry: Geometry | None = None):
     """The loop's estimator for a `sim://robot?sensor=fbg|one` URL ("dynamic" name, Kalman gain for
     `frame_dt` [s], FSR calibration `cal` for one's proximal tensions; for one, Kp and Kr identified on the
-    URL's robot, scenes.sensor_identification.identify_one_sensor_on); None for any other URL or sensor=fsr
-    (the FSR estimator serves)."""
+    URL's robot, scenes.sensor_identification.identify_one_sensor_on), the robot built on `geometry` (None: the
+    seed robot); None for any other URL or sensor=fsr (the FSR estimator serves)."""
     u = urlparse(robot_url)
     if (u.scheme, u.netloc) != ("sim", "robot") or parse_qs(u.query).get("sensor", ["fsr"])[-1] == "fsr":
         return None
-    p = open_device(robot_url).params  # built, not opened: the URL's checked options
+    p = open_device(robot_url, geometry=geometry).params  # built, not opened: the URL's checked options
     kw = {"model": identify_one_sensor_on(p, 0, p.fbg_cable), "cable": p.fbg_cable} if p.sensor == "one" else {}
     return make_estimator(p.geometry, p.sensor, "dynamic", cal=cal, kalman=KalmanNoise(dt=frame_dt), **kw)
 
@@ -174,7 +179,8 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
                 robot_process_hz: float | None = 1000.0, realtime: bool = True,
                 robot_rt_priority: int | None = None, live: tuple | None = None,
                 live_scene: dict | None = None, robot_wrapper=None, sim_clock: bool = False,
-                progress: str = "") -> SessionResult:
+                progress: str = "", geometry: Geometry | None = None,
+                geometry_file: str | None = None) -> SessionResult:
     """Run one paced session; `haptic`/`robot` may be given as device objects instead of URLs.
 
     With `robot_process_hz` (default) the robot runs in its own process at that rate (devices.wrappers
@@ -189,7 +195,10 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
     same inputs give the same session on any machine); it needs the robot inline (robot_process_hz None) and a
     simulated stylus (sim://, opened here on that clock); `robot_wrapper(robot, clock)` is handed the clock
     (None: the wall clock). `progress`, a name ("session"), shows the run's ticks, state, misses and faults
-    on stderr under that name (teleop.loop.loop_progress; "": none).
+    on stderr under that name (teleop.loop.loop_progress; "": none). `geometry` (None: the seed robot's) is the
+    robot's: the loop's kinematics, the default estimator and a robot built here from its URL
+    (devices_by_url.open_device) all use it; a given `estimator` must have been built on it. The recording's
+    metadata holds it, with `geometry_file` it came from.
 
     A stop signal (teleop.io.stop_signals: SIGINT, SIGTERM, SIGHUP, with the CLI's handler installed) ends the
     loop between two ticks; the devices are stopped, the recording closed with the signal's name in its
@@ -207,28 +216,29 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
         haptic = open_device(haptic_url, clock=clock)
     params = params or LoopParams()
     if estimator is None:
-        estimator = default_estimator(frame_period(params, robot_process_hz))
+        estimator = default_estimator(frame_period(params, robot_process_hz), geometry=geometry)
     haptic = haptic if haptic is not None else open_device(haptic_url)
     built = robot  # the robot as built from its URL (a ProcessRobot runs it elsewhere): its pad for the scene
     if robot is None:
         if robot_process_hz:
-            built = open_device(robot_url)  # validates the URL here (one clear line) before forking
+            built = open_device(robot_url, geometry=geometry)  # validates here (one clear line) before forking
             robot = process_robot(robot_url, rate_hz=robot_process_hz,
-                                  rt_priority=robot_rt_priority if realtime else None)
+                                  rt_priority=robot_rt_priority if realtime else None,
+                                  **({} if geometry is None else {"geometry": geometry}))
         else:
-            robot = built = open_device(robot_url)
+            robot = built = open_device(robot_url, geometry=geometry)
     if robot_wrapper is not None:
         robot = robot_wrapper(robot, clock)
     recorder = live_view = bar = None
     try:
         with haptic, robot:
-            tp = Teleop(haptic, robot, params, estimator=estimator)
+            tp = Teleop(haptic, robot, params, geom=geometry, estimator=estimator)
             first = robot.read()  # telemetry only; no motion command is sent before ENABLED
             tp.last_reading = first
             extras = numeric_extras(first)
             layout = session_layout(extras)
             if record:
-                meta = session_metadata(tp, haptic_url, robot_url, seconds, seed)
+                meta = session_metadata(tp, haptic_url, robot_url, seconds, seed, geometry_file)
                 recorder = Recorder(record, layout, meta, flush_interval=flush_interval,
                                     t0_ns=meta["start_time_ns"]).start()
                 tp.tap = RowTap(layout, recorder.push, extras)

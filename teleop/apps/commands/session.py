@@ -8,7 +8,8 @@ import sys
 from dataclasses import replace
 
 from devices.wrappers import BacklashCompensatedRobot
-from teleop.apps.argtypes import LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, input_file, positive_float, rt_priority
+from teleop.apps.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, add_geometry_option, geometry_of,
+                                   input_file, positive_float, rt_priority)
 from teleop.core.control.feedforward import model_backlash_width
 from teleop.core.errors import InputError
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
@@ -51,6 +52,7 @@ def register(subparsers) -> None:
                         "from `teleop diagnose REC --save-model MODEL` or hand-written (docs/feedforward.md); each "
                         "cable is commanded half the play ahead in its direction of motion, within v_max and the "
                         "length limits")
+    add_geometry_option(p)
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20; docs/safety.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO (loop 50, robot 45)")
@@ -103,6 +105,7 @@ def run(args) -> int:
         params = replace(params, mapping=replace(params.mapping, motion_scale=args.motion_scale))
 
     # read before any device is opened or file written: a bad file leaves nothing
+    geometry = geometry_of(args)
     if args.fsr_calibration and str(args.fsr_calibration).endswith(".toml"):
         cal = load_fsr(args.fsr_calibration)
     else:
@@ -111,15 +114,16 @@ def run(args) -> int:
     if args.compensation:
         wrapper = compensation_wrapper(args.compensation, params.dt * params.robot_every)
     robot_hz = None if args.robot_inline else args.robot_rate
-    estimator = default_estimator(frame_period(params, robot_hz), cal=cal)
+    estimator = default_estimator(frame_period(params, robot_hz), cal=cal, geometry=geometry)
     if "sensor=" in args.robot:  # sim://robot?sensor=fbg|one: the estimator reads that kind (loop_estimator)
-        estimator = loop_estimator(args.robot, frame_period(params, robot_hz), cal) or estimator
+        estimator = loop_estimator(args.robot, frame_period(params, robot_hz), cal, geometry) or estimator
     with STOP.polled():  # a stop signal ends the loop; the results below are written, marked interrupted
         res = run_session(args.haptic, args.robot, args.seconds, record=args.record, params=params,
                           estimator=estimator, robot_process_hz=robot_hz, realtime=not args.no_realtime,
                           robot_rt_priority=args.robot_rt or None,
                           live=(args.live_host, args.live) if args.live is not None else None,
-                          robot_wrapper=wrapper, sim_clock=args.sim_clock, progress="session")
+                          robot_wrapper=wrapper, sim_clock=args.sim_clock, progress="session",
+                          geometry=geometry, geometry_file=args.geometry)
         return report(args, res, wrapper)
 
 
