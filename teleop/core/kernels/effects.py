@@ -359,3 +359,64 @@ def contact_damping_run(s, U, p, out):
     for i in range(U.shape[0]):
         out[i] = contact_damping_step(s, U[i], p)
     return out
+
+
+# ------------------------------------------------------------------ lags (position links)
+@njit
+def transport_delay_step(s, u, p):
+    """u = (t, x); p = (delay,) [s]; s = (w, r, ring of times (N,), ring of inputs (N,)), N = (len(s) - 2) / 2:
+    w the samples written so far (NaN before the first), r the index of the newest kept sample at or before
+    t - delay. Returns x(t - delay), linearly interpolated between the kept samples that bracket it (a whole
+    number of sample intervals reads a kept sample exactly); before the first sample the input is held at
+    its first value; a delay reaching further back than the N kept samples reads the oldest one kept."""
+    n = (s.shape[0] - 2) // 2
+    if s[0] != s[0]:
+        s[0], s[1] = 0.0, 0.0
+    w = int(s[0])
+    s[2 + w % n] = u[0]
+    s[2 + n + w % n] = u[1]
+    w += 1
+    s[0] = w
+    target = u[0] - p[0]
+    r = max(int(s[1]), w - n)
+    while r + 1 < w and s[2 + (r + 1) % n] <= target:
+        r += 1
+    s[1] = r
+    t0, x0 = s[2 + r % n], s[2 + n + r % n]
+    if r + 1 >= w or target <= t0:
+        return x0
+    t1, x1 = s[2 + (r + 1) % n], s[2 + n + (r + 1) % n]
+    return x0 + (target - t0) / (t1 - t0) * (x1 - x0)
+
+
+@njit
+def transport_delay_run(s, U, p, out):
+    """out (n,): transport_delay_step along U (n, k) from the state s."""
+    for i in range(U.shape[0]):
+        out[i] = transport_delay_step(s, U[i], p)
+    return out
+
+
+@njit
+def first_order_lag_step(s, u, p):
+    """u = (t, x); p = (tau,) [s]; s = (t_prev, x_prev, y): y follows x through dy/dt = (x - y) / tau, integrated
+    exactly over each interval with x linear between its samples (a first-order hold):
+    y <- a y + (1 - a) x_prev + (x - x_prev) (1 - tau (1 - a) / dt), a = exp(-dt / tau); y starts at the
+    first sample's x (at rest)."""
+    t, x = u[0], u[1]
+    if s[0] != s[0]:
+        s[2] = x
+    elif t > s[0]:
+        dt = t - s[0]
+        b = -math.expm1(-dt / p[0])          # 1 - a, exact for dt << tau
+        s[2] = (1.0 - b) * s[2] + b * s[1] + (x - s[1]) * (1.0 - p[0] * b / dt)
+    s[0], s[1] = t, x
+    return s[2]
+
+
+@njit
+def first_order_lag_run(s, U, p, out):
+    """out (n,): first_order_lag_step along U (n, k) from the state s."""
+    for i in range(U.shape[0]):
+        out[i] = first_order_lag_step(s, U[i], p)
+    return out

@@ -39,7 +39,7 @@ Each effect's physics is written once, as a compiled step kernel `step(state, in
 (teleop.core.kernels.effects; `Kernel` on the Effect): the array form is the one compiled driver's loop over
 it (kernels.effects.drive), the Step calls it per sample. The module-level functions (tip2motor_transitions,
 backlash, cable_stretch, dahl, hysteresis_offset, thermal_offset, linear_force, hertz_force, sls_force,
-damped_force, spring_force, pulley_motor_force) run the same kernels; coulomb, viscous, stribeck and the
+damped_force, spring_force, pulley_motor_force, transport_delay, first_order_lag) run the same kernels; coulomb, viscous, stribeck and the
 capstan's hold law are element-wise loops over the scalar kernels those steps call.
 """
 
@@ -57,6 +57,7 @@ from teleop.core.physics.pulley import Pulley, PulleyChain, pulley_band, pulley_
 from teleop.core.physics.friction import coulomb, dahl, stribeck, viscous
 from teleop.core.physics.sensor_effects import hysteresis_offset, thermal_offset
 from teleop.core.physics.contact import damped_force, hertz_force, linear_force, sls_force
+from teleop.core.physics.lag import first_order_lag, transport_delay
 from teleop.core.physics.fit import FitResult, fit, rmse
 
 for _module in pkgutil.iter_modules(__path__):   # a new effect's module registers it (see above)
@@ -69,5 +70,5 @@ __all__ = [
     "tip2motor", "tip2motor_transitions", "backlash", "cable_stretch", "spring_force", "coulomb", "dahl", "stribeck",
     "viscous", "hysteresis_offset", "thermal_offset", "damped_force", "hertz_force", "linear_force",
     "sls_force", "FitResult", "fit", "rmse", "Pulley", "PulleyChain", "pulley_band", "pulley_elongation",
-    "pulley_motor_force",
+    "pulley_motor_force", "transport_delay", "first_order_lag",
 ]

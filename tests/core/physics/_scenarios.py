@@ -39,6 +39,10 @@ def scenario(name: str) -> Scenario:
     load = 3.0 + 1.5 * np.sin(2 * np.pi * 0.13 * t)
     if name == "backlash":
         return Scenario(Signals(t=t, x=x), {"width": 0.8e-3}, 10e-6)
+    if name == "transport_delay":
+        return Scenario(Signals(t=t, x=x), {"delay": 0.03}, 10e-6)
+    if name == "first_order_lag":
+        return Scenario(Signals(t=t, x=x), {"tau": 0.05}, 10e-6)
     if name == "cable_compliance":
         return Scenario(Signals(t=t, x=x, load=load), {"k": 2e4}, 2e-6)
     if name == "capstan_friction":
