@@ -64,25 +64,29 @@ LOAD_KINDS = ("spring", "force", "position")
 
 @dataclass(frozen=True)
 class TendonSheathParams:
-    """One cable in its sheath (SI). Defaults and their sources:
+    """One cable in its sheath (SI). Defaults and their sources (docs/plant-distributed.md: which figure each
+    one is checked against; none is taken from the figure it is checked against):
 
     Attributes:
-        length: cable length from the motor to the tip L [m]; the sheath from the motor box to the scaffold
-            (~1 m, scenes.sim_robot tip_stiffness).
-        EA: axial stiffness [N]: a 0.3 mm 7x7 steel cable, E = 200 GPa on the full section gives 14 kN, its
-            fill factor and rope modulus about half: 7 kN (a 0.45 mm cable: ~16 kN).
-        mass_per_length: rho_l [kg/m]: steel 7900 kg/m^3 over the 0.3 mm section with a 0.75 fill factor
-            (0.45 mm: ~9.4e-4).
+        length: cable length from the motor to the tip L [m]; assumed: seed 000 gives no length, ~1 m from the
+            motor box to the scaffold (scenes.sim_robot tip_stiffness).
+        EA: axial stiffness [N]; cable material data: seed 000 names a Bowden cable (steel inner cable) in a
+            PTFE-lined Bowden tube, no diameter; taken as 0.3 mm 7x7 302 stainless (the project's assumption) with
+            the maker's elastic stretch factor G = 1.20e-5 (Loos & Co. / Strand Core wire-rope stretch chart:
+            stretch [% of length] = W [lbf] G / D [in]^2), EA = 100 D^2 / G lbf = 5.17 kN.
+        mass_per_length: rho_l [kg/m]: steel 7900 kg/m^3 over the 0.3 mm section with a 0.75 fill factor.
         n_elements: N elements (>= 20).
-        mu_c: Coulomb friction coefficient of cable on liner [-]: the project's sheath mu (teleop.core.geometry,
-            seed 000 Fig 9).
-        mu_s: static (breakaway) coefficient [-]: 1.2 mu_c, the low end of steel on a polymer liner (1.2-2).
-        v_s: Stribeck velocity [m/s]: 0.1 mm/s, below the palpation's cable speed.
+        mu_c: Coulomb friction coefficient of cable on liner [-]; from one figure: seed 000 Fig 9b's distal swing
+            (3.32 / 2.39 N at theta = 30 deg, pretension 2.94 N) = exp(2 mu (theta0 + theta)): 0.0554, one mu for
+            the whole sheath.
+        mu_s: static (breakaway) coefficient [-]: 1.2 mu_c, the low end of steel on a polymer liner (1.2-2);
+            assumed, not checked by a seed figure.
+        v_s: Stribeck velocity [m/s]: 0.1 mm/s, below the palpation's cable speed; assumed.
         sigma0: bristle stiffness per newton of normal force [1/m]: mu_c / sigma0 is the pre-sliding travel,
-            10 um.
+            10 um; assumed (below the FSR's and the encoder's resolution at the seed's speeds).
         sigma1: bristle damping per newton of normal force [s/m]; 0: LuGre with sigma1 > 0 can generate
             energy at some speeds (Barabanov and Ortega 2000), and backward Euler damps the bristle modes.
-        sigma2: viscous friction per newton of normal force [s/m].
+        sigma2: viscous friction per newton of normal force [s/m]; 0, assumed (the seed's speeds are slow).
         theta0, scaffold_span: scaffold bend [rad] (seed 000 Fig 8, B-C: 140 deg) over [s_a, s_b] [m].
         theta1, route_span: route bend of the sheath [rad] (seed 000 Fig 8, A-B: 360 deg) over [s_a, s_b] [m].
         kinematic_span: where the kinematic bend theta (an input, each tick) sits [m] (C-D, at the tip).
@@ -92,13 +96,13 @@ class TendonSheathParams:
     """
 
     length: float = 1.0
-    EA: float = 7.0e3
+    EA: float = 5.17e3
     mass_per_length: float = 4.2e-4
     n_elements: int = 20
-    mu_c: float = 0.056
-    mu_s: float = 0.0672
+    mu_c: float = 0.0554
+    mu_s: float = 0.0665
     v_s: float = 1.0e-4
-    sigma0: float = 5.6e3
+    sigma0: float = 5.54e3
     sigma1: float = 0.0
     sigma2: float = 0.0
     theta0: float = math.radians(140.0)
@@ -154,7 +158,8 @@ class TendonSheathParams:
                          for s in (self.scaffold_span, self.route_span, self.kinematic_span)])
 
     def kernel_params(self, load: "SheathLoad", rest: float) -> np.ndarray:
-        """The parameter vector of scenes.tendon_sheath_kernels (P_COUNT,)."""
+        """The parameter vector of scenes.tendon_sheath_kernels (P_COUNT,): the cable's and the load's (the tick's
+        entries, P_MODE, P_TICK and P_NSUB, are TendonSheath's)."""
         p = np.zeros(K.P_COUNT)
         p[K.P_K], p[K.P_M] = self.element_stiffness, self.node_mass
         p[K.P_MU_C], p[K.P_MU_S], p[K.P_V_S] = self.mu_c, self.mu_s, self.v_s
@@ -260,7 +265,8 @@ class SheathRun:
     Attributes:
         t (m,) time [s]; x_motor, f_motor, f_tip, x_tip (m, c): motor travel [m], motor force (tension at the
         sheath's entrance) [N], tip load force [N], tip travel [m]; iterations (m, c) Newton iterations a
-        tick; tensions (m, c, N) element tensions [N] or None.
+        tick; tensions (m, c, N) element tensions [N] or None; tapped (m, taps, c) the tensions [N] of the
+        sheath's tapped elements (TendonSheath taps).
     """
 
     t: np.ndarray
@@ -270,6 +276,7 @@ class SheathRun:
     x_tip: np.ndarray
     iterations: np.ndarray
     tensions: np.ndarray | None = None
+    tapped: np.ndarray | None = None
 
     def motor_work(self) -> np.ndarray:
         """(c,) work the motor put in over the run [J]: sum of F dx (trapezoid)."""
@@ -305,42 +312,61 @@ class TendonSheath:
         n_cables: c.
         tick: the loop's period [s].
         theta0, theta1: scaffold and route bends per cable [rad], scalar or (c,); None: params' values.
+        taps: indices of elements whose tension every tick reports (sensors there; `step_into`, SheathRun.tapped).
     """
 
     def __init__(self, params: TendonSheathParams = TendonSheathParams(), load: SheathLoad = SheathLoad("force"),
-                 pretension=2.0, n_cables: int = 1, tick: float = 1e-3, theta0=None, theta1=None):
+                 pretension=2.0, n_cables: int = 1, tick: float = 1e-3, theta0=None, theta1=None, taps=()):
         if not (math.isfinite(tick) and tick > 0) or n_cables < 1:
             raise InputError(f"tendon sheath: need tick > 0 and n_cables >= 1, got {tick}, {n_cables}")
         pre = np.broadcast_to(np.asarray(pretension, dtype=float), (n_cables,)).copy()
         if not np.all(np.isfinite(pre)) or np.any(pre < 0):
             raise InputError(f"tendon sheath: pretension must be >= 0 N, got {pretension!r}")
+        N = params.n_elements
+        taps = np.array(taps, dtype=np.int64).reshape(-1)
+        if np.any((taps < 0) | (taps >= N)):
+            raise InputError(f"tendon sheath: taps must be element indices in [0, {N}), got {taps.tolist()}")
         self.params, self.load, self.tick, self.n_cables = params, load, float(tick), n_cables
         self.pretension = pre
+        self.taps = taps
         self.n_sub = max(1, math.ceil(self.tick / params.max_step - 1e-9))
         rest = load.rest
         if load.kind == "spring" and rest is None:
             if np.ptp(pre) > 0:
                 raise InputError("tendon sheath: a spring load's default rest needs one pretension for all cables")
             rest = -float(pre[0]) / load.stiffness
-        self._p = params.kernel_params(load, 0.0 if rest is None else rest)
+        p = params.kernel_params(load, 0.0 if rest is None else rest)
+        p[K.P_MODE], p[K.P_TICK], p[K.P_NSUB] = load.mode, self.tick, self.n_sub
+        self._p = p
         self._W = params.bend_weights
-        fixed = [params.theta0 if theta0 is None else theta0, params.theta1 if theta1 is None else theta1]
-        self._fixed = np.ascontiguousarray(np.stack([np.broadcast_to(np.asarray(a, float), (n_cables,))
-                                                     for a in fixed], axis=1))
-        N = params.n_elements
-        self._w = np.empty((K.WORK_ROWS, N + 1))
-        self._b = np.empty(N)
+        # the kernel's arrays (scenes.tendon_sheath_kernels): node arrays S (u, v, z and the step's scratch),
+        # per-cable scalars cab (pretension, last tip input, fixed bends and the step's scratch)
+        self._S = np.zeros((K.S_ROWS, n_cables, N + 1))
+        self.u, self.v, self.z = self._S[K.S_U], self._S[K.S_V], self._S[K.S_Z]
+        self._cab = np.zeros((n_cables, K.CAB_COLS))
+        self._cab[:, K.C_T0] = pre
+        for col, a, default in ((K.C_THETA0, theta0, params.theta0), (K.C_THETA1, theta1, params.theta1)):
+            self._cab[:, col] = np.broadcast_to(np.asarray(default if a is None else a, float), (n_cables,))
+        self.tensions = np.empty((n_cables, N))
         self.reset()
+
+    @property
+    def out_rows(self) -> int:
+        """Rows of a tick's output (`step_into`): motor force, tip load force, tip travel, Newton iterations, then
+        the tapped elements' tensions."""
+        return K.O_ROWS + len(self.taps)
 
     def reset(self) -> None:
         """Back to the initial configuration: motor and tip at 0, uniform pretension, no friction stored."""
-        N, c = self.params.n_elements, self.n_cables
-        self.u = np.zeros((c, N + 1))
-        self.v = np.zeros((c, N + 1))
-        self.z = np.zeros((c, N + 1))
-        self.tip_prev = np.zeros(c) if self.load.kind != "force" else self.pretension.copy()
-        self.tensions = np.repeat(self.pretension[:, None], N, axis=1)
+        self._S[:] = 0.0
+        self._cab[:, K.C_TIP] = 0.0 if self.load.kind != "force" else self.pretension
+        self.tensions[:] = self.pretension[:, None]
         self.t = 0.0
+
+    @property
+    def tip_prev(self) -> np.ndarray:
+        """(c,) the last tick's tip input (a view of the kernel's state)."""
+        return self._cab[:, K.C_TIP]
 
     def held_tip_input(self) -> np.ndarray:
         """(c,) the last tick's tip input, the default of the next (at the start the one that holds the initial
@@ -388,16 +414,16 @@ class TendonSheath:
         X, TIP, TH = self._tick_input(x_motor), self._tick_input(tip_input, True), self._tick_input(theta)
         if not math.isfinite(float(X.sum() + TIP.sum() + TH.sum())):
             raise InputError("tendon sheath: motor, tip and theta inputs must be finite")
-        out = np.empty((self.n_cables, 4))
+        out = np.empty((self.out_rows, self.n_cables))
         self.step_into(X, TIP, TH, out)
-        return out[:, :3]
+        return out[:3].T
 
     def step_into(self, x_motor, tip_input, theta, out) -> None:
         """`step` without its input checks, for a caller whose inputs are its own arrays: x_motor, tip_input,
-        theta (c,) float64, C-contiguous and finite; writes out (c, 4): motor force [N], tip load force [N],
-        tip travel [m], Newton iterations of the tick."""
-        K.step(self.u, self.v, self.z, self.pretension, self.tip_prev, x_motor, tip_input, theta, self._fixed, self._W,
-               self._p, self.load.mode, self.tick, self.n_sub, self.tensions, out, self._w, self._b)
+        theta (c,) float64, C-contiguous and finite; writes out (out_rows, c): motor force [N], tip load force
+        [N], tip travel [m], Newton iterations of the tick, then the tension [N] of each tapped element. One
+        compiled call for all cables and sub-steps."""
+        K.step(self._S, self._cab, x_motor, tip_input, theta, self._W, self._p, self.taps, self.tensions, out)
         self.t += self.tick
 
     def run(self, x_motor, tip_input=None, theta=0.0, keep_tensions: bool = False) -> SheathRun:
@@ -405,16 +431,15 @@ class TendonSheath:
         (m, c) or a constant. The state carries on from the last tick."""
         m = np.shape(x_motor)[0]
         X, TIP, TH = self._inputs(x_motor, tip_input, theta, m)
-        N = self.params.n_elements
-        OUT = np.empty((m, self.n_cables, 4))
-        TT = np.empty((m if keep_tensions else 1, self.n_cables, N))
-        K.run(self.u, self.v, self.z, self.pretension, self.tip_prev, X, TIP, TH, self._fixed, self._W, self._p,
-              self.load.mode, self.tick, self.n_sub, OUT, TT)
-        self.tensions = TT[-1].copy()
+        OUT = np.empty((m, self.out_rows, self.n_cables))
+        TT = np.empty((m if keep_tensions else 1, self.n_cables, self.params.n_elements))
+        K.run(self._S, self._cab, X, TIP, TH, self._W, self._p, self.taps, OUT, TT)
+        self.tensions[:] = TT[-1]
         t = self.t + self.tick * np.arange(1, m + 1)
         self.t += m * self.tick
-        return SheathRun(t=t, x_motor=X, f_motor=OUT[:, :, 0], f_tip=OUT[:, :, 1], x_tip=OUT[:, :, 2],
-                         iterations=OUT[:, :, 3], tensions=TT if keep_tensions else None)
+        return SheathRun(t=t, x_motor=X, f_motor=OUT[:, K.O_MOTOR], f_tip=OUT[:, K.O_TIP], x_tip=OUT[:, K.O_X_TIP],
+                         iterations=OUT[:, K.O_ITER], tensions=TT if keep_tensions else None,
+                         tapped=OUT[:, K.O_ROWS:])
 
     def tension_at(self, s: float) -> np.ndarray:
         """(c,) the tension [N] of the element holding arc length s [m] from the motor (a sensor there)."""
