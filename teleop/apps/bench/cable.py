@@ -1,4 +1,4 @@
-"""`teleop bench cable --experiment fig9|fig11|fig13 [--seed S] [--json F] [--plot F]`: seed 000's
+"""`teleop bench cable --experiment fig9|fig10b|fig11|fig13 [--seed S] [--json F] [--plot F]`: seed 000's
 single-cable experiments on the simulated single-cable bench (scenes.cable_rig), each beside the seed's
 numbers.
 
@@ -13,6 +13,9 @@ and the loop's converter (FsrConverter, branch by reading direction).
 - fig9: proximal (strain gauge at the motor, Fig 8b) vs distal (FSR at B, Fig 8a) force while the motor
   moves back and forth under a hanging weight, at theta = 0, 30, 60, 90 deg; the seed's pretensions
   1.96 N (0 deg) and 2.94 N (30, 60, 90 deg).
+- fig10b: the FSR's swing over a back-and-forth (three times) under each hanging weight 0.49-4.9 N (50-500 g)
+  at theta = 60 deg, before and after the capstan compensation (seed eq 3 over theta0 + theta, the
+  direction from the motor's motion).
 - fig11: the FSR-modelled tip tension (capstan compensation over theta0 + theta, seed eq 3/7: the direction
   from the motor's motion) against the F/T ground truth of a spring, the motor at variable speed:
   (b) a sine, (c) a sum of two sines; A-B bent 360 and 180 deg. Also the project's flat-transition
@@ -48,15 +51,18 @@ from teleop.core.physics import motor2tip, motor2tip_transitions
 from teleop.core.sensors import FsrBranchLag, FsrConverter, default_fsr_calibration
 from teleop.io.outputs import check_output, save_figure, write_json
 
-EXPERIMENTS = ("fig9", "fig11", "fig13")
+EXPERIMENTS = ("fig9", "fig10b", "fig11", "fig13")
 THETA0 = math.radians(140.0)
 THETA1 = math.radians(360.0)
 FS_HZ = 100.0
+G_N_PER_KG = 9.80665  # standard gravity: the seed's weights in newtons
 
 #: the seed's figures in numbers (seed 000 sec. 3.2 text; Fig 11 and 13 are reported in words only)
 SEED = {
     "fig9": {"0": {"pretension_N": 1.96, "distal_N": [2.25, 1.71], "proximal_N": [2.48, 1.50]},
              "30": {"pretension_N": 2.94, "distal_N": [3.32, 2.39], "proximal_N": [4.43, 1.74]}},
+    "fig10b": ["for a constant weight the change in the modelled force is smaller after the capstan compensation "
+               "(0.49-4.9 N, theta = 60 deg, three back-and-forths each)"],
     "fig11": ["the force measured by the FSR aligns well with the ground truth",
               "a sudden shift, quickly returning to normal, when the motor's direction or speed changes rapidly",
               "the results for 360 and 180 deg of A-B are almost identical"],
@@ -131,9 +137,29 @@ def distributed(seed: int, x: np.ndarray, theta: float, load: dict, cable: Tendo
                               pretension=load["preload_N"], tick=1.0 / FS_HZ, theta1=theta1)
         tip, F_mean = np.zeros(x.size), load["preload_N"]
     run = sheath.run(x - x[0], tip, theta, keep_tensions=True)
-    j = min(int(cable.scaffold_span[0] / cable.element_length), cable.n_elements - 1)  # B: the scaffold bend's start
     proximal = run.f_motor[:, 0] + np.random.default_rng(seed).normal(0.0, 0.004 * F_mean * noise, x.size)
-    return proximal, run.tensions[:, 0, j], run.f_tip[:, 0]
+    return proximal, tension_at_b(run.tensions[:, 0, :], cable, theta1), run.f_tip[:, 0]
+
+
+def tension_at_b(T: np.ndarray, cable: TendonSheathParams, theta1=None) -> np.ndarray:
+    """(m,) tension [N] at B, the scaffold bend's start s_B, from the element tensions T (m, N) [N].
+
+    B sits on node j (s_B = j l, rounded down). The node's friction comes from the bends of its two half
+    elements, the route's (element j-1, proximal of B) and the scaffold's (element j, distal of B), so the
+    tension at B lies between T_{j-1} and T_j: T_j (T_{j-1} / T_j)^w with w = b_j / (b_{j-1} + b_j), the
+    capstan split of the node's friction by bend (element j's tension alone would have lost half of element
+    j's scaffold bend, 1/6 of theta0 at N = 20). With no bend on either side: T_j."""
+    j = min(int(cable.scaffold_span[0] / cable.element_length), cable.n_elements - 1)
+    if j == 0:
+        return T[:, 0]
+    w_scaffold, w_route, _ = cable.bend_weights
+    th1 = cable.theta1 if theta1 is None else float(theta1)
+    b = cable.theta0 * w_scaffold + th1 * w_route                    # (N,) bend of each element [rad]
+    if b[j - 1] + b[j] <= 0:
+        return T[:, j]
+    w = b[j] / (b[j - 1] + b[j])
+    lo, hi = np.maximum(T[:, j], 1e-12), np.maximum(T[:, j - 1], 1e-12)
+    return np.where(T[:, j] > 0, lo * (hi / lo) ** w, 0.0)
 
 
 def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0) -> np.ndarray:
@@ -225,6 +251,32 @@ def fig9(seed: int = 0, cable: TendonSheathParams | None = None) -> dict:
         out["cases"][str(deg)] = case
         out["series"][str(deg)] = {"t": np.arange(x.size) / FS_HZ, "x": x, "distal": distal, "proximal": proximal,
                                    "tension_B": T_B}
+    return out
+
+
+def fig10b(seed: int = 0, cable: TendonSheathParams | None = None, weights_N=None, theta_deg: float = 60.0) -> dict:
+    """The FSR's swing before and after the capstan compensation under each hanging weight (module docstring);
+    `cable`: the distributed cable in place of the rig's capstan segments; weights_N: default 0.49-4.9 N."""
+    x = triangle(5e-3, 2e-3, 6)
+    theta = math.radians(theta_deg)
+    weights = np.arange(50, 501, 50) * 1e-3 * G_N_PER_KG if weights_N is None else weights_N  # 50-500 g
+    out = {"theta_CD_deg": theta_deg, "mu_compensation": mu_bd(), "cases": {}, **_cable_keys(cable)}
+    for k, W in enumerate(weights):
+        W = float(W)
+        if cable is None:
+            T_B, _ = sheath(seed + k, x, THETA0 + theta, mu_bd(), {"tip_force": np.full(x.size, W)})
+        else:
+            _, T_B, _ = distributed(seed + k, x, theta, {"tip_force": np.full(x.size, W)}, cable)
+        F = fsr_reading(T_B, seed + 100 + k)
+        comp = single_compensation(F, x, mu_bd(), THETA0 + theta)
+        (f_hi, f_lo), (c_hi, c_lo), (b_hi, b_lo) = _levels(F, x), _levels(comp, x), _levels(T_B, x)
+        out["cases"][f"{W:g}"] = {"weight_N": W, "fsr_change_N": f_hi - f_lo, "compensated_change_N": c_hi - c_lo,
+                                  "tension_B_change_N": b_hi - b_lo,
+                                  "compensated_error_N": 0.5 * (c_hi + c_lo) - W}
+    ch = [c["fsr_change_N"] for c in out["cases"].values()]
+    cc = [c["compensated_change_N"] for c in out["cases"].values()]
+    out["smaller_after_compensation"] = int(sum(abs(b) < abs(a) for a, b in zip(ch, cc)))
+    out["seed"] = SEED["fig10b"]
     return out
 
 
@@ -345,6 +397,16 @@ def table(name: str, res: dict) -> str:
                 lines.append(f"{'':>6} {'':>6}  seed {s['distal_N'][0]:5.2f}/{s['distal_N'][1]:5.2f} "
                              f"({s['distal_change_N']:4.2f})       seed {s['proximal_N'][0]:5.2f}/{s['proximal_N'][1]:5.2f} "
                              f"({s['proximal_change_N']:4.2f})")
+    elif name == "fig10b":
+        lines.append(f"seed 000 Fig 10b on the simulated bench: theta {res['theta_CD_deg']:g} deg, swing of the FSR "
+                     f"over three back-and-forths before and after the capstan compensation (mu "
+                     f"{res['mu_compensation']:.3f}) [N]")
+        lines.append(f"{'weight':>7} {'FSR':>7} {'compensated':>12} {'tension at B':>13} {'comp. level - W':>16}")
+        for c in res["cases"].values():
+            lines.append(f"{c['weight_N']:7.2f} {c['fsr_change_N']:7.3f} {c['compensated_change_N']:12.3f} "
+                         f"{c['tension_B_change_N']:13.3f} {c['compensated_error_N']:16.3f}")
+        lines.append(f"smaller after compensation at {res['smaller_after_compensation']} of {len(res['cases'])} weights")
+        lines += ["seed (in words): " + s for s in res["seed"]]
     elif name == "fig11":
         lines.append(f"seed 000 Fig 11 on the simulated bench (spring {res['spring']['spring_N_per_m']:g} N/m, "
                      f"preload {res['spring']['preload_N']:g} N, theta_CD {res['theta_CD_deg']:g} deg): "
@@ -412,6 +474,17 @@ def figure(name: str, res: dict):
         ax.set_ylabel("force change over a back-and-forth [N]")
         ax.set_title("(c) change vs bend (1.96 N at 0 deg, 2.94 N otherwise)", fontsize=9)
         ax.legend(fontsize=7)
+    elif name == "fig10b":
+        fig, ax = plt.subplots(figsize=(7, 4.5))
+        cs = list(res["cases"].values())
+        w = [c["weight_N"] for c in cs]
+        ax.plot(w, [c["fsr_change_N"] for c in cs], "o-", label="FSR reading, no compensation")
+        ax.plot(w, [c["compensated_change_N"] for c in cs], "s-", label="after capstan compensation")
+        ax.plot(w, [c["tension_B_change_N"] for c in cs], ":", color="grey", label="true tension at B")
+        ax.set_xlabel("hanging weight [N]")
+        ax.set_ylabel("swing over a back-and-forth [N]")
+        ax.set_title(f"seed 000 Fig 10b protocol: theta = {res['theta_CD_deg']:g} deg", fontsize=9)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     elif name == "fig11":
         fig, axes = plt.subplots(1, 2, figsize=(14, 4.5))
         for ax, m, tag in ((axes[0], "b", "sine"), (axes[1], "c", "sum of two sines")):
@@ -462,7 +535,7 @@ def run(args) -> int:
     cable = None
     if args.plant == "distributed":
         cable = TendonSheathParams() if args.cable_params is None else TendonSheathParams.from_toml(args.cable_params)
-    res = {"fig9": fig9, "fig11": fig11, "fig13": fig13}[args.experiment](args.seed, cable=cable)
+    res = {"fig9": fig9, "fig10b": fig10b, "fig11": fig11, "fig13": fig13}[args.experiment](args.seed, cable=cable)
     print(table(args.experiment, res))
     if args.json:
         write_json(args.json, {"experiment": args.experiment, "seed": args.seed, **_jsonable(res)})
