@@ -100,6 +100,13 @@ class Geometry:
         return replace(self, **changes)
 
 
+def geometry_dict(g: Geometry) -> dict:
+    """The geometry's fields in SI as JSON values (what a session's metadata records; Geometry(**d) with the
+    lists as arrays rebuilds it)."""
+    return {"B": g.B.tolist(), "r": g.r.tolist(), "theta0": g.theta0, "mu": g.mu, "t_min": g.t_min,
+            "t_max": g.t_max, "tip": g.tip.tolist(), "l_min": g.l_min, "l_max": g.l_max, "v_max": g.v_max}
+
+
 def default_geometry() -> Geometry:
     """The seed robot: scaffold ring radius 20 mm, shaft anchors 15 mm behind and ahead of the centre.
 

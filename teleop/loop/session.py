@@ -23,7 +23,7 @@ from scenes.sensor_identification import identify_one_sensor_on
 from teleop.core.estimation.kalman import KalmanNoise
 from teleop.core.estimation.reading import ReadingEstimator
 from teleop.core.estimation.sensor_reading import make_estimator
-from teleop.core.geometry import Geometry, default_geometry
+from teleop.core.geometry import Geometry, default_geometry, geometry_dict
 from teleop.core.kinematics import pose2lengths
 from teleop.io.recording import Recorder, Ring
 from teleop.io.stop_signals import STOP
@@ -72,9 +72,7 @@ def session_metadata(tp: Teleop, haptic_url: str, robot_url: str, seconds: float
     return {
         "configuration": {"haptic": haptic_url, "robot": robot_url, "seconds": seconds, "seed": seed,
                           "loop": tp.params.as_dict(),
-                          "geometry": {"B": g.B.tolist(), "r": g.r.tolist(), "theta0": g.theta0, "mu": g.mu,
-                                       "t_min": g.t_min, "t_max": g.t_max, "tip": g.tip.tolist(),
-                                       "l_min": g.l_min, "l_max": g.l_max, "v_max": g.v_max},
+                          "geometry": geometry_dict(g),
                           "geometry_file": None if geometry_file is None else str(geometry_file),
                           "haptic_spec": vars(tp.haptic.spec) if hasattr(tp.haptic.spec, "__dict__") else
                           str(tp.haptic.spec),

@@ -13,6 +13,10 @@ participants' stiffness JND (seed 000 §5.2 through the whole simulated chain, t
     force_scale = [0.05, 0.1]
     kalman_bandwidth = [20.0, 80.0]
 
+The rig option `geometry` names a geometry TOML (teleop.core.geometry.load_geometry; a lab's own robot), relative
+to the campaign file, in [rig] or as a [grid] axis of several robots; it is read (checked) when the campaign is
+loaded, and a task's identity holds the file's SHA-256, so an edited file is a new task.
+
 Random streams: participant p of a campaign seeded s draws (study seed, rig seed) from
 identity.seeds(s, p): the study seed gives the pad layout and presentation order
 (study.coordinator_draws) and the participant's own draws (person, pushes, perception noise), the rig seed
@@ -27,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import hashlib
 import itertools
 import math
 from dataclasses import dataclass
@@ -42,6 +47,7 @@ from teleop.apps.protocols.blind.study import (ParticipantRecord, StudyResult, c
                                                run_participant)
 from teleop.core.config import check_keys
 from teleop.core.errors import InputError
+from teleop.core.geometry import load_geometry
 from teleop.io.outputs import save_figure
 from teleop.loop.warm import warm_up
 
@@ -151,12 +157,22 @@ def parse(doc: dict, where: str, base_dir: Path) -> BlindStudy:
     for combo in itertools.product(*axes.values()):
         params = dict(zip(axes, combo))
         rig = {**fixed_rig, **{k: v for k, v in params.items() if k in rf}}
+        if rig.get("geometry") is not None:
+            rig["geometry"] = geometry_path(rig["geometry"], base_dir)
         person = {**fixed_person, **{k: v for k, v in params.items() if k in pf}}
         points.append(make_point(params, rig, person, f"{where} [grid] {params}"))
     labels = [p.label for p in points]
     if len(set(labels)) != len(labels):
         raise InputError(f"{where} [grid]: a value is listed twice (grid points must differ)")
     return BlindStudy(participants=participants, per_task=per_task, jnds=tuple(jnds), points=tuple(points))
+
+
+def geometry_path(name: str, base_dir: Path) -> str:
+    """The rig option `geometry` as an absolute path (a relative one is the campaign file's neighbour), the file
+    read now: a missing file, a bad table or key is an InputError naming it."""
+    path = Path(name) if Path(name).is_absolute() else Path(base_dir) / name
+    load_geometry(path)
+    return str(path.resolve())
 
 
 def point_tasks(campaign) -> list:
@@ -169,6 +185,8 @@ def point_tasks(campaign) -> list:
             last = min(first + s.per_task - 1, s.participants)
             identity = {"seed": campaign.seed, "rig": point.rig, "participant": point.participant,
                         "jnd": list(s.jnds), "participants": [first, last]}
+            if point.rig.get("geometry") is not None:  # the file's content, not only its name, makes the task
+                identity["geometry_sha256"] = hashlib.sha256(Path(point.rig["geometry"]).read_bytes()).hexdigest()
             blocks.append(Task(KIND, identity, f"{point.label}; participants {first}-{last}"))
         out.append((point, blocks))
     return out

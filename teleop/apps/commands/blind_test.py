@@ -16,7 +16,7 @@ import numpy as np
 
 from scenes.pads import blind_area_centres
 from scenes.sim_robot import PLANTS
-from teleop.apps.argtypes import jnd_fraction, positive_float, positive_int
+from teleop.apps.argtypes import add_geometry_option, geometry_of, jnd_fraction, positive_float, positive_int
 from teleop.apps.commands.session import add_live_arguments
 from teleop.apps.protocols.blind.human import Coordinator, run_human_study
 from teleop.apps.protocols.blind.participants import ParticipantParams
@@ -58,6 +58,7 @@ def add_rig_options(p) -> None:
     p.add_argument("--press-force", type=float, default=None, metavar="N",
                    help="participants press until the stylus force reaches about N newtons, capped by the "
                         "depth (default 0.2 N; 0: push by depth only)")
+    add_geometry_option(p)
 
 
 def register(subparsers) -> None:
@@ -114,6 +115,9 @@ def rig_options(args):
         kw["robot_substeps"] = args.robot_substeps
     kw["sensor"] = getattr(args, "sensor", "fsr")
     kw["plant"] = getattr(args, "plant", "matched")
+    if getattr(args, "geometry", None):
+        geometry_of(args)  # a bad file or key is one line now, before any station reads it
+        kw["geometry"] = args.geometry
     return RigOptions(**kw)
 
 

@@ -6,10 +6,11 @@ import dataclasses
 import sys
 
 from scenes.sim_robot import PLANTS
-from teleop.apps.argtypes import input_file
+from teleop.apps.argtypes import add_geometry_option, geometry_of, input_file
 from teleop.apps.protocols import palpation
 from teleop.apps.protocols.palpation_sensors import sensor_calibration
 from teleop.core.errors import InputError
+from teleop.core.geometry import geometry_dict
 from teleop.io.outputs import save_figure, write_json
 
 
@@ -39,12 +40,14 @@ def register(subparsers) -> None:
     p.add_argument("--calibration", type=input_file, default=None, metavar="TOML",
                    help="with --sensor fbg|one: a `teleop calibrate fbg` file (the FBGs' constants) or, with "
                         "--sensor one, a `teleop calibrate one-sensor` file (Kp, Kr: not identified on the run)")
+    add_geometry_option(p)
     p.add_argument("--json", default=None, help="write the results as JSON here")
     p.add_argument("--plot", default=None, help="write a PNG figure here")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    geometry = geometry_of(args)  # a bad file is one line before the run
     params = dataclasses.replace(palpation.PalpationParams(), sensor=args.sensor, calibration=args.calibration)
     if args.calibration is not None:  # a file that does not fit the sensor is refused before the run
         sensor_calibration(args.calibration, args.sensor)
@@ -55,10 +58,11 @@ def run(args) -> int:
     if args.limit is not None and args.limit < 1:
         raise InputError(f"--limit must be >= 1, got {args.limit}")
     res = palpation.run_test(args.test, args.speed_profile, args.seed, params, limit=args.limit, progress=True,
-                   plant=args.plant, cable_params=args.cable_params)
+                   plant=args.plant, cable_params=args.cable_params, geometry=geometry if args.geometry else None)
     print(res.table())
-    if args.json:
-        write_json(args.json, res.to_json())
+    if args.json:  # the geometry only when given: the seed robot's JSON is what it was
+        extra = {"geometry_file": args.geometry, "geometry": geometry_dict(geometry)} if args.geometry else {}
+        write_json(args.json, {**res.to_json(), **extra})
     if args.plot:
         save_figure(res.plot(), args.plot)
     sys.stdout.flush()

@@ -407,16 +407,18 @@ class PalpationResult:
 
 def run_test(test: str, profile: str = "uniform", seed: int = 0, params: PalpationParams = PalpationParams(),
              limit: int | None = None, progress: bool = False, plant: str = "matched",
-             cable_params=None) -> PalpationResult:
+             cable_params=None, geometry=None) -> PalpationResult:
     """Run a palpation test on the simulated robot (see the module docstring). `plant`: "matched" (the
     robot's physics is the estimators' model), "rich" (scenes.rich_plant's effects on top, drawn from
     `seed`) or "distributed" (scenes.tendon_sheath's cable, its parameters from the TOML `cable_params`
-    or its defaults)."""
+    or its defaults). `geometry` (teleop.core.geometry.Geometry; None: the seed robot) is the simulated robot's
+    and the estimators'."""
     if profile not in PROFILES:
         raise InputError(f"unknown speed profile '{profile}' (expected one of: {', '.join(PROFILES)})")
 
     sim = with_named_plant(SimRobotParams(substeps=params.substeps,
-                                          world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt)),
+                                          world=WorldParams(surface_z=params.surface_z, dt=params.physics_dt),
+                                          **({} if geometry is None else {"geometry": geometry})),
                            plant, seed, cable_params)
     sessions = sessions_for(test, params, limit, sim.tip_stiffness, sim.world.tip_radius)
 

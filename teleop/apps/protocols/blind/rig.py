@@ -50,7 +50,7 @@ from teleop.apps.protocols.blind.study import Area
 from teleop.core.errors import InputError
 from teleop.core.estimation.kalman import KalmanNoise
 from teleop.core.estimation.sensor_reading import make_estimator
-from teleop.core.geometry import default_geometry
+from teleop.core.geometry import default_geometry, load_geometry
 from teleop.core.mapping import MappingParams
 from teleop.loop import LoopParams, State, Teleop
 from teleop.loop.devices_by_url import open_device
@@ -109,6 +109,9 @@ class RigOptions:
         plant: the simulated robot's plant (scenes.sim_robot.PLANTS): matched, rich (drawn from the robot's
             seed) or distributed (the distributed tendon-sheath cable at its default parameters). Listed in
             `rig_dict` only when not matched.
+        geometry: the robot's geometry TOML (teleop.core.geometry.load_geometry, `--geometry`; None: the seed
+            robot), read by each station for its simulated robot and estimator. Listed in `rig_dict` only when
+            given.
     """
 
     compensation: bool = True
@@ -126,6 +129,7 @@ class RigOptions:
     kalman_bandwidth: float = 80.0
     sensor: str = "fsr"
     plant: str = "matched"
+    geometry: str | None = None
 
     def __post_init__(self):
         if self.plant not in PLANTS:
@@ -147,11 +151,14 @@ class RigOptions:
 
 
 def rig_dict(options: RigOptions) -> dict:
-    """The options as a dict, `plant` only when not matched (a matched rig's dict, its results' config and a
-    campaign task's identity, are what they were before the plant could be chosen)."""
+    """The options as a dict, `plant` only when not matched and `geometry` only when given (a matched rig's dict
+    on the seed robot, its results' config and a campaign task's identity, are what they were before either
+    could be chosen)."""
     d = dataclasses.asdict(options)
     if d["plant"] == "matched":
         del d["plant"]
+    if d["geometry"] is None:
+        del d["geometry"]
     return d
 
 
@@ -179,13 +186,14 @@ class Station:
 
     def __init__(self, pad, options: RigOptions, seed: tuple):
         o = options
-        geom = default_geometry()
+        geom = default_geometry() if o.geometry is None else load_geometry(o.geometry)
         self.options = o
         ss = np.random.SeedSequence(seed)
         robot_seed, stylus_seed = (int(s) for s in ss.generate_state(2) % (2 ** 31))
         home_tip_z = WorldParams().surface_z - 0.005  # the sim robot's home: tip 5 mm before the surface
         world = WorldParams(surface_z=home_tip_z + o.gap)
-        robot_params = with_named_plant(SimRobotParams(world=world, substeps=int(o.robot_substeps), sensor=o.sensor),
+        robot_params = with_named_plant(SimRobotParams(world=world, substeps=int(o.robot_substeps), sensor=o.sensor,
+                                                       geometry=geom),
                                         o.plant, robot_seed)
         if o.tip_stiffness is not None:
             robot_params = dataclasses.replace(robot_params, tip_stiffness=float(o.tip_stiffness))
@@ -495,6 +503,8 @@ class BackgroundSession:
                  log_path: str = "blind_test_session.log"):
         self.argv = ["session", "--haptic", haptic_url, "--robot", robot_url, "--seconds", "86400", "--zero-neg-z",
                      "--force-scale", repr(options.force_scale), "--motion-scale", repr(options.motion_scale)]
+        if options.geometry is not None:
+            self.argv += ["--geometry", str(options.geometry)]
         self.log_path = log_path
         self.proc = None
         self.startup_check = 3.0  # [s] the session must still be running after this long
