@@ -158,3 +158,39 @@ def test_a_press_the_rig_stops_is_repeated_more_gently_then_given_up():
     p = SimulatedParticipant(ParticipantParams(force=2.0, max_aborts=1), palpate, (1, 1))
     with pytest.raises(PressAborted):
         p.poke(0)
+
+
+def test_anchored_ratings_read_the_scale_the_training_pads_set():
+    from teleop.apps.protocols.blind.participants import RATING_HARD, RATING_SOFT, anchored_ratings
+
+    hard, soft = np.log(500.0), np.log(20.0)
+    assert anchored_ratings([hard, soft], hard, soft) == [RATING_HARD, RATING_SOFT]
+    mid = 0.5 * (hard + soft)
+    assert anchored_ratings([mid], hard, soft) == [round(0.5 * (RATING_HARD + RATING_SOFT))]
+    assert anchored_ratings([hard + 5.0, soft - 5.0], hard, soft) == [10, 1]     # clipped to the 1-10 scale
+    assert anchored_ratings([hard, soft], soft, hard) == [6, 6]                  # no scale: the middle
+
+
+def test_anchored_rule_fixes_no_rating_each_follows_what_was_felt():
+    """Same participants (same seed), the rig renders the middle pads twice as stiff: with the anchored rule
+    their ratings rise; with the positions rule the ranking is unchanged and so (mostly) are the ratings."""
+    anchored = ParticipantParams(rating="anchored")
+    base = run_simulated_study(SpringRig(AREAS), 6, seed=3, params=anchored)
+    stiffer = tuple(Area(a.name, a.label, a.stiffness * (2.0 if i in (1, 2) else 1.0)) for i, a in enumerate(AREAS))
+    moved = run_simulated_study(SpringRig(stiffer), 6, seed=3, params=anchored)
+    b, m = base.mean_std(), moved.mean_std()
+    for name in ("dragon_skin_30", "ecoflex_00_50"):
+        assert m[name][0] > b[name][0] + 0.5
+    assert base.correct_ranking_rate == 1.0
+    # the ends are outcomes too: a rig that renders every pad alike gives them no spread of their own
+    flat = run_simulated_study(SpringRig(tuple(Area(a.name, a.label, 5000.0) for a in AREAS)), 4, seed=3,
+                               params=anchored)
+    assert np.ptp(flat.ratings().mean(axis=0)) < 3.0      # the positions rule would spread them 8-10 .. 1-3
+    old = run_simulated_study(SpringRig(tuple(Area(a.name, a.label, 5000.0) for a in AREAS)), 4, seed=3,
+                              params=ParticipantParams())
+    assert np.all(old.ratings().max(axis=1) >= 8) and np.all(old.ratings().min(axis=1) <= 3)
+
+
+def test_rating_rule_is_checked():
+    with pytest.raises(InputError, match="rating"):
+        ParticipantParams(rating="median")

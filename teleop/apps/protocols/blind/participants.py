@@ -15,6 +15,21 @@ Perception model:
 - a participant presses until the stylus force reaches a comfortable level or the hand has travelled its
   push depth, whichever comes first; push depth, speed and press force vary per participant (person
   level) and per poke (log-normal spreads).
+
+Ratings (`ParticipantParams.rating`):
+- "positions" (the former rule): the hardest zone gets a draw from 8-10, the softest one from 1-3, the middle
+  ones 60 % even spacing and 40 % remembered magnitude between them. The ends and most of the middle are set
+  by the rule, so only the ranking is an outcome of what was felt.
+- "anchored": every rating is read off a log-stiffness scale anchored by two training pads. Before the
+  study the coordinator lets the participant press the hardest and the softest pad, named as "about 9" and
+  "about 2" (the middles of the seed's bands for the hardest, 8-10, and the softest, 1-3, zone); their
+  percepts (the same Weber noise, `training_pokes` presses each) fix the scale, and each zone's rating is
+  RATING_SOFT + (RATING_HARD - RATING_SOFT) (L - L_soft) / (L_hard - L_soft), rounded and clipped to 1-10,
+  with L the zone's remembered log stiffness and the anchors' memories drifting like any other zone's
+  (`memory_noise` per press of another pad). No pad's rating is fixed: the ends move with what the chain
+  renders in the study against what it rendered in training, the middle ones with where their stiffness
+  falls between the anchors; the ranking comes from the comparisons as before, so a rating may tie or
+  disagree with it (the seed's protocol asked for numbers after the ranking, ours keep both as felt).
 """
 
 from __future__ import annotations
@@ -35,7 +50,9 @@ GENTLER = 0.7              # a press the rig stopped is repeated at this fractio
 
 # random streams of one participant, keyed so the same poke gets the same motor and noise draws whatever
 # the JND (common random numbers across the points of a JND curve)
-_PERSON, _MOTOR, _NOISE, _MEMORY, _RATING = range(5)
+_PERSON, _MOTOR, _NOISE, _MEMORY, _RATING, _TRAIN_MOTOR, _TRAIN_NOISE = range(7)
+RATING_RULES = ("positions", "anchored")
+RATING_HARD, RATING_SOFT = 9.0, 2.0  # the anchored scale's training pads: middles of the seed's 8-10 and 1-3
 
 
 def weber_sigma(jnd: float) -> float:
@@ -72,7 +89,12 @@ class ParticipantParams:
         max_aborts: presses the rig may stop in a row (the robot faulted, the stylus went limp) before the
             participant gives up; each one is repeated at GENTLER times its force (or depth, for depth
             pushes), as a coordinator would ask after resetting the robot.
-        spacing: weight of even spacing (vs remembered magnitude) when placing the middle ratings.
+        spacing: weight of even spacing (vs remembered magnitude) when placing the middle ratings (rating
+            "positions").
+        rating: how the ranking becomes ratings (RATING_RULES; module docstring): "positions" (the middle
+            ratings placed between drawn end ratings) or "anchored" (every rating from the percept on a
+            scale anchored by the training pads).
+        training_pokes: presses of each training pad before the study (rating "anchored").
     """
 
     jnd: float = 0.23
@@ -86,6 +108,8 @@ class ParticipantParams:
     max_aborts: int = 3
     spacing: float = 0.6
     force: float | None = 0.2
+    rating: str = "positions"
+    training_pokes: int = 2
 
     def __post_init__(self):
         checks = {"jnd": self.jnd > 0, "depth": self.depth > 0, "speed": self.speed > 0,
@@ -93,7 +117,9 @@ class ParticipantParams:
                   "memory_noise": self.memory_noise >= 0, "force_threshold": self.force_threshold >= 0,
                   "max_repeats": self.max_repeats >= 0, "max_aborts": self.max_aborts >= 0,
                   "spacing": 0 <= self.spacing <= 1,
-                  "force": self.force is None or self.force > 0}
+                  "force": self.force is None or self.force > 0, "training_pokes": self.training_pokes >= 1}
+        if self.rating not in RATING_RULES:
+            raise InputError(f"participant parameter rating={self.rating!r}: expected one of {', '.join(RATING_RULES)}")
         for name, ok in checks.items():
             value = getattr(self, name)
             if not ok or (value is not None and not math.isfinite(value)):
@@ -125,10 +151,8 @@ class SimulatedParticipant:
     def _rng(self, stream: int, *key) -> np.random.Generator:
         return np.random.default_rng((*self._seed, stream, *key))
 
-    def poke(self, zone: int) -> float:
-        """Push on `zone` once and remember it; returns the log-stiffness percept."""
-        n = len(self._percepts.get(zone, []))
-        motor = self._rng(_MOTOR, zone, n)
+    def _press(self, palpate, key, motor: np.random.Generator, noise: np.random.Generator) -> tuple:
+        """One press through `palpate(key, request)`: (log-stiffness percept, Poke, loading slope [N/m])."""
         p = self.params
         depth = self.depth * math.exp(p.poke_spread * motor.standard_normal())
         speed = self.speed * math.exp(p.poke_spread * motor.standard_normal())
@@ -136,7 +160,7 @@ class SimulatedParticipant:
         request = PokeRequest(depth=depth, speed=speed, force=force)
         for attempt in range(p.max_aborts + 1):
             try:
-                trace: Poke = self._palpate(zone, request)
+                trace: Poke = palpate(key, request)
                 break
             except PressAborted:  # the stylus went limp: press again, more gently
                 self.aborted += 1
@@ -145,14 +169,35 @@ class SimulatedParticipant:
                 request = (PokeRequest(request.depth * GENTLER, request.speed) if request.force is None else
                            PokeRequest(request.depth, request.speed, request.force * GENTLER))
         k = loading_slope(trace.x, trace.f, p.force_threshold)
-        percept = math.log(max(k, K_FLOOR)) + self._sigma * self._rng(_NOISE, zone, n).standard_normal()
-        for other in self._drift:  # feeling this zone blurs the memory of the others
-            if other != zone:
-                self._drift[other] += p.memory_noise * self._memory.standard_normal()
+        return math.log(max(k, K_FLOOR)) + self._sigma * noise.standard_normal(), trace, k
+
+    def _blur(self, pressed) -> None:
+        """Feeling `pressed` blurs the memory of every other zone and training pad."""
+        for other in self._drift:
+            if other != pressed:
+                self._drift[other] += self.params.memory_noise * self._memory.standard_normal()
+
+    def poke(self, zone: int) -> float:
+        """Push on `zone` once and remember it; returns the log-stiffness percept."""
+        n = len(self._percepts.get(zone, []))
+        percept, trace, k = self._press(self._palpate, zone, self._rng(_MOTOR, zone, n), self._rng(_NOISE, zone, n))
+        self._blur(zone)
         self._percepts.setdefault(zone, []).append(percept)
         self._drift[zone] = 0.0
         self.pokes.append((zone, trace, k))
         return percept
+
+    def train(self, press_pad) -> None:
+        """Press the two training pads (rating "anchored"): press_pad(anchor, request) -> Poke, anchor 0 the
+        hardest pad (rated RATING_HARD), 1 the softest (RATING_SOFT). Their percepts anchor the scale."""
+        for anchor in (0, 1):
+            key = ("train", anchor)
+            for n in range(self.params.training_pokes):
+                percept, _trace, _k = self._press(press_pad, anchor, self._rng(_TRAIN_MOTOR, anchor, n),
+                                                  self._rng(_TRAIN_NOISE, anchor, n))
+                self._blur(key)
+                self._percepts.setdefault(key, []).append(percept)
+                self._drift[key] = 0.0
 
     def remembered(self, zone: int) -> float:
         return float(np.mean(self._percepts[zone])) + self._drift[zone]
@@ -172,8 +217,9 @@ class SimulatedParticipant:
         return HARDER if d > 0 else SOFTER
 
     def rate(self, ranking) -> list:
-        """Ratings of the ranked zones (hardest first): ends anchored in 8-10 and 1-3, the middle ones
-        placed between them by remembered hardness blended with even spacing."""
+        """Ratings of the ranked zones (hardest first), by the rule `params.rating` (module docstring)."""
+        if self.params.rating == "anchored":
+            return self.rate_anchored(ranking)
         rng = self._rng(_RATING)
         hardest, softest = int(rng.integers(8, 11)), int(rng.integers(1, 4))
         L = np.array([self.remembered(z) for z in ranking])
@@ -182,3 +228,22 @@ class SimulatedParticipant:
         even = np.linspace(1.0, 0.0, len(ranking))
         s = self.params.spacing
         return ratings_from_positions(ranking, s * even + (1 - s) * magnitude, hardest, softest)
+
+    def rate_anchored(self, ranking) -> list:
+        """Ratings (hardest first) read off the scale the training pads anchor (`train` first)."""
+        key_hard, key_soft = ("train", 0), ("train", 1)
+        if key_hard not in self._percepts or key_soft not in self._percepts:
+            raise InputError("anchored ratings need the training pads pressed first (SimulatedParticipant.train)")
+        return anchored_ratings([self.remembered(z) for z in ranking], self.remembered(key_hard),
+                                self.remembered(key_soft))
+
+
+def anchored_ratings(percepts, hard: float, soft: float) -> list:
+    """Integer ratings 1-10 of log-stiffness percepts on the scale where `hard` reads RATING_HARD and `soft`
+    RATING_SOFT (log stiffness of the training pads); anchors felt the wrong way round (hard <= soft) leave
+    no scale, and every zone reads the scale's middle."""
+    L = np.asarray(percepts, dtype=float)
+    span = hard - soft
+    pos = (L - soft) / span if span > 0 else np.full(L.shape, 0.5)
+    r = RATING_SOFT + (RATING_HARD - RATING_SOFT) * pos
+    return [int(v) for v in np.clip(np.rint(r), 1, 10)]

@@ -77,13 +77,19 @@ def coordinator_draws(seed: int, participant: int, areas) -> tuple:
     return layout, order
 
 
-def run_participant(palpate: Callable, n_zones: int, params: ParticipantParams, entropy) -> tuple:
+def run_participant(palpate: Callable, n_zones: int, params: ParticipantParams, entropy,
+                    train: Callable | None = None) -> tuple:
     """Take one simulated participant through the protocol.
 
-    palpate(zone, request) -> Poke. Returns (answers [(Compare, answer)], ranking (zones, hardest first),
-    ratings (hardest first), participant).
+    palpate(zone, request) -> Poke; train(anchor, request) -> Poke presses the training pads (anchor 0 the
+    hardest, 1 the softest; needed by the "anchored" rating rule, pressed before the first zone). Returns
+    (answers [(Compare, answer)], ranking (zones, hardest first), ratings (hardest first), participant).
     """
     person = SimulatedParticipant(params, palpate, entropy)
+    if params.rating == "anchored":
+        if train is None:
+            raise ValueError("the anchored rating rule needs the training pads (train)")
+        person.train(train)
     answers = []
     step = next_step(n_zones, answers)
     while isinstance(step, Compare):
@@ -121,7 +127,10 @@ def run_simulated_study(rig: Rig, participants: int, seed: int, params: Particip
         def palpate(zone, request, _order=order):
             return rig.poke(_order[zone], request)
 
-        answers, ranking, ratings, person = run_participant(palpate, len(areas), params, (seed, p))
+        def train(anchor, request, _layout=layout):  # the training pads: the hardest and the softest area
+            return rig.poke(_layout.index(areas[0 if anchor == 0 else -1].name), request)
+
+        answers, ranking, ratings, person = run_participant(palpate, len(areas), params, (seed, p), train)
         records.append(record_from(p, layout, order, answers, ranking, ratings, person))
         if progress is not None:
             progress()
