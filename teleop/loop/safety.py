@@ -13,6 +13,19 @@ import numpy as np
 from teleop.core.kernels import safety as KS
 
 
+def beyond(value: float, limit: float, unit: str, op: str = ">") -> str:
+    """"VALUE UNIT > LIMIT UNIT" (op ">" or "<") with the limit as set and the value to the fewest decimals
+    (at least one) that keep the printed comparison true: 20.04 ms over a 20 ms limit reads
+    "20.04 ms > 20 ms", not "20.0 ms > 20.0 ms"."""
+    lim = f"{limit:g}"
+    shown = f"{value:.1f}"
+    for digits in range(1, 10):
+        shown = f"{value:.{digits}f}"
+        if (float(shown) > float(lim)) if op == ">" else (float(shown) < float(lim)):
+            break
+    return f"{shown} {unit} {op} {lim} {unit}"
+
+
 class Freshness:
     """Telemetry watchdog: a source is stale when its sequence number (or timestamp) has not advanced for
     longer than `limit` [s], and missing when nothing arrived within `startup` [s] of `reset(now)` (None:
@@ -41,11 +54,11 @@ class Freshness:
     def check(self, now: float) -> str | None:
         if self.t_fresh is None:
             if now - self.t_start > self.startup:
-                return f"{self.name} telemetry missing for {1e3 * (now - self.t_start):.1f} ms"
+                return f"{self.name} telemetry missing for {beyond(1e3 * (now - self.t_start), 1e3 * self.startup, 'ms')}"
             return None
         age = now - self.t_fresh
         if age > self.limit:
-            return f"{self.name} telemetry stale: {1e3 * age:.1f} ms > {1e3 * self.limit:.1f} ms"
+            return f"{self.name} telemetry stale: {beyond(1e3 * age, 1e3 * self.limit, 'ms')}"
         return None
 
     def is_fresh(self, now: float) -> bool:
@@ -73,8 +86,9 @@ class TensionRange:
     def reason(self, now: float, k: int, t) -> str:
         """The fault message for the kernel's code k (row * n + cable) at tensions t (n,) [N]."""
         row, i = divmod(k, self.n)
-        return (f"cable {i + 1} tension {'slack' if row else 'over-range'} for "
-                f"{1e3 * (now - self.since[row, i]):.1f} ms ({t[i]:.3f} N; limits {self.t_slack:g}..{self.t_max:g} N)")
+        held = beyond(1e3 * (now - self.since[row, i]), 1e3 * self.window, "ms")
+        value = beyond(float(t[i]), self.t_slack, "N", "<") if row else beyond(float(t[i]), self.t_max, "N")
+        return f"cable {i + 1} tension {'slack' if row else 'over-range'} for {held} ({value})"
 
 
 class StuckCable:
@@ -108,8 +122,8 @@ class StuckCable:
     def reason(self, now: float, bad: int) -> str:
         """The fault message for stuck cable index `bad`."""
         st = self.st
-        return (f"cable {bad + 1} stuck: tension rose {st[KS.TF, bad] - st[KS.TMIN, bad]:.2f} N over "
-                f"{1e3 * (now - st[KS.T0, bad]):.0f} ms while paying out")
+        return (f"cable {bad + 1} stuck: tension rose {beyond(st[KS.TF, bad] - st[KS.TMIN, bad], self.rise, 'N')} "
+                f"over {1e3 * (now - st[KS.T0, bad]):.0f} ms while paying out")
 
 
 def tension_monitors(rng: TensionRange, stuck: StuckCable, now: float, t, dL, check_range: bool = True) -> str | None:

@@ -94,6 +94,13 @@ def json_schema(layout: Layout, topic: str) -> bytes:
     return json.dumps({"type": "object", "properties": props}).encode()
 
 
+def event_schema() -> bytes:
+    """JSON schema of a state change on /teleop/events (teleop.loop.core.Event: tick, time, states, reason)."""
+    props = {"k": {"type": "integer", "description": "tick"}, "t": {"type": "number", "description": "host time [s]"},
+             "src": {"type": "string"}, "dst": {"type": "string"}, "reason": {"type": "string"}}
+    return json.dumps({"type": "object", "properties": props}).encode()
+
+
 class RowEncoder:
     """Row -> {topic: JSON bytes} using a Layout (floats bit-exact; NaN/inf become null)."""
 

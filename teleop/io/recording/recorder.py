@@ -7,7 +7,8 @@ passed on either clock: the monotonic clock, or the session time of the rows it 
 loses at most about `flush_interval` of rows even when the recorder catches up on a backlog). When the disk
 is slow or full the ring fills, the loop's pushes are dropped and counted (memory stays bounded) and an alarm
 is raised. The recorder also computes the per-second timing statistics (/loop/timing) from the rows, and
-notices when the loop process dies (it then drains the ring and finishes the file).
+notices when the loop process dies: it then drains the ring and finishes the file, its `session_end` naming
+the last state the rows carried, the last fault reason it was sent and why the session ended (`interrupted`).
 
 ctrl counters a test or the loop can read (teleop.io.recording.ring): rows pushed, popped, dropped, written,
 made durable (written before the last completed flush), flushes.
@@ -23,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from teleop.io.recording.foxglove import STATE_NAMES
 from teleop.io.recording.layout import TOPIC_EVENTS, TOPIC_TIMING, Layout
 from teleop.io.recording.ring import (ALARM_ERROR, ALARM_FULL, DROPS, DURABLE, FLUSHES, HEAD, OK, STATUS, STOP,
                                    T0_NS, TAIL, WRITTEN, Ring)
@@ -69,12 +71,16 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
         return
     stats = SecondStats(layout)
     t_col = layout.slices()[("/loop", "t")][0]
+    state_col = (layout.slices().get(("/loop", "state")) or (None,))[0]
     last_flush = time.monotonic()
     t_flushed = None  # session time of the last row written before the last flush [s]
-    end_meta: dict = {}
+    end_meta = None  # the loop's session_end, once it sends one
+    last_row, fault_reason = None, ""
+    orphaned = False
     try:
         while True:
-            stopping = bool(ctrl[STOP]) or os.getppid() != parent_pid
+            orphaned = orphaned or os.getppid() != parent_pid
+            stopping = bool(ctrl[STOP]) or orphaned
             rows = ring.pop(2000)
             if len(rows) and ctrl[T0_NS]:
                 writer.t0_ns = int(ctrl[T0_NS])  # wall-clock time of session time 0, set by the loop at start
@@ -92,9 +98,13 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
                     ctrl[FLUSHES] += 1
                     ctrl[DURABLE] = ctrl[WRITTEN]
                     t_flushed, last_flush = t_row, time.monotonic()
+            if len(rows):
+                last_row = rows[-1]
             for kind, obj in drain_pipe(conn):
                 if kind == "event":
                     writer.write_json(TOPIC_EVENTS, float(obj.get("t", 0.0)), obj)
+                    if obj.get("dst") == "FAULT":
+                        fault_reason = str(obj.get("reason", ""))
                 elif kind == "end":
                     end_meta = obj
             now = time.monotonic()
@@ -112,6 +122,8 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
         if stats.rows:
             s = stats.summary()
             writer.write_json(TOPIC_TIMING, float(s["second"]), s)
+        if end_meta is None:  # no end record from the loop: if it died, what the rows and events tell
+            end_meta = _end_without_loop(last_row, state_col, t_col, fault_reason, parent_pid) if orphaned else {}
         end_meta.setdefault("drops", int(ctrl[DROPS]))
         end_meta.setdefault("rows_written", int(ctrl[WRITTEN]))
         writer.finish(end_meta)
@@ -120,6 +132,18 @@ def _recorder_main(path: str, layout_json: str, ring: Ring, conn, metadata: dict
     except OSError as exc:  # disk full, I/O error: stop writing, raise the alarm; the loop goes on
         ctrl[STATUS] = ALARM_ERROR
         _send_status(conn, f"recording stopped: {exc}")
+
+
+def _end_without_loop(row, state_col, t_col, fault_reason: str, parent_pid: int) -> dict:
+    """session_end written by the recorder itself when the loop process died without sending one: the state
+    of the last row written, the last fault's reason, and why the session ended."""
+    state = "unknown"
+    if row is not None and state_col is not None:
+        k = int(row[state_col])
+        state = STATE_NAMES[k] if 0 <= k < len(STATE_NAMES) else str(k)
+    why = f"loop process {parent_pid} ended without closing the recording (killed or crashed)"
+    return {"final_state": state, "fault_reason": fault_reason, "interrupted": why,
+            "t_last": float(row[t_col]) if row is not None else None, "closed_by": "recorder"}
 
 
 def _send_status(conn, text: str) -> None:

@@ -2,11 +2,28 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 from teleop.io.recording.layout import Layout
 
 LATE_US = 500.0  # a tick more than this late is a miss (docs/safety.md)
+STATISTICS = ("mean", "p99", "p999", "max")  # of each stage time, per second [us]
+
+
+def timing_schema(layout: Layout) -> bytes:
+    """JSON schema of the per-second timing messages (`SecondStats.summary`), every key with its type: the
+    recording's /loop/timing and the live view's /live/timing (Foxglove parses only schemas with properties)."""
+    stat = {"type": "object", "properties": {k: {"type": "number", "description": f"{k} over the second [us]"}
+                                             for k in STATISTICS}}
+    props = {"second": {"type": "integer", "description": "whole second of session time [s]"},
+             "ticks": {"type": "integer", "description": "ticks in that second"}}
+    for name in SecondStats(layout).cols:
+        props[name] = stat
+        if name == "lateness_us":
+            props["misses"] = {"type": "integer", "description": f"ticks more than {LATE_US:g} us late"}
+    return json.dumps({"type": "object", "properties": props}).encode()
 
 
 class SecondStats:
@@ -36,8 +53,8 @@ class SecondStats:
         out = {"second": self.second, "ticks": len(a)}
         for j, name in enumerate(self.cols):
             v = a[:, j]
-            out[name] = {"mean": round(float(v.mean()), 3), "p99": round(float(np.percentile(v, 99)), 3),
-                         "p999": round(float(np.percentile(v, 99.9)), 3), "max": round(float(v.max()), 3)}
+            vals = (v.mean(), np.percentile(v, 99), np.percentile(v, 99.9), v.max())
+            out[name] = {k: round(float(x), 3) for k, x in zip(STATISTICS, vals)}
             if name == "lateness_us":
                 out["misses"] = int((v > LATE_US).sum())
         return out

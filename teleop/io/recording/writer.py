@@ -22,12 +22,14 @@ from foxglove.messages import FrameTransforms, Log
 from mcap.writer import CompressionType, IndexType, Writer
 
 from teleop.io.recording.foxglove import fault_log, frame_transforms
-from teleop.io.recording.layout import (PROFILE, TOPIC_EVENTS, TOPIC_TIMING, Layout, RowEncoder, json_schema,
-                                     metadata_record)
+from teleop.io.recording.layout import (PROFILE, TOPIC_EVENTS, TOPIC_TIMING, Layout, RowEncoder, event_schema,
+                                        json_schema, metadata_record)
+from teleop.io.recording.pacing import Pacer
+from teleop.io.recording.stats import timing_schema
 
 LIBRARY = "cdpr-teleop recorder (mcap python)"
 TOPIC_LOG, TOPIC_TF = "/teleop/log", "/tf"
-TF_PERIOD = 0.01  # [s] of session time between /tf messages
+TF_RATE = 100.0  # /tf messages per second of session time [Hz]
 
 
 class SessionWriter:
@@ -41,7 +43,7 @@ class SessionWriter:
         self.w.start(PROFILE, LIBRARY)
         self.encoder = RowEncoder(layout)
         self.channels = {}
-        extra = ((TOPIC_EVENTS, b'{"type": "object"}'), (TOPIC_TIMING, b'{"type": "object"}'))
+        extra = ((TOPIC_EVENTS, event_schema()), (TOPIC_TIMING, timing_schema(layout)))
         for topic, schema in [(t, json_schema(layout, t)) for t in layout.topics()] + list(extra):
             sid = self.w.register_schema(topic, "jsonschema", schema)
             self.channels[topic] = self.w.register_channel(topic, "json", sid)
@@ -58,7 +60,7 @@ class SessionWriter:
             self.channels[topic] = self.w.register_channel(topic, "protobuf", sid)
         names = {s.name for s in layout.signals}
         self.tf_cols = layout.columns() if {"setpoint_cp", "measured_cp"} <= names else None
-        self.t_tf = -1e9
+        self.tf_pacer = Pacer(TF_RATE)
         self.n_tf = self.n_log = 0
 
     def log_time(self, t: float) -> int:
@@ -69,8 +71,7 @@ class SessionWriter:
         for topic, tick, t, payload in self.encoder.encode(row):
             lt = self.log_time(t)
             add(ch[topic], lt, payload, lt, tick & 0xFFFFFFFF)
-        if self.tf_cols is not None and t - self.t_tf >= TF_PERIOD - 1e-9:
-            self.t_tf = t
+        if self.tf_cols is not None and self.tf_pacer.due(t):
             self.n_tf += 1
             lt = self.log_time(t)
             ee, stylus = row[self.tf_cols["setpoint_cp"]].tolist(), row[self.tf_cols["measured_cp"]].tolist()

@@ -1,7 +1,7 @@
 """What the live view shows: channels, their rates, and how each message is built from a tick row.
 
-Rates are on the rows' session time (a channel publishes when at least 1/rate has passed since its last
-message), so they hold whatever the loop rate. Plots (JSON with a JSON schema) at 100 Hz, the 3D scene
+Rates are on the rows' session time (teleop.io.recording.pacing.Pacer: the first row at or after each
+deadline, the deadlines 1/rate apart), so they hold whatever the loop rate. Plots (JSON with a JSON schema) at 100 Hz, the 3D scene
 (foxglove.FrameTransforms, foxglove.SceneUpdate) at 50 and 10 Hz, faults (foxglove.Log) when they happen,
 per-second timing and the live view's own counters at 1 Hz.
 """
@@ -11,8 +11,11 @@ from __future__ import annotations
 import json
 
 import orjson
-from foxglove.messages import (Color, CubePrimitive, CylinderPrimitive, LinePrimitive, LinePrimitiveLineType, Point3,
-                               Pose, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive, Vector3)
+import math
+
+from foxglove.messages import (ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, LinePrimitive,
+                               LinePrimitiveLineType, Point3, Pose, Quaternion, SceneEntity, SceneUpdate,
+                               SpherePrimitive, Vector3)
 
 from teleop.io.recording.foxglove import STATE_NAMES, WORLD, frame_transforms, stamp
 from teleop.io.recording.layout import Layout
@@ -33,6 +36,36 @@ TOPIC_TIMING, TOPIC_STATS = "/live/timing", "/live/stats"
 RATES = {**{k: v[0] for k, v in PLOTS.items()}, TOPIC_TF: RATE_TF, TOPIC_SCENE: RATE_SCENE, TOPIC_TIMING: 1.0,
          TOPIC_STATS: 1.0}
 
+# the 3D scene (RGBA): a colour nothing else in the scene has for the end effector, red while in FAULT
+EE_COLOR, EE_FAULT_COLOR = (0.9, 0.1, 0.8, 1.0), (0.9, 0.1, 0.1, 1.0)
+EE_DIAMETER = 0.008  # [m]
+CABLE_COLOR, CABLE_PX = (0.8, 0.8, 0.8, 1.0), 2.0  # cables: lines of a constant width on screen [px]
+FORCE_COLOR, FORCE_M_PER_N = (1.0, 0.6, 0.0, 1.0), 0.01  # the force arrow: 1 cm per newton
+
+
+def x_onto(ux: float, uy: float, uz: float) -> tuple:
+    """Quaternion (x, y, z, w) of the shortest rotation taking +x onto the unit vector u (Foxglove's arrows
+    point along their pose's +x): axis x cross u = (0, -uz, uy), half-angle form."""
+    w = 1.0 + ux
+    if w < 1e-9:  # u = -x: half a turn about z
+        return 0.0, 0.0, 1.0, 0.0
+    k = math.sqrt(2.0 * w)
+    return 0.0, -uz / k, uy / k, w / k
+
+
+def _arrow(origin, f) -> list:
+    """A foxglove ArrowPrimitive for force f (3,) [N] at `origin` (3,) [m] (FORCE_M_PER_N), [] for no force."""
+    n = math.sqrt(f[0] ** 2 + f[1] ** 2 + f[2] ** 2)
+    length = FORCE_M_PER_N * n
+    if not length > 1e-4:
+        return []
+    qx, qy, qz, qw = x_onto(f[0] / n, f[1] / n, f[2] / n)
+    q = Quaternion(x=qx, y=qy, z=qz, w=qw)
+    head = min(0.004, 0.4 * length)
+    return [ArrowPrimitive(pose=Pose(position=Vector3(x=origin[0], y=origin[1], z=origin[2]), orientation=q),
+                           shaft_length=length - head, shaft_diameter=0.0015, head_length=head, head_diameter=0.004,
+                           color=Color(r=FORCE_COLOR[0], g=FORCE_COLOR[1], b=FORCE_COLOR[2], a=FORCE_COLOR[3]))]
+
 
 def plot_schema(layout: Layout, topic: str) -> bytes:
     """JSON schema of a plot channel (numbers and arrays of numbers, with `t` [s] and `tick`)."""
@@ -46,6 +79,26 @@ def plot_schema(layout: Layout, topic: str) -> bytes:
     if topic == "/live/loop":
         props["state_name"] = {"type": "string"}
     return json.dumps({"type": "object", "properties": props}).encode()
+
+
+# the live view's own counters on /live/stats: key -> (JSON type, description)
+STATS_FIELDS = {"t": ("number", "session time [s]"),
+                "rows_skipped": ("integer", "rows of the ring the live view fell behind on and skipped"),
+                "frames_dropped": ("integer", "frames dropped for viewers that read too slowly"),
+                "frames_sent": ("integer", "frames sent to viewers"),
+                "viewers": ("integer", "viewers connected")}
+
+
+def stats_schema() -> bytes:
+    """JSON schema of /live/stats (every key of `stats_message`)."""
+    props = {k: {"type": tp, "description": d} for k, (tp, d) in STATS_FIELDS.items()}
+    return json.dumps({"type": "object", "properties": props}).encode()
+
+
+def stats_message(t: float, rows_skipped: int, frames_dropped: int, frames_sent: int, viewers: int) -> bytes:
+    """One /live/stats message (t [s] of session time, counters since the start)."""
+    return json.dumps({"t": float(t), "rows_skipped": int(rows_skipped), "frames_dropped": int(frames_dropped),
+                       "frames_sent": int(frames_sent), "viewers": int(viewers)}).encode()
 
 
 class RowMessages:
@@ -94,25 +147,21 @@ class RowMessages:
         ts = stamp(t_ns)
         ee = row[c["setpoint_cp"]].tolist()
         state = int(row[c["state"]][0])
-        red = Color(r=0.9, g=0.1, b=0.1, a=1.0)
-        ee_color = red if state == 4 else Color(r=0.1, g=0.6, b=0.9, a=1.0)
+        rgba = EE_FAULT_COLOR if state == 4 else EE_COLOR
         ident = Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)
+        d = EE_DIAMETER
         entities = [SceneEntity(timestamp=ts, frame_id=WORLD, id="end_effector", spheres=[SpherePrimitive(
             pose=Pose(position=Vector3(x=ee[0], y=ee[1], z=ee[2]), orientation=ident),
-            size=Vector3(x=0.008, y=0.008, z=0.008), color=ee_color)])]
-        f = row[c["measured_cf"]].tolist()[:3]
-        entities.append(SceneEntity(timestamp=ts, frame_id=WORLD, id="force", lines=[LinePrimitive(
-            type=LinePrimitiveLineType.LineList, thickness=0.002, scale_invariant=False,
-            points=[Point3(x=ee[0], y=ee[1], z=ee[2]),
-                    Point3(x=ee[0] + 0.01 * f[0], y=ee[1] + 0.01 * f[1], z=ee[2] + 0.01 * f[2])],
-            color=Color(r=1.0, g=0.6, b=0.0, a=1.0))]))  # 1 cm per newton
+            size=Vector3(x=d, y=d, z=d), color=Color(r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]))])]
+        entities.append(SceneEntity(timestamp=ts, frame_id=WORLD, id="force",
+                                    arrows=_arrow(ee, row[c["measured_cf"]].tolist()[:3])))
         if self.B is not None and self.r is not None:
             pts = []
             for b, r in zip(self.B, self.r):
                 pts += [Point3(x=b[0], y=b[1], z=b[2]), Point3(x=ee[0] + r[0], y=ee[1] + r[1], z=ee[2] + r[2])]
             entities.append(SceneEntity(timestamp=ts, frame_id=WORLD, id="cables", lines=[LinePrimitive(
-                type=LinePrimitiveLineType.LineList, thickness=0.001, scale_invariant=False, points=pts,
-                color=Color(r=0.3, g=0.3, b=0.3, a=1.0))]))
+                type=LinePrimitiveLineType.LineList, thickness=CABLE_PX, scale_invariant=True, points=pts,
+                color=Color(r=CABLE_COLOR[0], g=CABLE_COLOR[1], b=CABLE_COLOR[2], a=CABLE_COLOR[3]))]))
         for pad in self.pads:
             x, y, z = pad["center"]
             sx, sy = pad["size"]

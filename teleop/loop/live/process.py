@@ -20,9 +20,10 @@ from teleop.io.recording.foxglove import fault_log
 from teleop.loop.live import channels as lc
 from teleop.loop.live.server import ChannelInfo, FoxgloveServer
 from teleop.io.recording.layout import Layout
+from teleop.io.recording.pacing import Pacer
 from teleop.io.recording.recorder import drain_pipe, time_sharing
 from teleop.io.recording.ring import HEAD, T0_NS, Cursor, Ring
-from teleop.io.recording.stats import SecondStats
+from teleop.io.recording.stats import SecondStats, timing_schema
 from teleop.io.stop_signals import ignore_stop_signals
 
 # shared counters of the live process (int64)
@@ -42,8 +43,8 @@ def _channel_list(layout: Layout) -> list:
     for topic, cls in ((lc.TOPIC_TF, FrameTransforms), (lc.TOPIC_SCENE, SceneUpdate), (lc.TOPIC_FAULTS, Log)):
         sc = cls.get_schema()
         add(topic, "protobuf", sc.name, bytes(sc.data), "protobuf")
-    add(lc.TOPIC_TIMING, "json", "live.timing", b'{"type": "object"}', "jsonschema")
-    add(lc.TOPIC_STATS, "json", "live.stats", b'{"type": "object"}', "jsonschema")
+    add(lc.TOPIC_TIMING, "json", "live.timing", timing_schema(layout), "jsonschema")
+    add(lc.TOPIC_STATS, "json", "live.stats", lc.stats_schema(), "jsonschema")
     return out
 
 
@@ -65,8 +66,7 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
     stats = SecondStats(layout)
     cursor = Cursor(ring, start=int(ring.ctrl[HEAD]))
     t_col = layout.slices()[("/loop", "t")][0]
-    period = {topic: 1.0 / rate - 1e-9 for topic, rate in lc.RATES.items()}
-    last = {topic: -1e9 for topic in lc.RATES}
+    pacers = {topic: Pacer(rate) for topic, rate in lc.RATES.items() if topic != lc.TOPIC_TIMING}
     published = 0
 
     def subscribed(topic):
@@ -87,11 +87,8 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
             s = stats.add(row)
             if s is not None and subscribed(lc.TOPIC_TIMING):
                 send(lc.TOPIC_TIMING, t_ns, json.dumps(s).encode())
-            for topic in lc.RATES:
-                if t - last[topic] < period[topic]:
-                    continue
-                last[topic] = t
-                if topic == lc.TOPIC_TIMING or not subscribed(topic):
+            for topic, pacer in pacers.items():
+                if not pacer.due(t) or not subscribed(topic):
                     continue
                 if topic in lc.PLOTS:
                     send(topic, t_ns, msgs.plot(topic, row))
@@ -100,9 +97,8 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
                 elif topic == lc.TOPIC_SCENE:
                     send(topic, t_ns, msgs.scene(row, t_ns))
                 elif topic == lc.TOPIC_STATS:
-                    send(topic, t_ns, json.dumps({"t": t, "rows_skipped": cursor.skipped,
-                                                  "frames_dropped": server.dropped, "frames_sent": server.sent,
-                                                  "viewers": len(server.viewers)}).encode())
+                    send(topic, t_ns, lc.stats_message(t, cursor.skipped, server.dropped, server.sent,
+                                                       len(server.viewers)))
         for kind, obj in drain_pipe(conn):
             if kind == "event":
                 t_ns = t0_ns + int(round(float(obj.get("t", 0.0)) * 1e9))

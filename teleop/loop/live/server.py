@@ -142,7 +142,8 @@ class FoxgloveServer:
         finally:
             writer.cancel()
             self.viewers.remove(v)
-            self.dropped_closed += v.dropped + len(v.outbox)
+            # what was still queued for a viewer that left is not a drop (it did not fall behind: it went away)
+            self.dropped_closed += v.dropped
             self.sent_closed += v.sent
 
     def _command(self, v: Viewer, text) -> None:
