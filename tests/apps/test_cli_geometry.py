@@ -17,6 +17,7 @@ from teleop.apps.commands.blind_test import rig_options
 from teleop.apps.protocols.blind.rig import BackgroundSession, RigOptions, Station, rig_dict
 from teleop.core.errors import InputError
 from teleop.core.geometry import default_geometry, load_geometry
+from teleop.io.recording import read_session
 
 LAB = """[geometry]
 base_anchors_mm = [[25, 0, 0], [12.5, 21.650635, 0], [-12.5, 21.650635, 0], [-25, 0, 0], [-12.5, -21.650635, 0],
@@ -56,7 +57,8 @@ def test_bench_blind_jnd_takes_the_rig_geometry(lab):
 
 @pytest.mark.parametrize("argv", [["blind-test", "--participants", "1"], ["palpate", "--test", "z", "--limit", "1"],
                                   ["session", "--seconds", "0.1", "--no-realtime", "--robot-inline"],
-                                  ["bench", "blind-jnd", "--participants", "1"]])
+                                  ["bench", "blind-jnd", "--participants", "1"],
+                                  ["bench", "loop", "--seconds", "0.1", "--no-realtime"]])
 def test_a_bad_geometry_is_one_line_naming_file_and_key_exit_2_nothing_written(tmp_path, capsys, argv):
     bad = tmp_path / "lab.toml"
     bad.write_text(LAB.replace("mu = 0.07", "mu = -0.07"))
@@ -120,3 +122,13 @@ def test_palpate_runs_the_simulated_robot_and_estimators_on_the_geometry(tmp_pat
     d = json.loads(out.read_text())
     assert d["params"]["mu"] == 0.07  # the run's own geometry (the simulated robot's, read by the estimators)
     assert d["geometry_file"] == str(lab) and d["geometry"]["B"][0] == [0.025, 0.0, 0.0]
+
+
+def test_bench_loop_runs_its_session_on_the_geometry(tmp_path, lab, capsys):
+    rec = tmp_path / "loop.mcap"
+    rc = main(["bench", "loop", "--seconds", "0.2", "--no-realtime", "--robot-rate", "500", "--geometry", str(lab),
+               "--record", str(rec)])
+    capsys.readouterr()
+    assert rc == 0
+    conf = read_session(str(rec)).metadata["session"]["configuration"]
+    assert conf["geometry"]["mu"] == 0.07 and conf["geometry_file"] == str(lab)

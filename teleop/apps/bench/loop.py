@@ -19,8 +19,8 @@ import tempfile
 
 import numpy as np
 
-from teleop.apps.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, nonnegative_float, positive_float,
-                                  rt_priority)
+from teleop.apps.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, add_geometry_option, geometry_of,
+                                  nonnegative_float, positive_float, rt_priority)
 from teleop.apps.commands.session import add_live_arguments
 from teleop.core.errors import InputError
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
@@ -50,6 +50,7 @@ def register(subparsers) -> None:
     p.add_argument("--stale-ms", type=positive_float, default=20.0,
                    help="telemetry older than this is a FAULT [ms] (default 20; docs/safety.md)")
     p.add_argument("--no-realtime", action="store_true", help="do not ask for SCHED_FIFO")
+    add_geometry_option(p)
     p.add_argument("--robot-rate", type=ROBOT_RATE_HZ, default=500.0, help="robot process rate [Hz] (default 500)")
     p.add_argument("--robot-rt", type=rt_priority, default=45,
                    help="SCHED_FIFO priority of the robot process, below the loop's 50 (0: time-sharing, nice -10)")
@@ -86,7 +87,8 @@ def bench_once(args, rate: float) -> dict:
                           spin_us=spin_us, realtime=not args.no_realtime, robot_rt_priority=args.robot_rt or None,
                           robot_process_hz=args.robot_rate,
                           live=(args.live_host, args.live) if args.live is not None else None,
-                          progress=f"bench loop {rate:g} Hz")
+                          progress=f"bench loop {rate:g} Hz", geometry=geometry_of(args),
+                          geometry_file=args.geometry)
     out = dict(res.timing)
     out["live"] = res.live or {"on": False}
     out["recording"] = {"on": record is not None, "drops": res.drops, "alarm": res.alarm}
@@ -142,6 +144,7 @@ def run(args) -> int:
         raise InputError("--seconds and --rate must be > 0")
     if args.live is not None:
         check_port(args.live_host, args.live)
+    geometry_of(args)  # a bad --geometry is one line before any run
     with STOP.polled():  # a stop signal ends the run under way; what ran is reported, marked interrupted
         return _run(args)
 
