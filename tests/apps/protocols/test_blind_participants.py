@@ -174,17 +174,17 @@ def test_anchored_ratings_read_the_scale_the_training_pads_set():
 def test_anchored_rule_fixes_no_rating_each_follows_what_was_felt():
     """Same participants (same seed), the rig renders the middle pads twice as stiff: with the anchored rule
     their ratings rise; with the positions rule the ranking is unchanged and so (mostly) are the ratings."""
-    anchored = ParticipantParams(rating="anchored")
-    base = run_simulated_study(SpringRig(AREAS), 6, seed=3, params=anchored)
+    anchored = {"params": ParticipantParams(), "rating": "anchored"}
+    base = run_simulated_study(SpringRig(AREAS), 6, seed=3, **anchored)
     stiffer = tuple(Area(a.name, a.label, a.stiffness * (2.0 if i in (1, 2) else 1.0)) for i, a in enumerate(AREAS))
-    moved = run_simulated_study(SpringRig(stiffer), 6, seed=3, params=anchored)
+    moved = run_simulated_study(SpringRig(stiffer), 6, seed=3, **anchored)
     b, m = base.mean_std(), moved.mean_std()
     for name in ("dragon_skin_30", "ecoflex_00_50"):
         assert m[name][0] > b[name][0] + 0.5
     assert base.correct_ranking_rate == 1.0
     # the ends are outcomes too: a rig that renders every pad alike gives them no spread of their own
     flat = run_simulated_study(SpringRig(tuple(Area(a.name, a.label, 5000.0) for a in AREAS)), 4, seed=3,
-                               params=anchored)
+                               **anchored)
     assert np.ptp(flat.ratings().mean(axis=0)) < 3.0      # the positions rule would spread them 8-10 .. 1-3
     old = run_simulated_study(SpringRig(tuple(Area(a.name, a.label, 5000.0) for a in AREAS)), 4, seed=3,
                               params=ParticipantParams())
@@ -192,5 +192,5 @@ def test_anchored_rule_fixes_no_rating_each_follows_what_was_felt():
 
 
 def test_rating_rule_is_checked():
-    with pytest.raises(InputError, match="rating"):
-        ParticipantParams(rating="median")
+    with pytest.raises(InputError, match="rating rule 'median'"):
+        run_simulated_study(SpringRig(AREAS), 1, seed=0, params=ParticipantParams(), rating="median")

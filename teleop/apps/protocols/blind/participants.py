@@ -16,14 +16,14 @@ Perception model:
   push depth, whichever comes first; push depth, speed and press force vary per participant (person
   level) and per poke (log-normal spreads).
 
-Ratings (`ParticipantParams.rating`):
+Ratings (the `rating` rule a participant is made with; the study's, `run_simulated_study(rating=...)`):
 - "positions" (the former rule): the hardest zone gets a draw from 8-10, the softest one from 1-3, the middle
   ones 60 % even spacing and 40 % remembered magnitude between them. The ends and most of the middle are set
   by the rule, so only the ranking is an outcome of what was felt.
 - "anchored": every rating is read off a log-stiffness scale anchored by two training pads. Before the
   study the coordinator lets the participant press the hardest and the softest pad, named as "about 9" and
   "about 2" (the middles of the seed's bands for the hardest, 8-10, and the softest, 1-3, zone); their
-  percepts (the same Weber noise, `training_pokes` presses each) fix the scale, and each zone's rating is
+  percepts (the same Weber noise, TRAINING_POKES presses each) fix the scale, and each zone's rating is
   RATING_SOFT + (RATING_HARD - RATING_SOFT) (L - L_soft) / (L_hard - L_soft), rounded and clipped to 1-10,
   with L the zone's remembered log stiffness and the anchors' memories drifting like any other zone's
   (`memory_noise` per press of another pad). No pad's rating is fixed: the ends move with what the chain
@@ -53,6 +53,7 @@ GENTLER = 0.7              # a press the rig stopped is repeated at this fractio
 _PERSON, _MOTOR, _NOISE, _MEMORY, _RATING, _TRAIN_MOTOR, _TRAIN_NOISE = range(7)
 RATING_RULES = ("positions", "anchored")
 RATING_HARD, RATING_SOFT = 9.0, 2.0  # the anchored scale's training pads: middles of the seed's 8-10 and 1-3
+TRAINING_POKES = 2                   # presses of each training pad before the study (rating "anchored")
 
 
 def weber_sigma(jnd: float) -> float:
@@ -90,11 +91,7 @@ class ParticipantParams:
             participant gives up; each one is repeated at GENTLER times its force (or depth, for depth
             pushes), as a coordinator would ask after resetting the robot.
         spacing: weight of even spacing (vs remembered magnitude) when placing the middle ratings (rating
-            "positions").
-        rating: how the ranking becomes ratings (RATING_RULES; module docstring): "positions" (the middle
-            ratings placed between drawn end ratings) or "anchored" (every rating from the percept on a
-            scale anchored by the training pads).
-        training_pokes: presses of each training pad before the study (rating "anchored").
+            rule "positions").
     """
 
     jnd: float = 0.23
@@ -108,8 +105,6 @@ class ParticipantParams:
     max_aborts: int = 3
     spacing: float = 0.6
     force: float | None = 0.2
-    rating: str = "positions"
-    training_pokes: int = 2
 
     def __post_init__(self):
         checks = {"jnd": self.jnd > 0, "depth": self.depth > 0, "speed": self.speed > 0,
@@ -117,9 +112,7 @@ class ParticipantParams:
                   "memory_noise": self.memory_noise >= 0, "force_threshold": self.force_threshold >= 0,
                   "max_repeats": self.max_repeats >= 0, "max_aborts": self.max_aborts >= 0,
                   "spacing": 0 <= self.spacing <= 1,
-                  "force": self.force is None or self.force > 0, "training_pokes": self.training_pokes >= 1}
-        if self.rating not in RATING_RULES:
-            raise InputError(f"participant parameter rating={self.rating!r}: expected one of {', '.join(RATING_RULES)}")
+                  "force": self.force is None or self.force > 0}
         for name, ok in checks.items():
             value = getattr(self, name)
             if not ok or (value is not None and not math.isfinite(value)):
@@ -130,9 +123,12 @@ class SimulatedParticipant:
     """One participant: pokes zones through `palpate(zone, request) -> Poke` and answers the protocol.
 
     seed: the participant's own entropy (e.g. (study seed, participant number)); all draws derive from it.
+    rating: how the ranking becomes ratings (RATING_RULES, module docstring); "anchored" needs `train` first.
     """
 
-    def __init__(self, params: ParticipantParams, palpate, seed):
+    def __init__(self, params: ParticipantParams, palpate, seed, rating: str = "positions"):
+        check_rating_rule(rating)
+        self.rating = rating
         self.params = params
         self._palpate = palpate
         self._seed = tuple(int(s) for s in np.atleast_1d(seed))
@@ -192,7 +188,7 @@ class SimulatedParticipant:
         hardest pad (rated RATING_HARD), 1 the softest (RATING_SOFT). Their percepts anchor the scale."""
         for anchor in (0, 1):
             key = ("train", anchor)
-            for n in range(self.params.training_pokes):
+            for n in range(TRAINING_POKES):
                 percept, _trace, _k = self._press(press_pad, anchor, self._rng(_TRAIN_MOTOR, anchor, n),
                                                   self._rng(_TRAIN_NOISE, anchor, n))
                 self._blur(key)
@@ -218,7 +214,7 @@ class SimulatedParticipant:
 
     def rate(self, ranking) -> list:
         """Ratings of the ranked zones (hardest first), by the rule `params.rating` (module docstring)."""
-        if self.params.rating == "anchored":
+        if self.rating == "anchored":
             return self.rate_anchored(ranking)
         rng = self._rng(_RATING)
         hardest, softest = int(rng.integers(8, 11)), int(rng.integers(1, 4))
@@ -236,6 +232,12 @@ class SimulatedParticipant:
             raise InputError("anchored ratings need the training pads pressed first (SimulatedParticipant.train)")
         return anchored_ratings([self.remembered(z) for z in ranking], self.remembered(key_hard),
                                 self.remembered(key_soft))
+
+
+def check_rating_rule(rating: str) -> None:
+    """Refuse a rating rule not in RATING_RULES (InputError naming it)."""
+    if rating not in RATING_RULES:
+        raise InputError(f"rating rule {rating!r}: expected one of {', '.join(RATING_RULES)}")
 
 
 def anchored_ratings(percepts, hard: float, soft: float) -> list:

@@ -12,10 +12,11 @@ from typing import Callable, Protocol
 
 import numpy as np
 
-from teleop.apps.protocols.blind.participants import ParticipantParams, SimulatedParticipant
+from teleop.apps.protocols.blind.participants import ParticipantParams, SimulatedParticipant, check_rating_rule
 from teleop.apps.protocols.blind.probe import Poke, PokeRequest
 from teleop.apps.protocols.blind.protocol import Compare, next_step, presentation
 from teleop.apps.protocols.blind.stats import SEED_TABLE3, kendall_tau, kendall_w, mean_std
+from teleop.core.errors import InputError
 from teleop.io.outputs import save_figure
 
 _LAYOUT = 100  # random stream of the coordinator (layout and presentation), apart from the participant's
@@ -78,17 +79,18 @@ def coordinator_draws(seed: int, participant: int, areas) -> tuple:
 
 
 def run_participant(palpate: Callable, n_zones: int, params: ParticipantParams, entropy,
-                    train: Callable | None = None) -> tuple:
+                    train: Callable | None = None, rating: str = "positions") -> tuple:
     """Take one simulated participant through the protocol.
 
     palpate(zone, request) -> Poke; train(anchor, request) -> Poke presses the training pads (anchor 0 the
-    hardest, 1 the softest; needed by the "anchored" rating rule, pressed before the first zone). Returns
+    hardest, 1 the softest; needed by the rating rule "anchored", pressed before the first zone); rating:
+    participants.RATING_RULES. Returns
     (answers [(Compare, answer)], ranking (zones, hardest first), ratings (hardest first), participant).
     """
-    person = SimulatedParticipant(params, palpate, entropy)
-    if params.rating == "anchored":
+    person = SimulatedParticipant(params, palpate, entropy, rating)
+    if rating == "anchored":
         if train is None:
-            raise ValueError("the anchored rating rule needs the training pads (train)")
+            raise InputError("the anchored rating rule needs training pads to press (run_participant's train)")
         person.train(train)
     answers = []
     step = next_step(n_zones, answers)
@@ -116,8 +118,11 @@ def record_from(participant: int, layout, order, answers, ranking, ratings, pers
 
 
 def run_simulated_study(rig: Rig, participants: int, seed: int, params: ParticipantParams,
-                        progress=None) -> "StudyResult":
-    """`participants` simulated participants on `rig`; `progress` (optional) is called after each one."""
+                        progress=None, rating: str = "positions") -> "StudyResult":
+    """`participants` simulated participants on `rig`; `progress` (optional) is called after each one;
+    `rating`: the rule that turns a participant's ranking into ratings (participants.RATING_RULES; "anchored":
+    the rig's hardest and softest areas are the training pads)."""
+    check_rating_rule(rating)
     areas = tuple(rig.areas)
     records = []
     for p in range(1, participants + 1):
@@ -130,7 +135,7 @@ def run_simulated_study(rig: Rig, participants: int, seed: int, params: Particip
         def train(anchor, request, _layout=layout):  # the training pads: the hardest and the softest area
             return rig.poke(_layout.index(areas[0 if anchor == 0 else -1].name), request)
 
-        answers, ranking, ratings, person = run_participant(palpate, len(areas), params, (seed, p), train)
+        answers, ranking, ratings, person = run_participant(palpate, len(areas), params, (seed, p), train, rating)
         records.append(record_from(p, layout, order, answers, ranking, ratings, person))
         if progress is not None:
             progress()
