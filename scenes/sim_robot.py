@@ -35,12 +35,14 @@ from scenes.rich_plant import PLANTS as RICH_PLANTS
 from scenes.rich_plant import RichPlant, RichPlantParams, plant_params, with_plant
 from scenes.sim_sensors import FBG_FROM_END_M, FbgArray, fbg_cables
 from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams
+from scenes.tendon_sheath_kernels import O_MOTOR, O_ROWS
 from scenes.world import PadWorld, WorldParams
 from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry, default_geometry
 from teleop.core.kernels import sim as KS
 from teleop.core.kernels import tension as KT
 from teleop.core.kernels import sheath as SH
+from teleop.core.kernels.sensor import fsr_counts
 from teleop.core.kinematics import FREE_AXIAL, check_lengths, poses2lengths
 from teleop.core.physics import get_effect
 from teleop.core.physics.backlash import backlash
@@ -407,8 +409,8 @@ class SimRobot(ContextDevice):
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + p.dt])[0]
-        if not direct or status != KT.OK:
-            counts = self._lag.counts(t_fsr, noise[k])  # lag, conductance, ADC (= counts_from(fsr_conductance(..)))
+        if not direct or status != KT.OK:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
+            fsr_counts(t_fsr, *self._lag_args, noise[k], counts)
         fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + p.dt)  # distal FBGs (sim_sensors)
         self.t += p.dt
         self.seq += 1
@@ -500,6 +502,9 @@ class SimRobot(ContextDevice):
                         counts=counts, theta=theta, fbg_pm=fbg)
 
 
+TAP_FSR, TAP_FBG = O_ROWS, O_ROWS + 1  # rows of a DistributedCables tick's output: its two tapped elements
+
+
 class DistributedCables:
     """The robot's cables as distributed tendon-sheath cables (scenes.tendon_sheath, `SimRobotParams.cable`).
 
@@ -517,10 +522,11 @@ class DistributedCables:
 
     def __init__(self, params: TendonSheathParams, n: int, pretension: float, tick: float):
         self.params = params
-        self.sheath = TendonSheath(params, SheathLoad("force"), pretension=pretension, n_cables=n, tick=tick)
         self.j_fsr = self.element_at(params.scaffold_span[0])
         self.j_fbg = self.element_at(params.length - FBG_FROM_END_M)
-        self._out = np.empty((n, 4))  # a reading's motor force, tip force, tip travel, Newton iterations
+        self.sheath = TendonSheath(params, SheathLoad("force"), pretension=pretension, n_cables=n, tick=tick,
+                                   taps=(self.j_fsr, self.j_fbg))
+        self._rows = self.sheath.out_rows
 
     def element_at(self, s: float) -> int:
         """Index of the element holding arc length s [m] from the motor (TendonSheath.tension_at's rule)."""
@@ -529,20 +535,15 @@ class DistributedCables:
 
     def step(self, x, t_tip, theta) -> tuple:
         """One reading: motor haul-in x (n,) [m], tip tensions t_tip (n,) [N], kinematic bends theta (n,)
-        [rad] -> (tension at the FSR, at the FBG, at the motor) (n,) each [N]."""
-        self.sheath.step_into(x, t_tip, theta, self._out)  # the robot's own (n,) float arrays: no checks
-        T = self.sheath.tensions
-        return T[:, self.j_fsr].copy(), T[:, self.j_fbg].copy(), self._out[:, 0].copy()
+        [rad] -> (tension at the FSR, at the FBG, at the motor) (n,) each [N] (rows of one new array)."""
+        out = np.empty((self._rows, len(x)))
+        self.sheath.step_into(x, t_tip, theta, out)  # the robot's own (n,) float arrays: no checks
+        return out[TAP_FSR], out[TAP_FBG], out[O_MOTOR]
 
-    def run(self, X, T_tip, TH, chunk: int = 2048) -> tuple:
+    def run(self, X, T_tip, TH) -> tuple:
         """`step` over m readings, (m, n) inputs -> (m, n) tensions at the FSR, the FBG and the motor [N]."""
-        m = len(X)
-        fsr, fbg, motor = np.empty(X.shape), np.empty(X.shape), np.empty(X.shape)
-        for a in range(0, m, chunk):  # the element tensions of a chunk at a time (m x n x N would be large)
-            b = min(a + chunk, m)
-            r = self.sheath.run(X[a:b], T_tip[a:b], TH[a:b], keep_tensions=True)
-            fsr[a:b], fbg[a:b], motor[a:b] = r.tensions[:, :, self.j_fsr], r.tensions[:, :, self.j_fbg], r.f_motor
-        return fsr, fbg, motor
+        r = self.sheath.run(X, T_tip, TH)
+        return tuple(np.ascontiguousarray(a) for a in (r.tapped[:, 0], r.tapped[:, 1], r.f_motor))
 
 
 class _AddedEffects:

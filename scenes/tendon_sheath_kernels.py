@@ -1,6 +1,7 @@
-"""Compiled step of the distributed tendon-sheath cable (scenes.tendon_sheath): one implicit step of every
-cable, the per-tick step (all cables, sub-steps, input interpolation) and the batch that calls that step for
-each tick of a trajectory (one source for the loop and the batch).
+"""Compiled step of the distributed tendon-sheath cable (scenes.tendon_sheath): one implicit step of c cables,
+the per-tick step (all cables, sub-steps, input interpolation, the sensor taps) and the batch that calls that
+step for each tick of a trajectory (one source for the loop and the batch: the loop's tick is one compiled
+call for all cables and sub-steps).
 
 Symbols (one cable, N elements, nodes i = 0..N from the motor to the tip; travel u hauling in is positive):
     u, v (N+1,)   node travel [m] from the initial configuration and velocity [m/s]; u[0] is the motor
@@ -19,6 +20,16 @@ Per node (i = 1..N), backward Euler over a step h, unknowns du_i = u_i' - u_i:
 solved by Newton's method on the tridiagonal Jacobian (Thomas algorithm). With g taken at the last step's
 velocity every node's friction is a nondecreasing function of its own travel du_i (z' is, for |z| <= zs), and
 Newton converges; a Newton step that would carry du_i across 0 (the bristle law's kink) stops on it.
+
+Arrays of c cables (the TendonSheath's, written in place):
+    S (S_ROWS, c, N+1)   rows S_U, S_V, S_Z: u, v, z; the rows from S_DU on are the step's scratch
+    cab (c, CAB_COLS)    columns C_T0 (t0 [N]), C_TIP (the last tick's tip input), C_THETA0, C_THETA1 (the
+                         scaffold and route bends [rad]); the columns from C_DU0 on are the step's scratch
+    out (O_ROWS + taps, c)  a tick's motor force [N], tip load force [N], tip travel [m], Newton iterations,
+                         then the tension [N] of each tapped element (a sensor there)
+How the cables share a step: they run in lockstep, node by node (the Newton sweeps' recurrences are chains of
+dependent divisions; c independent chains side by side keep the processor busy), each cable iterating until
+its own convergence: a cable's numbers do not depend on the others'.
 """
 
 from __future__ import annotations
@@ -42,12 +53,26 @@ P_K_LOAD = 8  # load spring stiffness [N/m]
 P_REST = 9  # load spring rest position of the tip [m]
 P_TOL = 10  # Newton tolerance on du [m]
 P_ITER = 11  # Newton iteration limit [-]
-P_COUNT = 12
+P_MODE = 12  # MODE_SPRING or MODE_POSITION
+P_TICK = 13  # the tick [s]
+P_NSUB = 14  # implicit steps a tick [-]
+P_COUNT = 15
 
 MODE_SPRING = 0  # tip load F = k_load (u_N - rest) + f_ext, f_ext the tip input [N]
 MODE_POSITION = 1  # tip travel prescribed, the tip input [m]; F the reaction
 
-WORK_ROWS = 10  # rows of the scratch array (WORK_ROWS, N+1)
+# rows of S: the state, then the step's scratch (du, 1 / zs, the eliminated Jacobian's upper diagonal and
+# right-hand side, the element bends b in the first N columns)
+S_U, S_V, S_Z, S_DU, S_IZS, S_CP, S_R, S_B = range(8)
+S_ROWS = 8
+# columns of cab: t0, the last tick's tip input, the fixed bends; then the step's scratch per cable: motor
+# travel over the step, the step's tip input, the sweep's carried tension and its slope, the eliminated
+# upper diagonal and right-hand side, the largest correction, Newton iterations, still iterating
+C_T0, C_TIP, C_THETA0, C_THETA1, C_DU0, C_A, C_TL, C_AL, C_CP, C_RP, C_BIG, C_IT, C_ACTIVE, C_FM, C_FL = range(15)
+CAB_COLS = 15
+# rows of out
+O_MOTOR, O_TIP, O_X_TIP, O_ITER = range(4)
+O_ROWS = 4
 
 
 @njit
@@ -62,181 +87,204 @@ def stribeck_curve(v, mu_c, mu_s, v_s):
 
 
 @njit
-def bristle(z, du, zs):
-    """(z', dz'/du): the LuGre state after travel du [m] by backward Euler, zs = g / sigma0 [m] (0: no
-    friction)."""
-    if zs <= 0.0:
+def bristle(z, du, izs):
+    """(z', dz'/du): the LuGre state after travel du [m] by backward Euler, izs = sigma0 / g = 1 / zs [1/m]
+    (0: no friction)."""
+    if izs <= 0.0:
         return 0.0, 0.0
-    a = 1.0 + abs(du) / zs
-    zn = (z + du) / a
+    ia = 1.0 / (1.0 + abs(du) * izs)
+    zn = (z + du) * ia
     if du > 0.0:
-        dz = (1.0 - z / zs) / (a * a)
+        dz = (1.0 - z * izs) * ia * ia
     elif du < 0.0:
-        dz = (1.0 + z / zs) / (a * a)
+        dz = (1.0 + z * izs) * ia * ia
     else:
         dz = 1.0
     return zn, dz
 
 
 @njit
-def friction_coefficient(z, du, v, h, p):
-    """(phi, dphi/du, z'): friction coefficient [-] of a node travelling du [m] over h [s] from state z, the
-    Stribeck curve at the last step's velocity v [m/s]."""
-    g = stribeck_curve(v, p[P_MU_C], p[P_MU_S], p[P_V_S])
-    s0 = p[P_SIGMA0]
-    zn, dz = bristle(z, du, g / s0)
-    c = s0 + p[P_SIGMA1] / h
-    phi = c * zn - p[P_SIGMA1] * z / h + p[P_SIGMA2] * du / h
-    return phi, c * max(dz, 0.0) + p[P_SIGMA2] / h, zn
+def taut(t0, k, stretch):
+    """(T, dT/dstretch) of an element [N, N/m]: t0 + k stretch, 0 when slack."""
+    s = t0 + k * stretch
+    if s > 0.0:
+        return s, k
+    return 0.0, 0.0
 
 
 @njit
-def cable_step(u, v, z, t0, b, p, h, du0, mode, tip, T, w):
-    """One backward-Euler step h [s] of one cable: motor travel du0 [m]; tip = f_ext [N] (MODE_SPRING) or
-    the tip's travel over the step [m] (MODE_POSITION). Updates u, v, z (N+1,) and T (N,) in place; w
-    (WORK_ROWS, N+1) scratch. Returns (motor force, tip load force, Newton iterations) [N, N, -]."""
-    N = T.shape[0]
+def cables_step(S, cab, p, h):
+    """One backward-Euler step h [s] of every cable: cab[:, C_DU0] the motor's travel over the step [m],
+    cab[:, C_A] f_ext [N] (MODE_SPRING) or the tip's travel over the step [m] (MODE_POSITION), S[S_B] the
+    bends. Updates u, v, z in place; leaves the element tensions in S[S_R] (first N columns), the motor force
+    and tip load force [N] in cab[:, C_FM], cab[:, C_FL] and adds the Newton iterations to cab[:, C_IT].
+
+    A Newton iteration is two sweeps over the nodes: the first evaluates node i's tensions, friction and
+    residual and eliminates its row at once (Thomas algorithm, forward), the second substitutes back and
+    updates du. The Stribeck curve, fixed over the step, is evaluated once a node and step (as 1 / zs).
+    After the last update one sweep takes the tensions and bristle states at the converged du."""
+    nc = S.shape[1]
+    N = S.shape[2] - 1
+    u, v, z, du, izs, cpv, rv, b = S[S_U], S[S_V], S[S_Z], S[S_DU], S[S_IZS], S[S_CP], S[S_R], S[S_B]
     k = p[P_K]
-    m = p[P_M]
     kl = p[P_K_LOAD]
-    du = w[0]
-    zn = w[1]
-    phi = w[2]
-    dphi = w[3]
-    act = w[4]
-    lo = w[5]
-    di = w[6]
-    up = w[7]
-    r = w[8]
-    cp = w[9]
-    last = N if mode == MODE_SPRING else N - 1
-    du[0] = du0
-    if mode == MODE_POSITION:
-        du[N] = tip
-    for i in range(1, last + 1):
-        du[i] = h * v[i]  # predictor: the last step's velocity
-    h2 = h * h
+    rest = p[P_REST]
+    s0 = p[P_SIGMA0]
+    s1h = p[P_SIGMA1] / h
+    s2h = p[P_SIGMA2] / h
+    cf = s0 + s1h
+    mh = p[P_M] / (h * h)  # an interior node's inertia per travel over the step [N/m]
+    mu_c, mu_s, v_s = p[P_MU_C], p[P_MU_S], p[P_V_S]
+    tol = p[P_TOL]
     max_iter = int(p[P_ITER])
-    it = 0
-    while True:
-        for j in range(N):  # T'_j and its slope (0 when slack)
-            s = t0 + k * (u[j] + du[j] - u[j + 1] - du[j + 1])
-            if s > 0.0:
-                T[j] = s
-                act[j] = k
-            else:
-                T[j] = 0.0
-                act[j] = 0.0
-        for i in range(1, N + 1):
-            phi[i], dphi[i], zn[i] = friction_coefficient(z[i], du[i], v[i], h, p)
+    spring = int(p[P_MODE]) == MODE_SPRING
+    last = N if spring else N - 1
+    for c in range(nc):
+        du[c, 0] = cab[c, C_DU0]
+        if not spring:
+            du[c, N] = cab[c, C_A]
+        for i in range(N + 1):
+            if 0 < i <= last:
+                du[c, i] = h * v[c, i]  # predictor: the last step's velocity
+            g = stribeck_curve(v[c, i], mu_c, mu_s, v_s)
+            izs[c, i] = s0 / g if g > 0.0 else 0.0
+        cab[c, C_ACTIVE] = 1.0
+    active = nc
+    its = 0
+    while active > 0:
+        for c in range(nc):  # the first element's tension starts the sweep
+            if cab[c, C_ACTIVE] > 0.0:
+                cab[c, C_TL], cab[c, C_AL] = taut(cab[c, C_T0], k, u[c, 0] + du[c, 0] - u[c, 1] - du[c, 1])
+                cab[c, C_CP] = 0.0
+                cab[c, C_RP] = 0.0
+        # forward sweep: node i's residual R_i and its row of the tridiagonal Jacobian, eliminated at once
         for i in range(1, last + 1):
-            Tl = T[i - 1]
-            al = act[i - 1]
-            bl = b[i - 1]
-            if i < N:
-                Tr = T[i]
-                ar = act[i]
-                br = b[i]
-                mi = m
+            for c in range(nc):
+                if cab[c, C_ACTIVE] <= 0.0:
+                    continue
+                Tl = cab[c, C_TL]
+                al = cab[c, C_AL]
+                bl = b[c, i - 1]
+                if i < N:
+                    Tr, ar = taut(cab[c, C_T0], k, u[c, i] + du[c, i] - u[c, i + 1] - du[c, i + 1])
+                    br = b[c, i]
+                    mi = mh
+                else:
+                    Tr = 0.0
+                    ar = 0.0
+                    br = 0.0
+                    mi = 0.5 * mh
+                x = du[c, i]
+                zi = z[c, i]
+                zn, dz = bristle(zi, x, izs[c, i])
+                phi = cf * zn - s1h * zi + s2h * x
+                dphi = cf * max(dz, 0.0) + s2h
+                n = 0.5 * (Tl * bl + Tr * br)  # normal force n'_i
+                res = mi * (x - h * v[c, i]) - Tl + Tr + n * phi
+                d = mi + al + ar + n * dphi + 0.5 * phi * (br * ar - bl * al)
+                if i == N:  # MODE_SPRING: the load on the tip node
+                    res += kl * (u[c, N] + x - rest) + cab[c, C_A]
+                    d += kl
+                lo = -al * (1.0 - 0.5 * phi * bl)
+                iden = 1.0 / (d - lo * cab[c, C_CP])
+                cp = -ar * (1.0 + 0.5 * phi * br) * iden
+                rp = (-res - lo * cab[c, C_RP]) * iden
+                cpv[c, i] = cp
+                rv[c, i] = rp
+                cab[c, C_CP] = cp
+                cab[c, C_RP] = rp
+                cab[c, C_TL] = Tr
+                cab[c, C_AL] = ar
+        # back substitution (the ends' travel is known: their delta is 0); a step that would carry du across 0
+        # (friction's kink) stops on it
+        for c in range(nc):
+            cab[c, C_BIG] = 0.0
+            cab[c, C_RP] = 0.0
+        for i in range(last, 0, -1):
+            for c in range(nc):
+                if cab[c, C_ACTIVE] <= 0.0:
+                    continue
+                dn = rv[c, i] - cpv[c, i] * cab[c, C_RP]
+                cab[c, C_RP] = dn
+                x = du[c, i]
+                if (x > 0.0 and x + dn < 0.0) or (x < 0.0 and x + dn > 0.0):
+                    dn = -x
+                du[c, i] = x + dn
+                cab[c, C_BIG] = max(cab[c, C_BIG], abs(dn))
+        its += 1
+        for c in range(nc):
+            if cab[c, C_ACTIVE] > 0.0:
+                cab[c, C_IT] += 1.0
+                if cab[c, C_BIG] < tol or its >= max_iter:
+                    cab[c, C_ACTIVE] = 0.0
+                    active -= 1
+    # the converged step: tensions, friction of the motor node (it adds to the motor's force: the proximal
+    # gauge between motor and sheath) and of the tip node (the reaction of a held tip), the state
+    for c in range(nc):
+        t0 = cab[c, C_T0]
+        for j in range(N):
+            rv[c, j] = taut(t0, k, u[c, j] + du[c, j] - u[c, j + 1] - du[c, j + 1])[0]
+        du0 = du[c, 0]
+        z0 = bristle(z[c, 0], du0, izs[c, 0])[0]
+        cab[c, C_FM] = rv[c, 0] * (1.0 + 0.5 * b[c, 0] * (cf * z0 - s1h * z[c, 0] + s2h * du0))
+        if spring:
+            cab[c, C_FL] = kl * (u[c, N] + du[c, N] - rest) + cab[c, C_A]
+        else:
+            zN = bristle(z[c, N], du[c, N], izs[c, N])[0]
+            phiN = cf * zN - s1h * z[c, N] + s2h * du[c, N]
+            Tt = rv[c, N - 1]
+            cab[c, C_FL] = Tt - 0.5 * Tt * b[c, N - 1] * phiN - 0.5 * mh * (du[c, N] - h * v[c, N])
+        for i in range(N + 1):
+            x = du[c, i]
+            z[c, i] = bristle(z[c, i], x, izs[c, i])[0]
+            v[c, i] = x / h
+            u[c, i] += x
+
+
+@njit
+def step(S, cab, x_motor, tip_in, theta, W, p, taps, T, out):
+    """One tick of c cables, one call: x_motor (c,) motor travel [m] at the tick's end; tip_in (c,) f_ext [N]
+    or tip travel [m] at the tick's end (by p[P_MODE]); theta (c,) kinematic bend [rad]; W (3, N) the share of
+    theta0, theta1 and |theta| in each element; the tick p[P_TICK] [s] in p[P_NSUB] steps, the motor and tip
+    inputs interpolated linearly. Writes T (c, N) element tensions [N] and out (O_ROWS + len(taps), c): motor
+    force [N], tip load force [N], tip travel [m], Newton iterations of the tick, the tensions of the
+    elements `taps` (int64) [N]."""
+    nc = S.shape[1]
+    N = S.shape[2] - 1
+    n_sub = int(p[P_NSUB])
+    h = p[P_TICK] / n_sub
+    spring = int(p[P_MODE]) == MODE_SPRING
+    u, b = S[S_U], S[S_B]
+    for c in range(nc):
+        a = abs(theta[c])
+        for j in range(N):
+            b[c, j] = W[0, j] * cab[c, C_THETA0] + W[1, j] * cab[c, C_THETA1] + W[2, j] * a
+        cab[c, C_IT] = 0.0
+    for s in range(n_sub):
+        for c in range(nc):
+            cab[c, C_DU0] = (x_motor[c] - u[c, 0]) / (n_sub - s)
+            if spring:
+                cab[c, C_A] = cab[c, C_TIP] + (tip_in[c] - cab[c, C_TIP]) * (s + 1) / n_sub
             else:
-                Tr = 0.0
-                ar = 0.0
-                br = 0.0
-                mi = 0.5 * m
-            n = 0.5 * (Tl * bl + Tr * br)  # normal force n'_i
-            res = mi * (du[i] - h * v[i]) / h2 - Tl + Tr + n * phi[i]
-            d = mi / h2 + al + ar + n * dphi[i] + 0.5 * phi[i] * (br * ar - bl * al)
-            if i == N:  # MODE_SPRING: the load on the tip node
-                res += kl * (u[N] + du[N] - p[P_REST]) + tip
-                d += kl
-            lo[i] = -al * (1.0 - 0.5 * phi[i] * bl)
-            up[i] = -ar * (1.0 + 0.5 * phi[i] * br)
-            di[i] = d
-            r[i] = -res
-        if it >= max_iter:
-            break
-        # Thomas algorithm: J delta = -R over i = 1..last (delta of the known ends is 0)
-        cp[1] = up[1] / di[1]
-        r[1] = r[1] / di[1]
-        for i in range(2, last + 1):
-            den = di[i] - lo[i] * cp[i - 1]
-            cp[i] = up[i] / den
-            r[i] = (r[i] - lo[i] * r[i - 1]) / den
-        for i in range(last - 1, 0, -1):
-            r[i] -= cp[i] * r[i + 1]
-        big = 0.0
-        for i in range(1, last + 1):  # a step that crosses du = 0 (friction's kink) stops on it
-            d = r[i]
-            if (du[i] > 0.0 and du[i] + d < 0.0) or (du[i] < 0.0 and du[i] + d > 0.0):
-                d = -du[i]
-            du[i] += d
-            big = max(big, abs(d))
-        it += 1
-        if big < p[P_TOL]:
-            max_iter = it  # one more evaluation at the converged du, then stop
-    # the motor node: its friction adds to the motor's force (the proximal gauge between motor and sheath)
-    phi0, _, z0 = friction_coefficient(z[0], du0, v[0], h, p)
-    f_motor = T[0] * (1.0 + 0.5 * b[0] * phi0)
-    n_tip = 0.5 * T[N - 1] * b[N - 1]
-    if mode == MODE_SPRING:
-        f_load = kl * (u[N] + du[N] - p[P_REST]) + tip
-    else:
-        f_load = T[N - 1] - n_tip * phi[N] - 0.5 * m * (du[N] - h * v[N]) / h2
-    z[0] = z0
-    for i in range(N + 1):
-        if i > 0:
-            z[i] = zn[i]
-        v[i] = du[i] / h
-        u[i] += du[i]
-    return f_motor, f_load, it
+                cab[c, C_A] = (tip_in[c] - u[c, N]) / (n_sub - s)
+        cables_step(S, cab, p, h)
+    R = S[S_R]
+    for c in range(nc):
+        cab[c, C_TIP] = tip_in[c]
+        for j in range(N):
+            T[c, j] = R[c, j]
+        out[O_MOTOR, c] = cab[c, C_FM]
+        out[O_TIP, c] = cab[c, C_FL]
+        out[O_X_TIP, c] = u[c, N]
+        out[O_ITER, c] = cab[c, C_IT]
+        for q in range(taps.shape[0]):
+            out[O_ROWS + q, c] = R[c, taps[q]]
 
 
 @njit
-def element_bends(W, theta_fixed, theta, b):
-    """b (N,) [rad] = W[0] theta0 + W[1] theta1 + W[2] |theta|; W (3, N) the bend's share of each element."""
-    a = abs(theta)
-    for j in range(b.shape[0]):
-        b[j] = W[0, j] * theta_fixed[0] + W[1, j] * theta_fixed[1] + W[2, j] * a
-
-
-@njit
-def step(u, v, z, t0, tip_prev, x_motor, tip_in, theta, theta_fixed, W, p, mode, tick, n_sub, T, out, w, b):
-    """One tick of c cables: u, v, z (c, N+1) state; t0 (c,) initial tensions [N]; tip_prev (c,) the last
-    tick's tip input; x_motor (c,) motor travel [m] at the tick's end; tip_in (c,) f_ext [N] or tip travel
-    [m] at the tick's end (by `mode`); theta (c,) kinematic bend [rad]; theta_fixed (c, 2) scaffold and route
-    bends [rad]; W (3, N); tick [s] in n_sub steps, the motor and tip inputs interpolated linearly.
-    Writes T (c, N) element tensions [N], out (c, 4): motor force, tip load force [N], tip travel [m], Newton
-    iterations of the tick. w (WORK_ROWS, N+1) and b (N,) scratch."""
-    N = T.shape[1]
-    h = tick / n_sub
-    for c in range(u.shape[0]):
-        element_bends(W, theta_fixed[c], theta[c], b)
-        dm = (x_motor[c] - u[c, 0]) / n_sub
-        f_m = 0.0
-        f_l = 0.0
-        its = 0
-        for s in range(n_sub):
-            if mode == MODE_SPRING:
-                a = tip_prev[c] + (tip_in[c] - tip_prev[c]) * (s + 1) / n_sub
-            else:
-                a = (tip_in[c] - u[c, N]) / (n_sub - s)
-            f_m, f_l, n_it = cable_step(u[c], v[c], z[c], t0[c], b, p, h, dm, mode, a, T[c], w)
-            its += n_it
-        tip_prev[c] = tip_in[c]
-        out[c, 0] = f_m
-        out[c, 1] = f_l
-        out[c, 2] = u[c, N]
-        out[c, 3] = its
-
-
-@njit
-def run(u, v, z, t0, tip_prev, X, TIP, THETA, theta_fixed, W, p, mode, tick, n_sub, OUT, TT):
-    """`step` for each tick k of X, TIP, THETA (m, c): OUT (m, c, 4); TT (m, c, N) the element tensions of
-    every tick, or (1, c, N) to keep the last tick's only."""
-    N = TT.shape[2]
-    w = np.empty((WORK_ROWS, N + 1))
-    b = np.empty(N)
+def run(S, cab, X, TIP, THETA, W, p, taps, OUT, TT):
+    """`step` for each tick m of X, TIP, THETA (m, c): OUT (m, O_ROWS + len(taps), c); TT (m, c, N) the element
+    tensions of every tick, or (1, c, N) to keep the last tick's only."""
     keep = TT.shape[0] == X.shape[0]
-    for k in range(X.shape[0]):
-        T = TT[k] if keep else TT[0]
-        step(u, v, z, t0, tip_prev, X[k], TIP[k], THETA[k], theta_fixed, W, p, mode, tick, n_sub, T, OUT[k], w, b)
+    for m in range(X.shape[0]):
+        step(S, cab, X[m], TIP[m], THETA[m], W, p, taps, TT[m] if keep else TT[0], OUT[m])
