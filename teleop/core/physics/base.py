@@ -351,7 +351,10 @@ class Rules:
     raw_input: its signature is sharp in the input (a play's take-up): found on a position link whose input
     the diagnosis smooths, the link is identified on its raw input too and the better kept.
     input_units: parameters in the output's unit that the diagnosis also reports in the input's (divided by
-    the link's gain)."""
+    the link's gain).
+    reading: its contribution to a link's output may be the output sensor's own (a late reading: a lag):
+    found there, a later link that reads the channel as its input is offered the channel without it, as
+    it is a sensor effect's (kept where that link's baseline fits better with it)."""
 
     channel: str = ""
     primary: tuple[str, ...] = ()
@@ -369,6 +372,7 @@ class Rules:
     rate_probe: bool = False
     raw_input: bool = False
     input_units: tuple[str, ...] = ()
+    reading: bool = False
 
 
 @dataclass(frozen=True)
