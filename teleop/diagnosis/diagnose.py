@@ -248,11 +248,15 @@ class Diagnosis:
 
 
 def sensor_correction(res: LinkResult) -> np.ndarray | None:
-    """(n,) what the sensor effects identified on a link add to its output channel's reading, or None."""
+    """(n,) what the sensor effects identified on a link add to its output channel's reading, or None; so
+    do effects whose contribution may be the reading's own (Rules.reading: a late tip-force sensor)."""
     m = res.final.model
-    if not any(get_effect(n).link == "sensor" for n, _ in m.effects[m.base:]):
+
+    def reading(n):
+        return get_effect(n).link == "sensor" or get_effect(n).rules.reading
+    if not any(reading(n) for n, _ in m.effects[m.base:]):
         return None
-    plain = m.with_effects([(n, p) for n, p in m.effects if get_effect(n).link != "sensor"])
+    plain = m.with_effects([(n, p) for n, p in m.effects if not reading(n)])
     return predict(res.data, m) - predict(res.data, plain)
 
 
