@@ -90,7 +90,7 @@ TRANSPORT_DELAY = register(Effect(
     params=(ParamSpec("delay", "s", 0.0, MAX_DELAY_S, 0.01, "dead time between the motor and the tip"),),
     inputs=("t", "x"), output="x",
     guess=_delay_guess, kernel=DELAY,
-    rules=Rules(channel="tip_pos", primary=("delay",), alike=("first_order_lag",),
+    rules=Rules(channel="tip_pos", primary=("delay",), alike=("first_order_lag",), reading=True,
                 draw=lambda rng, s: {"delay": min(rng.uniform(0.05, 0.15) * _drive_time(s), 0.8 * MAX_DELAY_S)}),
 ))
 
@@ -101,6 +101,6 @@ FIRST_ORDER_LAG = register(Effect(
                       log=True, positive=True),),
     inputs=("t", "x"), output="x",
     guess=_lag_guess, kernel=LAG,
-    rules=Rules(channel="tip_pos", primary=("tau",),
+    rules=Rules(channel="tip_pos", primary=("tau",), reading=True,
                 draw=lambda rng, s: {"tau": rng.uniform(0.05, 0.15) * _drive_time(s)}),
 ))
