@@ -18,10 +18,11 @@ def beyond(value: float, limit: float, unit: str, op: str = ">") -> str:
     (at least one) that keep the printed comparison true: 20.04 ms over a 20 ms limit reads
     "20.04 ms > 20 ms", not "20.0 ms > 20.0 ms"."""
     lim = f"{limit:g}"
-    shown = f"{value:.1f}"
+    shown = repr(float(value))  # all the digits, where a few do not show the difference
     for digits in range(1, 10):
-        shown = f"{value:.{digits}f}"
-        if (float(shown) > float(lim)) if op == ">" else (float(shown) < float(lim)):
+        text = f"{value:.{digits}f}"
+        if (float(text) > float(lim)) if op == ">" else (float(text) < float(lim)):
+            shown = text
             break
     return f"{shown} {unit} {op} {lim} {unit}"
 

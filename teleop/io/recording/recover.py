@@ -34,8 +34,9 @@ class Recovery:
         source: the input's name.
         input_bytes: its length.
         intact_bytes: length of the prefix whose records were kept.
-        complete: the input had its footer (it needed no recovery; it is rewritten all the same).
-        stopped: '' when the input was read to its footer, else what ended the reading.
+        complete: the input's data section was whole, through its DataEnd record (only the summary, if
+            anything, was missing; the file is rewritten all the same).
+        stopped: '' when complete, else what ended the reading.
         messages, channels, schemas, metadata, attachments: records written.
     """
 
