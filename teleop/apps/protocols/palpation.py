@@ -407,12 +407,13 @@ class PalpationResult:
 
 def run_test(test: str, profile: str = "uniform", seed: int = 0, params: PalpationParams = PalpationParams(),
              limit: int | None = None, progress: bool = False, plant: str = "matched",
-             cable_params=None, geometry=None) -> PalpationResult:
+             cable_params=None, geometry=None, no_load: bool = False) -> PalpationResult:
     """Run a palpation test on the simulated robot (see the module docstring). `plant`: "matched" (the
     robot's physics is the estimators' model), "rich" (scenes.rich_plant's effects on top, drawn from
     `seed`) or "distributed" (scenes.tendon_sheath's cable, its parameters from the TOML `cable_params`
     or its defaults). `geometry` (teleop.core.geometry.Geometry; None: the seed robot) is the simulated robot's
-    and the estimators'."""
+    and the estimators'. `no_load`: also report every estimator's wrench over the no-load runs (the robot-level
+    seed 000 Fig 13, `no_load_errors`) as extra["no_load"]."""
     if profile not in PROFILES:
         raise InputError(f"unknown speed profile '{profile}' (expected one of: {', '.join(PROFILES)})")
 
@@ -443,7 +444,7 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
         plans.append((fit_tips, spans, plan, scale))
     total = sum(len(f) + len(pl.tips) for f, _, pl, _ in plans)
     bar = _progress_bar(progress, 2 * total, f"palpate {test}")
-    results, extra_grids, calib = [], {}, {}
+    results, extra_grids, calib, extra_no_load = [], {}, {}, {}
     try:
         for i, (s, (fit_tips, spans, plan, scale)) in enumerate(zip(sessions, plans)):
             with SimRobot(s.pad, sim, seed=int(seeds[2 * i])) as robot:
@@ -466,6 +467,11 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
                 a, b = min(v[0] for v in spans.values()), max(v[1] for v in spans.values())
                 dyn = fit_dynamic_params(geom, fit_trace.poses[a:b], fsr_tensions(slice_trace(fit_trace, a, b)), dt)
             w = estimate(poke_trace, geom, dt, turn=TurnCompensation(axes=fits), progress=bar.update, dynamic=dyn)
+            if no_load:  # seed 000 Fig 13 at robot level: the wrench of the run the turn polynomials are fitted on
+                w_fit = estimate(fit_trace, geom, dt, turn=TurnCompensation(axes=fits), dynamic=dyn)
+                extra_no_load[s.name] = {"xyz"[axis]: no_load_errors(w_fit, fit_trace.poses, a, b, axis,
+                                                                      fits[i].duration, dt)
+                                         for i, (axis, (a, b)) in enumerate(spans.items())}
             calib[s.name] = {"turn_duration_s": {"xyz"[f.axis]: _num(f.duration) for f in fits},
                              "dynamic": None if dyn is None else {k: _num(v) for k, v in asdict(dyn).items()}}
             if params.sensor != "fsr":  # the FBG kinds' estimate replaces the FSR array's
@@ -499,6 +505,8 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     elif test == "scan":
         extra = scan_extras(extra_grids)
     extra["calibration"] = calib
+    if no_load:
+        extra["no_load"] = extra_no_load
     extra["plant"] = {"name": plant, **({} if sim.plant is None else RichPlant(sim.plant).describe()),
                       **({} if sim.cable is None else {"cable": asdict(sim.cable)})}
     pdict = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(params).items()}
@@ -527,6 +535,32 @@ def _progress_bar(enabled: bool, total: int, desc: str):
         return _NoBar()
 
     return progress(total, desc, unit="ticks", mininterval=0.5)
+
+
+def no_load_errors(w: dict, poses: np.ndarray, a: int, b: int, axis: int, turn_window_s: float,
+                   dt: float | None = None) -> dict:
+    """Each estimator's wrench along `axis` over the no-load run samples a..b-1 (the truth is 0) [N]:
+    {name: {"rmse_N", "max_abs_N", "peak_to_peak_N", "rmse_off_turns_N", "max_abs_near_turns_N"}} plus
+    "turns" (how many) and "turn_window_s"; near a turn = within turn_window_s (the turn fit's duration, 1 s
+    if it has none) after the tip reverses along the axis. dt: the sample period [s] (None: 0.01)."""
+    dt = 0.01 if dt is None else dt
+    x = np.asarray(poses)[a:b, axis]
+    v = np.sign(np.diff(x))
+    moving = np.nonzero(v)[0]
+    v = v[np.maximum.accumulate(np.where(v != 0, np.arange(v.size), moving[0] if moving.size else 0))]
+    turns = np.nonzero(np.diff(v))[0] + 1
+    window = turn_window_s if np.isfinite(turn_window_s) and 0 < turn_window_s < 10 else 1.0
+    near = np.zeros(b - a, dtype=bool)
+    for k in turns:
+        near[k:k + int(round(window / dt))] = True
+    out = {"turns": int(turns.size), "turn_window_s": _num(window)}
+    for n, wn in w.items():
+        e = np.asarray(wn)[a:b, axis]
+        out[n] = {"rmse_N": _num(np.sqrt(np.mean(e ** 2))), "max_abs_N": _num(np.max(np.abs(e))),
+                  "peak_to_peak_N": _num(np.ptp(e)),
+                  "rmse_off_turns_N": _num(np.sqrt(np.mean(e[~near] ** 2))) if (~near).any() else None,
+                  "max_abs_near_turns_N": _num(np.max(np.abs(e[near]))) if near.any() else None}
+    return out
 
 
 def summarise(rows) -> dict:

@@ -74,3 +74,18 @@ def test_turn_fit_level_before_the_next_turn_ignores_a_mid_stroke_transition():
     assert new.correction(1, 0.0)[1] == pytest.approx(1.0, abs=0.05)
     with pytest.raises(Exception, match="level_tail"):
         fit_turn_compensation(t, poses, w, axis=1, level_tail=0.0)
+
+
+def test_no_load_run_reports_every_estimator_only_when_asked():
+    """Robot-level seed 000 Fig 13: the no-load z run's wrench per estimator (truth 0), in extra["no_load"]."""
+    a = run_test("stiffness", "uniform", seed=5, params=QUICK, limit=1, no_load=True)
+    b = run_test("stiffness", "uniform", seed=5, params=QUICK, limit=1)
+    assert "no_load" not in b.extra and a.pokes == b.pokes          # asking for it changes nothing else
+    (session,) = a.extra["no_load"].values()
+    z = session["z"]
+    assert z["turns"] == 2 * QUICK.fit_cycles - 1
+    for n in ESTIMATORS:
+        e = z[n]
+        assert e["peak_to_peak_N"] > 0 and e["rmse_N"] <= e["max_abs_N"]
+    # the matched plant's single compensation is steadier off the turns than none (the capstan is its model)
+    assert z["single"]["rmse_off_turns_N"] < z["non_compensated"]["rmse_off_turns_N"]
