@@ -1,0 +1,208 @@
+// Drives the real Foxglove Studio 1.48 (npm @foxglove/studio-base, served by serve.mjs through studio/index.html)
+// in headless Debian Chromium through puppeteer-core, and reports what a person would see, as JSON lines on
+// stdout; tests/browser/test_studio.py starts the session, judges the report and keeps the screenshots.
+//
+//   node studio.mjs CONFIG.json
+//
+// CONFIG: {chromium, out (screenshot folder), layout (layout file), ws (ws://127.0.0.1:PORT of
+// `teleop session --live`), robot_pid (the session's robot process: SIGSTOP for fault_hold_ms induces a
+// "robot telemetry stale" fault), fault_hold_ms, ee_rgb ([r, g, b] 0..255 of the end effector), timeout_s}.
+// Stages, each one JSON line {"stage": ...}: "live" (connected, every panel's state twice, 3D pixels),
+// "fault" (the log panel after the induced fault), then, after the line "recording PATH" on stdin,
+// "recording" (the same page opening that MCAP through Studio's remote-file source, with Studio's `time`
+// deep link at the recording's end given as "recording PATH END_ISO").
+import { mkdtempSync, readFileSync, rmSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+import { createInterface } from "node:readline";
+
+import puppeteer from "puppeteer-core";
+
+import { serve } from "./serve.mjs";
+
+const cfg = JSON.parse(readFileSync(process.argv[2], "utf8"));
+const T0 = Date.now();
+const elapsed = () => (Date.now() - T0) / 1000;
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+const emit = (obj) => process.stdout.write(JSON.stringify({ ...obj, elapsed_s: elapsed() }) + "\n");
+const stdinLines = createInterface({ input: process.stdin })[Symbol.asyncIterator]();
+
+const layout = JSON.parse(readFileSync(cfg.layout, "utf8"));
+const panelIds = Object.keys(layout.configById);
+const files = { "layout.json": cfg.layout };
+
+/** Every panel of the layout: its type, whether it is mounted, its text and its box on the page. */
+async function panels(page) {
+  return page.evaluate((ids) => {
+    const out = {};
+    for (const id of ids) {
+      const el = document.querySelector(`[data-testid="panel-mouseenter-container ${id}"]`);
+      const r = el?.getBoundingClientRect();
+      out[id] = {
+        type: id.split("!")[0], found: !!el, text: el ? el.innerText : "",
+        box: r ? { x: r.x, y: r.y, width: r.width, height: r.height } : null,
+      };
+    }
+    return out;
+  }, panelIds);
+}
+
+/** What two screenshots (PNG buffers, `gap` apart) show inside each panel's box: `changed` pixels, of which
+ *  `changed_colour` are colourful (a plotted series, a state bar; not grey text or grid), and `ee` pixels of
+ *  the colour `rgb` (a lit or shaded surface of it: the same chromaticity at some brightness) in the second.
+ *  Decoded in the page itself (an <img> drawn on a 2D canvas): no image library needed. */
+async function pixels(page, pngA, pngB, boxes, rgb) {
+  return page.evaluate(async (a64, b64, boxes, rgb) => {
+    const decode = async (b64) => {
+      const img = new Image();
+      img.src = `data:image/png;base64,${b64}`;
+      await img.decode();
+      const c = document.createElement("canvas");
+      c.width = img.width;
+      c.height = img.height;
+      const g = c.getContext("2d");
+      g.drawImage(img, 0, 0);
+      return g.getImageData(0, 0, img.width, img.height);
+    };
+    const A = await decode(a64);
+    const B = await decode(b64);
+    const norm = Math.hypot(...rgb);
+    const unit = rgb.map((v) => v / norm);
+    const out = {};
+    for (const [id, box] of Object.entries(boxes)) {
+      if (!box) continue;
+      const x0 = Math.max(0, Math.floor(box.x)), y0 = Math.max(0, Math.floor(box.y));
+      const x1 = Math.min(B.width, Math.floor(box.x + box.width)), y1 = Math.min(B.height, Math.floor(box.y + box.height));
+      let changed = 0, changedColour = 0, ee = 0, ex = 0, ey = 0;
+      for (let y = y0; y < y1; y++) {
+        for (let x = x0; x < x1; x++) {
+          const i = 4 * (y * B.width + x);
+          const p = [B.data[i], B.data[i + 1], B.data[i + 2]];
+          const diff = Math.abs(p[0] - A.data[i]) + Math.abs(p[1] - A.data[i + 1]) + Math.abs(p[2] - A.data[i + 2]);
+          if (diff > 60) {
+            changed++;
+            const q = [A.data[i], A.data[i + 1], A.data[i + 2]];
+            if (Math.max(...p) - Math.min(...p) > 80 || Math.max(...q) - Math.min(...q) > 80) changedColour++;
+          }
+          const len = Math.hypot(...p);
+          if (len >= 60 && (p[0] * unit[0] + p[1] * unit[1] + p[2] * unit[2]) / len > 0.985) {
+            ee++;
+            ex += x;
+            ey += y;
+          }
+        }
+      }
+      out[id] = { changed, changed_colour: changedColour, ee, ee_centre: ee ? [ex / ee, ey / ee] : null,
+        box: { x: x0, y: y0, width: x1 - x0, height: y1 - y0 } };
+    }
+    return out;
+  }, pngA.toString("base64"), pngB.toString("base64"), boxes, rgb);
+}
+
+const boxes = (ps) => Object.fromEntries(Object.entries(ps).map(([id, p]) => [id, p.box]));
+
+/** The data source sidebar's text (source, start time, duration and the open tab: Topics or Problems). */
+async function sidebar(page, tab) {
+  await page.evaluate((tab) => {
+    [...document.querySelectorAll("button[role=tab]")].find((b) => b.innerText.startsWith(tab))?.click();
+  }, tab);
+  await sleep(400);
+  return page.evaluate(() => {
+    let el = [...document.querySelectorAll("[role=tablist]")].find((t) => t.innerText.includes("Problems"));
+    while (el && !/DURATION/.test(el.innerText)) el = el.parentElement;
+    return el ? el.innerText : "";
+  });
+}
+
+async function waitFor(what, fn, timeoutMs) {
+  const until = Date.now() + timeoutMs;
+  let last;
+  while (Date.now() < until) {
+    last = await fn();
+    if (last.ok) return last;
+    await sleep(500);
+  }
+  return { ...last, timedOut: what };
+}
+
+async function live(page, host, timeout) {
+  await page.goto(`${host}&ds=foxglove-websocket&ds.url=${encodeURIComponent(cfg.ws)}`);
+  const connected = await waitFor("data in every panel", async () => {
+    const ps = await panels(page);
+    const info = await sidebar(page, "Problems");
+    const ok = /START TIME\s*\n\s*\d{4}-/.test(info) && Object.values(ps).every((p) => p.found) &&
+      !Object.values(ps).some((p) => /Waiting for next message/.test(p.text));
+    return { ok, info };
+  }, timeout);
+  await sleep(1000);
+  const first = await panels(page);
+  const shotA = await page.screenshot({ path: join(cfg.out, "live-1.png") });
+  await sleep(2500); // the 1 Hz panels (timing, stats) have news twice over; plots and the time axes move on
+  const second = await panels(page);
+  const shotB = await page.screenshot({ path: join(cfg.out, "live.png") });
+  emit({
+    stage: "live", connected: !connected.timedOut, sidebar: await sidebar(page, "Problems"), first, second,
+    pixels: await pixels(page, shotA, shotB, boxes(second), cfg.ee_rgb),
+    host_error: await page.evaluate(() => window.hostError ?? null),
+  });
+
+  // an induced fault: the robot process paused past the staleness limit, then let go
+  process.kill(cfg.robot_pid, "SIGSTOP");
+  await sleep(cfg.fault_hold_ms);
+  process.kill(cfg.robot_pid, "SIGCONT");
+  const faulted = await waitFor("a FAULT line in the log panel", async () => {
+    const logs = Object.entries(await panels(page)).filter(([, p]) => p.type === "RosOut" || p.type === "Log");
+    return { ok: logs.some(([, p]) => /-> FAULT/.test(p.text)), logs: Object.fromEntries(logs) };
+  }, 15000);
+  const ps = await panels(page);
+  const shotF = await page.screenshot({ path: join(cfg.out, "fault.png") });
+  emit({ stage: "fault", found: !faulted.timedOut, log_panels: faulted.logs, sidebar: await sidebar(page, "Problems"),
+    pixels: await pixels(page, shotB, shotF, boxes(ps), cfg.ee_fault_rgb) });
+}
+
+async function recording(page, host, timeout, path, endIso) {
+  files["session.mcap"] = path;
+  const time = endIso ? `&time=${encodeURIComponent(endIso)}` : "";
+  await page.goto(`${host}&ds=remote-file&ds.url=${encodeURIComponent(`${origin}/files/session.mcap`)}${time}`);
+  const opened = await waitFor("the recording's duration shown", async () => {
+    const info = await sidebar(page, "Topics");
+    return { ok: /DURATION\s*\n\s*\d+:\d\d:\d\d/.test(info), info };
+  }, timeout);
+  await sleep(2000);
+  const topics = await sidebar(page, "Topics");
+  await page.screenshot({ path: join(cfg.out, "recording.png") });
+  const problems = await sidebar(page, "Problems");
+  await page.screenshot({ path: join(cfg.out, "recording-problems.png") });
+  emit({ stage: "recording", opened: !opened.timedOut, topics, sidebar: problems, panels: await panels(page) });
+}
+
+const THREE_D = panelIds.find((id) => id.startsWith("3D!"));
+const NOBOX = { x: 0, y: 0, width: 0, height: 0 };
+const profile = mkdtempSync(join(tmpdir(), "studio-profile-"));
+const { server, origin, log: httpLog } = await serve(files);
+const browser = await puppeteer.launch({
+  executablePath: cfg.chromium,
+  headless: true,
+  userDataDir: profile,
+  args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync"],
+  defaultViewport: { width: 1600, height: 1000 },
+});
+const consoleErrors = [];
+try {
+  const page = await browser.newPage();
+  page.on("console", (m) => { if (m.type() === "error") consoleErrors.push(m.text().slice(0, 500)); });
+  page.on("pageerror", (e) => consoleErrors.push(`pageerror: ${String(e).slice(0, 500)}`));
+  const timeout = (cfg.timeout_s ?? 40) * 1000;
+  const host = `${origin}/studio/index.html?layoutId=teleop&layout=/files/layout.json`;
+  if (cfg.ws) await live(page, host, timeout);
+  const line = (await stdinLines.next()).value ?? "";
+  const [cmd, path, endIso] = line.trim().split(" ");
+  if (cmd === "recording" && path) await recording(page, host, timeout, path, endIso);
+  emit({ stage: "done", console_errors: consoleErrors, http_404: httpLog });
+} finally {
+  await browser.close();
+  server.close();
+  rmSync(profile, { recursive: true, force: true });
+}
+process.exit(0);

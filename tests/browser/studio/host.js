@@ -1,0 +1,43 @@
+// Renders Foxglove Studio's `App` (put on `window` by @foxglove/studio-base's assets/index.js) the way its web
+// build does, with what a test needs instead of the browser's storage: the layout given by the page's
+// `layout` parameter (a URL on this server) as the one stored layout, selected through Studio's own
+// `layoutId` deep-link parameter; every other parameter (ds, ds.url) is Studio's own deep link.
+/* global App, initI18n, FoxgloveWebSocketDataSourceFactory, McapLocalDataSourceFactory, RemoteDataSourceFactory */
+(async () => {
+  const params = new URLSearchParams(window.location.search);
+  const layoutId = params.get("layoutId");
+  const layouts = new Map();
+  if (layoutId && params.get("layout")) {
+    const data = await (await fetch(params.get("layout"))).json();
+    layouts.set(layoutId, {
+      id: layoutId, name: layoutId, permission: "CREATOR_WRITE",
+      baseline: { data, savedAt: new Date().toISOString() }, working: undefined, syncInfo: undefined,
+    });
+  }
+  const layoutStorage = {
+    async list() { return [...layouts.values()]; },
+    async get(_ns, id) { return layouts.get(id); },
+    async put(_ns, layout) { layouts.set(layout.id, layout); return layout; },
+    async delete(_ns, id) { layouts.delete(id); },
+    async importLayouts() {},
+    async migrateUnnamespacedLayouts() {},
+  };
+  const settings = new Map();
+  const listeners = new Map();
+  const appConfiguration = {
+    get: (key) => settings.get(key),
+    set: async (key, value) => { settings.set(key, value); for (const cb of listeners.get(key) ?? []) cb(value); },
+    addChangeListener: (key, cb) => { listeners.set(key, [...(listeners.get(key) ?? []), cb]); },
+    removeChangeListener: (key, cb) => { listeners.set(key, (listeners.get(key) ?? []).filter((c) => c !== cb)); },
+  };
+  await initI18n();
+  const dataSources = [
+    new FoxgloveWebSocketDataSourceFactory(), new McapLocalDataSourceFactory(), new RemoteDataSourceFactory(),
+  ];
+  const app = React.createElement(App, {
+    deepLinks: [window.location.href], appConfiguration, dataSources, layoutStorage, extensionLoaders: [],
+    enableGlobalCss: true,
+  });
+  ReactDOM.render(app, document.getElementById("root"));
+  window.hostReady = true;
+})().catch((err) => { window.hostError = String(err && err.stack || err); console.error(err); });
