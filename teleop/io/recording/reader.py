@@ -19,7 +19,8 @@ What the library could not do is kept here as a small guard:
   first (a flipped size must not size an allocation);
 - MCAP metadata records have no CRC -> ours carry one ("crc32"), checked here.
 
-Records of one chunk are taken all or none; the intact prefix is everything before the first damage.
+Records of one chunk are taken all or none; the intact prefix is everything before the first damage (the
+records of the last record read whole included).
 """
 
 from __future__ import annotations
@@ -154,8 +155,16 @@ def parse_session(data: bytes, name: str = "<bytes>") -> Session:
     staged, staged_topics, boundary = [], {}, len(MAGIC)
     encodings: dict = {}  # channel id -> message encoding
     footer_at = None
+    records = iter(reader.records)
+    reading = False  # the damage, if any, was met reading the next record (not in one already read whole)
     try:
-        for rec in reader.records:
+        while True:
+            reading = True
+            try:
+                rec = next(records)
+            except StopIteration:
+                break
+            reading = False
             pos = stream.tell()
             if pos != boundary:  # a new top-level record: what came before it is complete
                 _commit(s, staged, staged_topics)
@@ -193,13 +202,23 @@ def parse_session(data: bytes, name: str = "<bytes>") -> Session:
             s.complete = False
             s.damage = f"{len(data) - stream.tell()} bytes after the end of the recording"
     except _Damage as exc:
+        _keep_whole(s, staged, staged_topics, boundary, reading)
         s.damage = f"at byte {boundary}: {exc}"
     except Exception as exc:  # noqa: BLE001 - the library's CRC errors, struct/zstd/lz4/UTF-8 errors of
         # damaged fields: damage to report, never a crash
+        _keep_whole(s, staged, staged_topics, boundary, reading)
         s.damage = f"at byte {boundary}: {type(exc).__name__}: {exc}"
     if not s.complete and not s.damage:
         s.damage = f"file ends at byte {len(data)} before the footer (recording interrupted)"
     return s
+
+
+def _keep_whole(s: Session, staged: list, topics: dict, boundary: int, reading: bool) -> None:
+    """On damage met while reading the next record, the records staged from the one before (read whole, its
+    CRC checked) are kept: a recording killed mid-write keeps its last flushed chunk."""
+    if reading:
+        _commit(s, staged, topics)
+        s.intact_bytes = boundary
 
 
 def _commit(s: Session, staged: list, topics: dict) -> None:

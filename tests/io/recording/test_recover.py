@@ -17,7 +17,7 @@ from mcap.records import Message
 from mcap.stream_reader import StreamReader
 
 from teleop.core.errors import InputError
-from teleop.io.recording import Recorder, read_session
+from teleop.io.recording import Recorder, parse_session, read_session
 from teleop.io.recording.recover import RECOVERED, recover_bytes
 from teleop.loop.tap import session_layout
 from tests.io.recording.test_recording import SMALL, write_file
@@ -70,6 +70,8 @@ def test_recover_a_killed_recording(tmp_path):
     assert r.returncode == 0 and r.stderr == "", r.stderr
     n = flushed_messages(data)
     assert n > 0
+    before = read_session(src)  # the project's own reader keeps as much: the last whole chunk too
+    assert len(before.records) + sum(before.views.values()) == n and not before.complete
     with open(out, "rb") as fh:
         reader = make_reader(fh)
         assert isinstance(reader, SeekingReader)  # the indexed reader
@@ -98,6 +100,8 @@ def test_every_cut_recovers_or_says_why():
         out = buf.getvalue()
         n = sum(1 for _ in make_reader(io.BytesIO(out)).iter_messages())
         assert n == rep.messages == flushed_messages(data[:cut]) <= full
+        s = parse_session(data[:cut])
+        assert len(s.records) + sum(s.views.values()) == n
         assert rep.complete == (rep.stopped == "") and (n == full if rep.complete else rep.stopped)
     assert rep.complete and n == full
 
