@@ -19,9 +19,11 @@ def test_main_process_killed_leaves_session_end(tmp_path):
     proc = subprocess.Popen([sys.executable, "-c", SESSION.format(repo=repo, path=str(path))],
                             start_new_session=True, stderr=subprocess.PIPE)
     try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and (not path.exists() or path.stat().st_size < 20000):
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None and (not path.exists()
+                                                                       or path.stat().st_size < 20000):
             time.sleep(0.01)
+        assert proc.poll() is None and path.exists(), proc.stderr.read().decode() if proc.poll() else "slow start"
         os.kill(proc.pid, signal.SIGKILL)  # the loop process only; its recorder lives on
         proc.wait()
         deadline = time.monotonic() + 30
@@ -32,7 +34,6 @@ def test_main_process_killed_leaves_session_end(tmp_path):
             os.killpg(proc.pid, signal.SIGKILL)  # whatever is left of the group
         except ProcessLookupError:
             pass
-    assert path.exists(), proc.stderr.read().decode()
     s, ticks = check_file(path)
     assert s.complete and s.is_intact, s.damage
     end = s.metadata["session_end"]
