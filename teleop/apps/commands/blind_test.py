@@ -19,7 +19,7 @@ from scenes.sim_robot import PLANTS
 from teleop.apps.argtypes import add_geometry_option, geometry_of, jnd_fraction, positive_float, positive_int
 from teleop.apps.commands.session import add_live_arguments
 from teleop.apps.protocols.blind.human import Coordinator, run_human_study
-from teleop.apps.protocols.blind.participants import ParticipantParams
+from teleop.apps.protocols.blind.participants import RATING_RULES, ParticipantParams
 from teleop.apps.protocols.blind.probe import PressAborted
 from teleop.apps.protocols.blind.rig import (BackgroundSession, RehearsalStation, RigOptions, SimRig, blind_areas,
                                              rig_dict, transparency)
@@ -70,6 +70,10 @@ def register(subparsers) -> None:
                    help="simulated participants (default) or real ones guided by prompts")
     p.add_argument("--participants", type=positive_int, default=10, metavar="N", help="number of participants")
     p.add_argument("--seed", type=int, default=0, help="seed of layouts, orders and participants (default 0)")
+    p.add_argument("--rating", default="positions", choices=RATING_RULES,
+                   help="how a simulated participant's ranking becomes ratings: positions (ends drawn 8-10 and 1-3, the "
+                        "middle placed between them; default) or anchored (every rating read off a scale two training "
+                        "pads anchor; docs/plant-distributed.md)")
     p.add_argument("--jnd", type=jnd_fraction, default=None, metavar="J",
                    help="participants' stiffness JND as a Weber fraction, e.g. 0.23 or 23%% "
                         "(default 0.23, Jones & Hunter 1990)")
@@ -126,6 +130,9 @@ def run(args) -> int:
         raise InputError("--live serves the experimenter's screen of --operator human (the simulated study runs "
                          "faster than real time; watch a session with `teleop session --live`)")
     if args.operator == "human":
+        if args.rating != "positions":  # real participants give their own numbers (the seed's rule, checked)
+            raise InputError(f"--rating {args.rating}: the rating rule is the simulated participants'; real ones "
+                             f"rate by the seed's rule (--operator human)")
         return run_human(args)
     if getattr(args, "transparency", False):
         return run_transparency(args)
@@ -183,12 +190,14 @@ def run_sim(args) -> int:
     warm_up()  # compiled (saying so) or loaded before the progress starts: its ETA counts participants only
     with SimRig(options) as rig, _progress(args.participants, "blind test") as bar:
         try:
-            result = run_simulated_study(rig, args.participants, args.seed, params, progress=bar.update)
+            result = run_simulated_study(rig, args.participants, args.seed, params, progress=bar.update,
+                                         rating=args.rating)
         except PressAborted as exc:  # the options asked more of the simulated robot than its cables hold
             raise InputError(f"{exc}; a participant's push overloaded the simulated robot with these options "
                              f"(depth pushes into rigid need --press-force > 0)") from None
         config = {"operator": "sim", "participants": args.participants, "seed": args.seed,
-                  "participant_params": _asdict(params), "rig": rig.describe()}
+                  "participant_params": _asdict(params), "rig": rig.describe(),
+                  **({} if args.rating == "positions" else {"rating": args.rating})}  # former configs unchanged
         expected = rig.expected_stiffness()
     result = type(result)(areas=result.areas, records=result.records, config=config, expected=expected)
     print(result.table())

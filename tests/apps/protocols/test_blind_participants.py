@@ -194,3 +194,13 @@ def test_anchored_rule_fixes_no_rating_each_follows_what_was_felt():
 def test_rating_rule_is_checked():
     with pytest.raises(InputError, match="rating rule 'median'"):
         run_simulated_study(SpringRig(AREAS), 1, seed=0, params=ParticipantParams(), rating="median")
+
+
+def test_cli_rating_rule_belongs_to_simulated_participants(capsys):
+    from teleop.apps.cli import main
+
+    assert main(["blind-test", "--operator", "human", "--rating", "anchored"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "--rating anchored" in err
+    assert main(["blind-test", "--rating", "median"]) == 2
+    assert "--rating" in capsys.readouterr().err
