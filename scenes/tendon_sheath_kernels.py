@@ -75,13 +75,16 @@ O_MOTOR, O_TIP, O_X_TIP, O_ITER = range(4)
 O_ROWS = 4
 
 
+STRIBECK_SPAN = 7.5  # g(v) = mu_c past |v| = 7.5 v_s (the peak's share exp(-56) is below rounding)
+
+
 @njit
 def stribeck_curve(v, mu_c, mu_s, v_s):
     """g(v) [-] at speed v [m/s]."""
     if mu_s == mu_c or v_s <= 0.0:
         return mu_c
     r = v / v_s
-    if r * r > 50.0:
+    if abs(r) > STRIBECK_SPAN:
         return mu_c
     return mu_c + (mu_s - mu_c) * math.exp(-r * r)
 
@@ -133,8 +136,11 @@ def cables_step(S, cab, p, h):
     s1h = p[P_SIGMA1] / h
     s2h = p[P_SIGMA2] / h
     cf = s0 + s1h
+    ih = 1.0 / h
     mh = p[P_M] / (h * h)  # an interior node's inertia per travel over the step [N/m]
     mu_c, mu_s, v_s = p[P_MU_C], p[P_MU_S], p[P_V_S]
+    izs_c = s0 / mu_c if mu_c > 0.0 else 0.0
+    v_peak = STRIBECK_SPAN * v_s  # past it g(v) = mu_c (stribeck_curve)
     tol = p[P_TOL]
     max_iter = int(p[P_ITER])
     spring = int(p[P_MODE]) == MODE_SPRING
@@ -146,8 +152,12 @@ def cables_step(S, cab, p, h):
         for i in range(N + 1):
             if 0 < i <= last:
                 du[c, i] = h * v[c, i]  # predictor: the last step's velocity
-            g = stribeck_curve(v[c, i], mu_c, mu_s, v_s)
-            izs[c, i] = s0 / g if g > 0.0 else 0.0
+            # 1 / zs: sigma0 / mu_c past the Stribeck peak (no division there: most nodes, most steps)
+            if abs(v[c, i]) > v_peak:
+                izs[c, i] = izs_c
+            else:
+                g = stribeck_curve(v[c, i], mu_c, mu_s, v_s)
+                izs[c, i] = s0 / g if g > 0.0 else 0.0
         cab[c, C_ACTIVE] = 1.0
     active = nc
     its = 0
@@ -237,7 +247,7 @@ def cables_step(S, cab, p, h):
         for i in range(N + 1):
             x = du[c, i]
             z[c, i] = bristle(z[c, i], x, izs[c, i])[0]
-            v[c, i] = x / h
+            v[c, i] = x * ih
             u[c, i] += x
 
 
