@@ -91,7 +91,8 @@ def run(args) -> int:
         p = fit.params
         values = {"S_pm_N": p.S_pm_N, "r": p.r, "kT1_pm_C": p.kT1_pm_C, "kT2_pm_C": p.kT2_pm_C, "noise_pm": p.noise_pm}
         stderr = {k: fit.stderr[k] for k in ("S_pm_N", "r", "kT1_pm_C", "kT2_pm_C")}
-        quality = {k: fit.values[k] for k in ("hysteresis_pm", "hysteresis_N", "hysteresis_percent", "rmse_pm",
+        quality = {k: fit.values[k] for k in ("hysteresis_pm", "hysteresis_N", "hysteresis_percent",
+                                               "hysteresis_at_N", "hysteresis_terms", "rmse_pm",
                                                "rmse_compensated_pm", "force_error_N", "rmse_dl1_pm", "full_scale_N")}
         quality["hysteresis_percent_stderr"] = fit.stderr["hysteresis_percent"]
         fig = plot_fbg_fit(fit)
@@ -101,7 +102,9 @@ def run(args) -> int:
                   f"{_fmt(v['kT2_pm_C'], e['kT2_pm_C'], 'pm/degC')}   (seed: 11.23, 25.62)",
                   f"temperature ratio r = {_fmt(v['r'], e['r'])}   (seed: 2.28)",
                   f"hysteresis = {_fmt(v['hysteresis_percent'], e['hysteresis_percent'], '%')} of "
-                  f"{v['full_scale_N']:.3g} N full scale ({v['hysteresis_N']:.3f} N)   (seed: 4.798 %)",
+                  f"{v['full_scale_N']:.3g} N full scale: the largest loading - unloading gap, "
+                  f"{v['hysteresis_N']:.3f} N at {v['hysteresis_at_N']:.3g} N (loop model of "
+                  f"{v['hysteresis_terms']} term(s), zero at the ends)   (seed: 4.798 %)",
                   f"RMSE FBG2 {v['rmse_pm']:.3f} pm, compensated {v['rmse_compensated_pm']:.3f} pm = "
                   f"{v['force_error_N']:.3f} N   (seed: 12.59 pm = 0.37 N)"]
         source = fit.data.source

@@ -7,16 +7,24 @@ hold. Columns `force_N`, `temperature_C`, `dl1_pm`, `dl2_pm`, optionally `branch
 Model (linear in its parameters, solved by ordinary least squares; seed 001 eq 2-3):
 
     dl1 = kT1 (T - Tm) + c1
-    dl2 = S F + H s + kT2 (T - Tm) + c2        s in [-1, 1]: +1 after the force rose, -1 after it fell
+    dl2 = S F + s h(u) + kT2 (T - Tm) + c2     s in [-1, 1]: +1 after the force rose, -1 after it fell
+    h(u) = sum_k a_k 4 u (1 - u) P_k(2u - 1),  u = (F - F_lo) / (F_hi - F_lo)
 
-Tm is the mean temperature, c1 and c2 the shifts' zeros. Reported: the sensitivity S [pm/N], the
-temperature sensitivities kT1, kT2 [pm/degC] and their ratio r = kT2 / kT1 (eq 3), the hysteresis as the
-seed states it (loading - unloading gap 2H over the full-scale output S F_max [%], and 2H / S [N]), the
-RMSE of dl2 [pm], that of the compensated shift dl2 - r dl1 [pm] and the force error it means, / S [N]
-(seed: 12.59 pm, 0.37 N). Standard errors
-from cov = s^2 (X^T X)^-1 per equation (teleop.core.fit_statistics); r's by the delta method. Samples of
-a hold are not independent draws of everything (the load cell's own error is shared), so the errors are a
-floor, not a bound.
+Tm is the mean temperature, c1 and c2 the shifts' zeros. The hysteresis is a loop: the loading - unloading
+gap 2 h(u) [pm] is a function of the force, zero at the ends of the loop (F_lo, F_hi: the smallest and
+largest reference force, where the branches meet) and largest in between; P_k are Legendre polynomials,
+their number (3 to 6, HYSTERESIS_TERMS) chosen by the Bayesian information criterion. Three at least: the
+arch, its tilt and its flattening (an arch alone misses a half sine's largest gap by 3 %, and the criterion,
+on a noisy sensor, keeps to one term: a gap biased low by more than its standard error); more when the
+data ask for them (a flat-topped or lopsided loop). Reported: the sensitivity S [pm/N], the temperature
+sensitivities kT1, kT2 [pm/degC] and their ratio r = kT2 / kT1 (eq 3), the hysteresis as seed 001 states it
+(sec. 3.1: 4.798 %): the MAXIMUM loading - unloading gap over the full-scale output S (F_hi - F_lo) [%], that
+gap in pm and as a force, / S [N], and the force where it is largest; the RMSE of dl2 [pm], that of the
+compensated shift dl2 - r dl1 [pm] and the force error it means, / S [N] (seed: 12.59 pm, 0.37 N). Standard
+errors from cov = s^2 (X^T X)^-1 per equation (teleop.core.fit_statistics); r's by the delta method, the
+maximum gap's through the gradient of 2 h at its maximum (the envelope theorem: the place of the maximum
+moves to first order without changing it). Samples of a hold are not independent draws of everything (the
+load cell's own error is shared), so the errors are a floor, not a bound.
 
 The loading state s is the catalogue's sensor-hysteresis switch (teleop.core.physics.hysteresis_offset with
 h = 1) applied to the reference force, its half-width five times the force noise (so noise does not flip
@@ -36,6 +44,8 @@ from teleop.core.physics import hysteresis_offset
 from teleop.core.sensors import FbgParams
 
 BRANCH_WORDS = {"loading": 1.0, "unloading": -1.0, "+1": 1.0, "1": 1.0, "-1": -1.0}
+HYSTERESIS_TERMS = (3, 6)  # fewest and most Legendre terms of the loop's half-gap h(u) (module docstring)
+_U_GRID = np.linspace(0.0, 1.0, 1001)  # where the gap's maximum is looked for
 
 
 @dataclass(frozen=True)
@@ -77,6 +87,7 @@ class FbgFit:
     dl1_fit: np.ndarray
     dl2_fit: np.ndarray
     Tm: float
+    coef: np.ndarray = None  # dl2's fitted coefficients: S, kT2, c2, then the loop's a_k [pm]
 
     @property
     def params(self) -> FbgParams:
@@ -88,6 +99,19 @@ class FbgFit:
     def summary(self) -> dict:
         return {"kind": "fbg", "source": self.data.source, "values": self.values, "stderr": self.stderr,
                 "samples": int(self.data.force.size)}
+
+
+def loop_basis(u: np.ndarray, terms: int) -> np.ndarray:
+    """(n, terms) shapes of the hysteresis loop's half-gap at the loop coordinate u (n,) in [0, 1]:
+    4 u (1 - u) P_k(2u - 1), k < terms (P_k Legendre): each zero at both ends, the first the arch of height 1."""
+    u = np.asarray(u, dtype=float)
+    arch = 4.0 * u * (1.0 - u)
+    return np.column_stack([arch * np.polynomial.legendre.Legendre.basis(k)(2.0 * u - 1.0) for k in range(terms)])
+
+
+def _bic(r: np.ndarray, p: int) -> float:
+    n = r.size
+    return n * float(np.log(max(float(np.mean(r ** 2)), 1e-300))) + p * float(np.log(n))
 
 
 def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -110,9 +134,18 @@ def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
     Tm = float(np.mean(T))
     one = np.ones_like(F)
     b1, cov1, r1 = _ols(np.column_stack([T - Tm, one]), data.dl1)
-    has_h = bool(np.any(np.abs(data.s) > 0.5))
-    cols2 = [F, T - Tm, one] + ([data.s] if has_h else [])
-    b2, cov2, r2 = _ols(np.column_stack(cols2), data.dl2)
+    has_h = bool(np.any(data.s > 0.5) and np.any(data.s < -0.5))  # both branches seen
+    F_lo, F_hi = float(np.min(F)), float(np.max(F))
+    u = np.clip((F - F_lo) / (F_hi - F_lo), 0.0, 1.0)
+    base = [F, T - Tm, one]
+    b2, cov2, r2 = _ols(np.column_stack(base), data.dl2)
+    terms = 0
+    if has_h:  # the loop's shape: the number of terms the data ask for (BIC), HYSTERESIS_TERMS
+        lo, hi = HYSTERESIS_TERMS
+        fits = {m: _ols(np.column_stack(base + list((data.s[:, None] * loop_basis(u, m)).T)), data.dl2)
+                for m in range(lo, hi + 1)}
+        terms = min(fits, key=lambda m: _bic(fits[m][2], len(base) + m))
+        b2, cov2, r2 = fits[terms]
     S, kT2, kT1 = float(b2[0]), float(b2[1]), float(b1[0])
     se_S, se_kT2, se_kT1 = (float(np.sqrt(max(c, 0.0))) for c in (cov2[0, 0], cov2[1, 1], cov1[0, 0]))
     if abs(kT1) < 1e-12 or S <= 0:
@@ -120,19 +153,28 @@ def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
                          f"(kT1 = {kT1:.3g} pm/degC, S = {S:.3g} pm/N)")
     r = kT2 / kT1
     se_r = abs(r) * float(np.hypot(se_kT2 / kT2 if kT2 else 0.0, se_kT1 / kT1))
-    H = float(b2[3]) if has_h else 0.0
-    se_H = float(np.sqrt(max(cov2[3, 3], 0.0))) if has_h else 0.0
-    Fmax = float(np.max(np.abs(F)))
+    gap_pm, se_gap, F_at = 0.0, 0.0, float("nan")
+    if terms:  # the largest |loading - unloading| gap 2 |h(u)| on the loop, and its standard error
+        a, cov_a = b2[3:], cov2[3:, 3:]
+        shapes = loop_basis(_U_GRID, terms)
+        gaps = 2.0 * shapes @ a
+        i = int(np.argmax(np.abs(gaps)))
+        gap_pm = float(abs(gaps[i]))
+        g = 2.0 * shapes[i]
+        se_gap = float(np.sqrt(max(float(g @ cov_a @ g), 0.0)))
+        F_at = F_lo + float(_U_GRID[i]) * (F_hi - F_lo)
+    span = F_hi - F_lo
     rmse = float(np.sqrt(np.mean(r2 ** 2)))
     # the temperature-compensated shift dl2 - r dl1 (eq 3) carries both gratings' errors
     rmse_comp = float(np.sqrt(np.mean((r2 - r * r1) ** 2)))
-    values = {"S_pm_N": S, "kT1_pm_C": kT1, "kT2_pm_C": kT2, "r": r, "hysteresis_pm": abs(H),
-              "hysteresis_N": 2 * abs(H) / S, "hysteresis_percent": 100 * 2 * abs(H) / (S * Fmax),
-              "rmse_pm": rmse, "rmse_compensated_pm": rmse_comp, "force_error_N": rmse_comp / S, "rmse_dl1_pm": float(np.sqrt(np.mean(r1 ** 2))),
-              "full_scale_N": Fmax}
-    stderr = {"S_pm_N": se_S, "kT1_pm_C": se_kT1, "kT2_pm_C": se_kT2, "r": se_r, "hysteresis_pm": se_H,
-              "hysteresis_N": 2 * se_H / S, "hysteresis_percent": 100 * 2 * se_H / (S * Fmax)}
-    return FbgFit(data, values, stderr, data.dl1 - r1, data.dl2 - r2, Tm)
+    values = {"S_pm_N": S, "kT1_pm_C": kT1, "kT2_pm_C": kT2, "r": r, "hysteresis_pm": gap_pm,
+              "hysteresis_N": gap_pm / S, "hysteresis_percent": 100 * gap_pm / (S * span),
+              "hysteresis_at_N": F_at, "hysteresis_terms": terms,
+              "rmse_pm": rmse, "rmse_compensated_pm": rmse_comp, "force_error_N": rmse_comp / S,
+              "rmse_dl1_pm": float(np.sqrt(np.mean(r1 ** 2))), "full_scale_N": span}
+    stderr = {"S_pm_N": se_S, "kT1_pm_C": se_kT1, "kT2_pm_C": se_kT2, "r": se_r, "hysteresis_pm": se_gap,
+              "hysteresis_N": se_gap / S, "hysteresis_percent": 100 * se_gap / (S * span)}
+    return FbgFit(data, values, stderr, data.dl1 - r1, data.dl2 - r2, Tm, np.asarray(b2, dtype=float))
 
 
 def plot_fbg_fit(fit: FbgFit):
@@ -144,21 +186,30 @@ def plot_fbg_fit(fit: FbgFit):
     import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
     d, v = fit.data, fit.values
-    fig, (ax, axT, axr) = plt.subplots(1, 3, figsize=(13, 4.2))
+    fig, (ax, axT, axr) = plt.subplots(1, 3, figsize=(13, 5.2))
     temp_part = v["kT2_pm_C"] * (d.temperature - fit.Tm)
     y = d.dl2 - temp_part
     up, down = d.s >= 0, d.s < 0
     ax.plot(d.force[up], y[up], ".", ms=3, color="tab:red", label="loading")
     ax.plot(d.force[down], y[down], ".", ms=3, color="tab:blue", label="unloading")
-    Fg = np.linspace(float(d.force.min()), float(d.force.max()), 50)
-    base = fit.dl2_fit - temp_part - v["S_pm_N"] * d.force
-    c0 = float(np.median(base[np.abs(d.s) < 0.5])) if np.any(np.abs(d.s) < 0.5) else float(np.mean(base))
-    ax.plot(Fg, v["S_pm_N"] * Fg + c0, "k-", lw=1,
-            label=f"S = {v['S_pm_N']:.2f} +/- {fit.stderr['S_pm_N']:.2f} pm/N, "
-                  f"hysteresis {v['hysteresis_percent']:.2f} %")
+    F_lo, F_hi = float(d.force.min()), float(d.force.max())
+    Fg = np.linspace(F_lo, F_hi, 101)
+    terms = int(v["hysteresis_terms"])
+    half = loop_basis((Fg - F_lo) / (F_hi - F_lo), terms) @ fit.coef[3:3 + terms] if terms else 0.0 * Fg
+    base = fit.dl2_fit - temp_part - v["S_pm_N"] * d.force - (
+        d.s * (loop_basis((d.force - F_lo) / (F_hi - F_lo), terms) @ fit.coef[3:3 + terms]) if terms else 0.0)
+    c0 = float(np.mean(base))
+    line = v["S_pm_N"] * Fg + c0
+    ax.plot(Fg, line, "k-", lw=1, label=f"S = {v['S_pm_N']:.2f} +/- {fit.stderr['S_pm_N']:.2f} pm/N")
+    if terms:
+        ax.plot(Fg, line + half, "k--", lw=0.8, label="loop model (loading, unloading)")
+        ax.plot(Fg, line - half, "k--", lw=0.8)
+        ax.plot([v["hysteresis_at_N"]] * 2, np.interp(v["hysteresis_at_N"], Fg, line) + np.array([-0.5, 0.5])
+                * v["hysteresis_pm"], "m-", lw=2, label=f"largest gap: hysteresis {v['hysteresis_percent']:.2f} % "
+                                                        f"of full scale")
     ax.set_xlabel("reference force [N]")
     ax.set_ylabel("FBG2 shift minus kT2 (T - Tm) [pm]")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
     ax.set_title("force calibration (seed 001 Fig 4a)", fontsize=9)
     # each shift minus its fitted non-temperature part (zero, force, hysteresis): k (T - Tm) + residual
     rest1 = fit.dl1_fit - v["kT1_pm_C"] * (d.temperature - fit.Tm)
@@ -170,7 +221,7 @@ def plot_fbg_fit(fit: FbgFit):
     axT.set_xlabel("temperature [degC]")
     axT.set_ylabel("Bragg shift about the mean temperature [pm]")
     axT.set_title(f"temperature: r = kT2/kT1 = {v['r']:.3f} +/- {fit.stderr['r']:.3f} (seed 001 Fig 4b)", fontsize=9)
-    axT.legend(fontsize=7, loc="lower right")
+    axT.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
     axr.plot(d.force, d.dl2 - fit.dl2_fit, ".", ms=3, color="tab:blue", label="FBG2 residual")
     axr.plot(d.force, d.dl1 - fit.dl1_fit, ".", ms=3, color="tab:green", alpha=0.6, label="FBG1 residual")
     axr.axhline(0, color="k", lw=0.6)
@@ -178,7 +229,7 @@ def plot_fbg_fit(fit: FbgFit):
     axr.set_ylabel("residual [pm]")
     axr.set_title(f"RMSE FBG2 {v['rmse_pm']:.2f} pm; compensated {v['rmse_compensated_pm']:.2f} pm "
                   f"= {v['force_error_N']:.3f} N", fontsize=9)
-    axr.legend(fontsize=7)
+    axr.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
     fig.suptitle(f"FBG calibration ({Path(d.source).name})", fontsize=10)
     fig.tight_layout()
     return fig

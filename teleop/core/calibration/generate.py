@@ -9,8 +9,12 @@ fbg, one_sensor), so a test that recovers the parameters checks the fits against
   through its branch lag (teleop.core.sensors.FsrBranchLag: the unloading branch is the loading one at the
   tension plus the friction gap) plus conductance noise.
 - `fbg_load_steps`: seed 001 sec. 2.1.3-2.1.4: 0-20 N up and down in steps at several temperatures; FBG2
-  carries the catalogue's sensor hysteresis (teleop.core.physics.hysteresis_offset), both gratings the
-  temperature shift and noise (teleop.core.sensors.synthesize_fbg).
+  carries a hysteresis, both gratings the temperature shift and noise (teleop.core.sensors.synthesize_fbg).
+  The hysteresis is a loop that closes at both ends as in seed 001 Fig 4a (loop="closing", the default):
+  +-h sin(pi F / top) by the direction of the last load step (the gap 2h at mid-span, zero at 0 and top,
+  the loop's centre line S F untilted), or the catalogue's sensor hysteresis switch (loop="switch",
+  teleop.core.physics.hysteresis_offset: a gap 2h over the whole loop, jumping at the turns);
+  `fbg_loop_gap` gives a loop's true gaps.
 - `one_cable_cycles`: one tendon-sheath cable hauling a spring back and forth (teleop.core.physics capstan law
   with stick transitions): Kp = exp(-mu Theta), Kr = exp(+mu Theta).
 """
@@ -46,30 +50,69 @@ def fsr_step_protocol(cal: FsrCalibration, seed: int = 0, repeats: int = 3, nois
     return "\n".join(lines) + "\n"
 
 
+def _load_levels(top_N: float, step_N: float) -> np.ndarray:
+    """One loop's force levels [N]: 0 -> top in steps, then back to 0."""
+    return np.r_[np.arange(0.0, top_N + 1e-9, step_N), np.arange(top_N - step_N, -1e-9, -step_N)]
+
+
+def _direction(F: np.ndarray) -> np.ndarray:
+    """(n,) +1 after the force last rose, -1 after it last fell (+1 before it first moved)."""
+    d = np.sign(np.r_[0.0, np.diff(F)])
+    for k in range(1, d.size):
+        if d[k] == 0:
+            d[k] = d[k - 1]
+    d[d == 0] = 1.0
+    return d
+
+
+def _hysteresis(F: np.ndarray, h: float, step_N: float, loop: str, top_N: float) -> np.ndarray:
+    """(n,) the sensed force's hysteresis offset [N] along the stepped reference force F (n,) [N] (module
+    docstring)."""
+    if loop == "switch":
+        return hysteresis_offset(F, h, 0.05 * step_N)
+    if loop == "closing":
+        return _direction(F) * h * np.sin(np.pi * np.clip(F / top_N, 0.0, 1.0))
+    raise ValueError(f"loop must be 'switch' or 'closing', got {loop!r}")
+
+
+def fbg_loop_gap(hysteresis_N: float, loop: str = "closing", top_N: float = 20.0,
+                 step_N: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """(levels, gap) [N]: the true loading - unloading gap of `fbg_load_steps`' hysteresis at each force level
+    strictly inside the loop (0 < F < top), after a first loop has settled it."""
+    levels = _load_levels(top_N, step_N)
+    F = np.r_[levels, levels]
+    off = _hysteresis(F, hysteresis_N, step_N, loop, top_N)[levels.size:]
+    n_up = int(np.argmax(levels)) + 1
+    inside = levels[1:n_up - 1]
+    up = off[1:n_up - 1]
+    down = off[n_up:][::-1][1:]  # unloading, from the lowest level above 0 upwards
+    return inside, up - down[:inside.size]
+
+
 def fbg_load_steps(p: FbgParams = FbgParams(), hysteresis_N: float = 0.48, temperatures_C=(25.0, 45.0, 65.0),
                    seed: int = 0, top_N: float = 20.0, step_N: float = 2.0, hold: int = 20,
-                   force_noise_N: float = 0.01, with_branch: bool = False) -> str:
+                   force_noise_N: float = 0.01, with_branch: bool = False, loop: str = "closing") -> str:
     """CSV text (t_s, force_N, temperature_C, dl1_pm, dl2_pm[, branch]) of load steps 0 -> top -> 0 at each
-    temperature; `hysteresis_N` is the catalogue hysteresis h (loading - unloading gap 2h: seed 001's
-    4.798 % of 20 N is h = 0.48 N). The reference force carries `force_noise_N` RMS noise."""
+    temperature. `loop` "closing" (default, seed 001 Fig 4a's shape): the loading - unloading gap is 2h at
+    mid-span and zero at the loop's ends (`fbg_loop_gap`; seed 001's largest gap, 4.798 % of 20 N, is
+    h = 0.48 N); "switch": `hysteresis_N` is the catalogue hysteresis h, a gap 2h everywhere, switching at
+    the turns. The reference force carries `force_noise_N` RMS noise."""
     rng = np.random.default_rng(seed)
-    levels = np.r_[np.arange(0.0, top_N + 1e-9, step_N), np.arange(top_N - step_N, -1e-9, -step_N)]
+    levels = _load_levels(top_N, step_N)
     F, T = [], []
     for temp in temperatures_C:
         for f in levels:
             F += [f] * hold
             T += list(temp + rng.normal(0.0, 0.05, hold))
     F, T = np.array(F), np.array(T)
-    F_sensed = F + hysteresis_offset(F, hysteresis_N, 0.05 * step_N)
+    F_sensed = F + _hysteresis(F, hysteresis_N, step_N, loop, top_N)
     dl1, dl2 = synthesize_fbg(F_sensed, T - temperatures_C[0], p, rng)
     F_ref = F + rng.normal(0.0, force_noise_N, F.shape)
-    branch = np.sign(np.r_[0.0, np.diff(F)])
-    for k in range(1, branch.size):
-        if branch[k] == 0:
-            branch[k] = branch[k - 1]
+    branch = _direction(F)
     head = "t_s,force_N,temperature_C,dl1_pm,dl2_pm" + (",branch" if with_branch else "")
     lines = ["# source = teleop.core.calibration.generate.fbg_load_steps (synthetic)",
-             f"# truth = S {p.S_pm_N} pm/N, kT1 {p.kT1_pm_C}, kT2 {p.kT2_pm_C} pm/degC, h {hysteresis_N} N", head]
+             f"# truth = S {p.S_pm_N} pm/N, kT1 {p.kT1_pm_C}, kT2 {p.kT2_pm_C} pm/degC, h {hysteresis_N} N"
+             + ("" if loop == "switch" else f", {loop} loop (gap 2h at mid-span, 0 at the ends)"), head]
     for k in range(F.size):
         row = f"{k * 0.1:.1f},{F_ref[k]:.5f},{T[k]:.4f},{dl1[k]:.4f},{dl2[k]:.4f}"
         if with_branch:
