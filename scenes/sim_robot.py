@@ -320,7 +320,8 @@ class SimRobot(ContextDevice):
         self._no_noise = np.zeros((1, n))
         self._added = _AddedEffects(self.model, n) if self.model is not None else None
         self._rich = RichPlant(p.plant, n) if p.plant is not None else None
-        self._cables = DistributedCables(p.cable, n, p.pretension, p.dt) if p.cable is not None else None
+        self._cables = None if p.cable is None else DistributedCables(p.cable, n, p.pretension, p.dt, self.L_home,
+                                                                      float(self.geom.theta0))
         self.is_open = True
 
     def close(self) -> None:
@@ -402,8 +403,8 @@ class SimRobot(ContextDevice):
             SH.motor_forces(self._cap, x, t_tip, self._theta, self._kc, t_fsr)
         t_fbg, extras = t_tip, {}
         if self._cables is not None:  # the distributed cable in place of the lumped sheath
-            x_d = self.L_home - (self.L_cmd if self._play is None else self._L_real)
-            t_fsr, t_fbg, t_motor = self._cables.step(x_d, t_tip, self._theta - g.theta0)
+            t_fsr, t_fbg, t_motor = self._cables.step(self.L_cmd if self._play is None else self._L_real, t_tip,
+                                                      self._theta)
             extras["t_motor"] = t_motor
         if self._added is not None:
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
@@ -481,8 +482,7 @@ class SimRobot(ContextDevice):
             x = -Lr
         t_fsr, t_fbg = np.empty((n, 6)), t_tip
         if self._cables is not None:  # the distributed cable in place of the lumped sheath (as read())
-            x_d = self.L_home - (L if self._play is None else Lr)
-            t_fsr, t_fbg, _ = self._cables.run(np.ascontiguousarray(x_d), t_tip, theta - g.theta0)
+            t_fsr, t_fbg, _ = self._cables.run(np.ascontiguousarray(L if self._play is None else Lr), t_tip, theta)
         for i in range(6 if self._cables is None else 0):  # each lumped sheath along the run, from its state
             SH.motor_force_run(np.ascontiguousarray(x[:, i]), np.ascontiguousarray(t_tip[:, i]),
                                np.ascontiguousarray(theta[:, i]), self._kc, self._cap, i, t_fsr[:, i])
@@ -520,28 +520,33 @@ class DistributedCables:
     `step` (one reading) and `run` (m readings) call the same compiled step.
     """
 
-    def __init__(self, params: TendonSheathParams, n: int, pretension: float, tick: float):
+    def __init__(self, params: TendonSheathParams, n: int, pretension: float, tick: float, L_home=0.0,
+                 theta0: float = 0.0):
         self.params = params
         self.j_fsr = self.element_at(params.scaffold_span[0])
         self.j_fbg = self.element_at(params.length - FBG_FROM_END_M)
         self.sheath = TendonSheath(params, SheathLoad("force"), pretension=pretension, n_cables=n, tick=tick,
-                                   taps=(self.j_fsr, self.j_fbg))
+                                   taps=(self.j_fsr, self.j_fbg), motor_ref=L_home, motor_sign=-1.0,
+                                   theta_offset=theta0)
         self._rows = self.sheath.out_rows
+        self._step_into = self.sheath.step_into
 
     def element_at(self, s: float) -> int:
         """Index of the element holding arc length s [m] from the motor (TendonSheath.tension_at's rule)."""
         p = self.params
         return min(max(int(s / p.element_length), 0), p.n_elements - 1)
 
-    def step(self, x, t_tip, theta) -> tuple:
-        """One reading: motor haul-in x (n,) [m], tip tensions t_tip (n,) [N], kinematic bends theta (n,)
-        [rad] -> (tension at the FSR, at the FBG, at the motor) (n,) each [N] (rows of one new array)."""
-        out = np.empty((self._rows, len(x)))
-        self.sheath.step_into(x, t_tip, theta, out)  # the robot's own (n,) float arrays: no checks
+    def step(self, L, t_tip, wrap) -> tuple:
+        """One reading: cable lengths L (n,) [m] (the motor hauls in L_home - L), tip tensions t_tip (n,) [N],
+        capstan wraps wrap = theta + theta0 (n,) [rad] -> (tension at the FSR, at the FBG, at the motor) (n,) each
+        [N] (rows of one new array). One compiled call (TendonSheath.step_into)."""
+        out = np.empty((self._rows, len(L)))
+        self._step_into(L, t_tip, wrap, out)  # the robot's own (n,) float arrays: no checks
         return out[TAP_FSR], out[TAP_FBG], out[O_MOTOR]
 
     def run(self, X, T_tip, TH) -> tuple:
-        """`step` over m readings, (m, n) inputs -> (m, n) tensions at the FSR, the FBG and the motor [N]."""
+        """`step` over m readings, (m, n) lengths, tip tensions and wraps -> (m, n) tensions at the FSR, the FBG
+        and the motor [N]."""
         r = self.sheath.run(X, T_tip, TH)
         return tuple(np.ascontiguousarray(a) for a in (r.tapped[:, 0], r.tapped[:, 1], r.f_motor))
 

@@ -313,10 +313,14 @@ class TendonSheath:
         tick: the loop's period [s].
         theta0, theta1: scaffold and route bends per cable [rad], scalar or (c,); None: params' values.
         taps: indices of elements whose tension every tick reports (sensors there; `step_into`, SheathRun.tapped).
+        motor_ref, motor_sign, theta_offset: the inputs' map, per cable (scalar or (c,)): a tick's motor input x
+            is the motor travel motor_ref + motor_sign x [m] (the robot gives its cable lengths: L_home - L), its
+            theta input the kinematic bend |theta - theta_offset| [rad]. Defaults: the travel and the bend.
     """
 
     def __init__(self, params: TendonSheathParams = TendonSheathParams(), load: SheathLoad = SheathLoad("force"),
-                 pretension=2.0, n_cables: int = 1, tick: float = 1e-3, theta0=None, theta1=None, taps=()):
+                 pretension=2.0, n_cables: int = 1, tick: float = 1e-3, theta0=None, theta1=None, taps=(),
+                 motor_ref=0.0, motor_sign=1.0, theta_offset=0.0):
         if not (math.isfinite(tick) and tick > 0) or n_cables < 1:
             raise InputError(f"tendon sheath: need tick > 0 and n_cables >= 1, got {tick}, {n_cables}")
         pre = np.broadcast_to(np.asarray(pretension, dtype=float), (n_cables,)).copy()
@@ -337,16 +341,21 @@ class TendonSheath:
             rest = -float(pre[0]) / load.stiffness
         p = params.kernel_params(load, 0.0 if rest is None else rest)
         p[K.P_MODE], p[K.P_TICK], p[K.P_NSUB] = load.mode, self.tick, self.n_sub
-        self._p = p
-        self._W = params.bend_weights
-        # the kernel's arrays (scenes.tendon_sheath_kernels): node arrays S (u, v, z and the step's scratch),
-        # per-cable scalars cab (pretension, last tip input, fixed bends and the step's scratch)
+        self._p = np.concatenate([p, taps.astype(float)])  # the kernel's parameters, then the taps
+        # the kernel's arrays (scenes.tendon_sheath_kernels): node arrays S (u, v, z, the bend weights and the
+        # step's scratch), per-cable scalars cab (pretension, last tip input, fixed bends, the inputs' map and
+        # the step's scratch)
         self._S = np.zeros((K.S_ROWS, n_cables, N + 1))
+        self._S[K.S_W0:K.S_W2 + 1, :, :N] = params.bend_weights[:, None, :]
         self.u, self.v, self.z = self._S[K.S_U], self._S[K.S_V], self._S[K.S_Z]
         self._cab = np.zeros((n_cables, K.CAB_COLS))
         self._cab[:, K.C_T0] = pre
-        for col, a, default in ((K.C_THETA0, theta0, params.theta0), (K.C_THETA1, theta1, params.theta1)):
-            self._cab[:, col] = np.broadcast_to(np.asarray(default if a is None else a, float), (n_cables,))
+        for col, a in ((K.C_THETA0, params.theta0 if theta0 is None else theta0),
+                       (K.C_THETA1, params.theta1 if theta1 is None else theta1),
+                       (K.C_X0, motor_ref), (K.C_XS, motor_sign), (K.C_TH_OFF, theta_offset)):
+            self._cab[:, col] = np.broadcast_to(np.asarray(a, float), (n_cables,))
+        if not np.all(np.isfinite(self._cab[:, :K.C_TH_OFF + 1])):
+            raise InputError("tendon sheath: bends, motor_ref, motor_sign and theta_offset must be finite")
         self.tensions = np.empty((n_cables, N))
         self.reset()
 
@@ -358,7 +367,7 @@ class TendonSheath:
 
     def reset(self) -> None:
         """Back to the initial configuration: motor and tip at 0, uniform pretension, no friction stored."""
-        self._S[:] = 0.0
+        self._S[:K.S_W0] = 0.0
         self._cab[:, K.C_TIP] = 0.0 if self.load.kind != "force" else self.pretension
         self.tensions[:] = self.pretension[:, None]
         self.t = 0.0
@@ -408,7 +417,7 @@ class TendonSheath:
         return np.ascontiguousarray(a)
 
     def step(self, x_motor, tip_input=None, theta=0.0) -> np.ndarray:
-        """One tick to motor travel x_motor [m] (scalar or (c,)): tip_input f_ext [N] ("spring", "force") or
+        """One tick to motor travel x_motor [m] (scalar or (c,); through the inputs' map): tip_input f_ext [N] ("spring", "force") or
         tip travel [m] ("position"), default `held_tip_input`; theta the kinematic bend [rad]. Returns
         (c, 3): motor force [N], tip load force [N], tip travel [m]."""
         X, TIP, TH = self._tick_input(x_motor), self._tick_input(tip_input, True), self._tick_input(theta)
@@ -423,7 +432,7 @@ class TendonSheath:
         theta (c,) float64, C-contiguous and finite; writes out (out_rows, c): motor force [N], tip load force
         [N], tip travel [m], Newton iterations of the tick, then the tension [N] of each tapped element. One
         compiled call for all cables and sub-steps."""
-        K.step(self._S, self._cab, x_motor, tip_input, theta, self._W, self._p, self.taps, self.tensions, out)
+        K.step(self._S, self._cab, self._p, x_motor, tip_input, theta, self.tensions, out)
         self.t += self.tick
 
     def run(self, x_motor, tip_input=None, theta=0.0, keep_tensions: bool = False) -> SheathRun:
@@ -433,11 +442,12 @@ class TendonSheath:
         X, TIP, TH = self._inputs(x_motor, tip_input, theta, m)
         OUT = np.empty((m, self.out_rows, self.n_cables))
         TT = np.empty((m if keep_tensions else 1, self.n_cables, self.params.n_elements))
-        K.run(self._S, self._cab, X, TIP, TH, self._W, self._p, self.taps, OUT, TT)
+        K.run(self._S, self._cab, self._p, X, TIP, TH, OUT, TT)
         self.tensions[:] = TT[-1]
         t = self.t + self.tick * np.arange(1, m + 1)
         self.t += m * self.tick
-        return SheathRun(t=t, x_motor=X, f_motor=OUT[:, K.O_MOTOR], f_tip=OUT[:, K.O_TIP], x_tip=OUT[:, K.O_X_TIP],
+        x_motor = self._cab[:, K.C_X0] + self._cab[:, K.C_XS] * X  # the motor's travel (the inputs' map)
+        return SheathRun(t=t, x_motor=x_motor, f_motor=OUT[:, K.O_MOTOR], f_tip=OUT[:, K.O_TIP], x_tip=OUT[:, K.O_X_TIP],
                          iterations=OUT[:, K.O_ITER], tensions=TT if keep_tensions else None,
                          tapped=OUT[:, K.O_ROWS:])
 

@@ -22,9 +22,11 @@ velocity every node's friction is a nondecreasing function of its own travel du_
 Newton converges; a Newton step that would carry du_i across 0 (the bristle law's kink) stops on it.
 
 Arrays of c cables (the TendonSheath's, written in place):
-    S (S_ROWS, c, N+1)   rows S_U, S_V, S_Z: u, v, z; the rows from S_DU on are the step's scratch
+    S (S_ROWS, c, N+1)   rows S_U, S_V, S_Z: u, v, z; S_W0..S_W2 the bend weights; the rest the step's scratch
     cab (c, CAB_COLS)    columns C_T0 (t0 [N]), C_TIP (the last tick's tip input), C_THETA0, C_THETA1 (the
-                         scaffold and route bends [rad]); the columns from C_DU0 on are the step's scratch
+                         scaffold and route bends [rad]), C_X0, C_XS, C_TH_OFF (the inputs' map: motor travel
+                         x0 + s x_in [m], kinematic bend |theta_in - offset| [rad]); from C_DU0 on the scratch
+    p (P_COUNT + taps,)  the parameters, then the indices of the tapped elements
     out (O_ROWS + taps, c)  a tick's motor force [N], tip load force [N], tip travel [m], Newton iterations,
                          then the tension [N] of each tapped element (a sensor there)
 How the cables share a step: they run in lockstep, node by node (the Newton sweeps' recurrences are chains of
@@ -36,7 +38,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 
 from teleop.core.kernels.jit import njit
 
@@ -61,15 +62,18 @@ P_COUNT = 15
 MODE_SPRING = 0  # tip load F = k_load (u_N - rest) + f_ext, f_ext the tip input [N]
 MODE_POSITION = 1  # tip travel prescribed, the tip input [m]; F the reaction
 
-# rows of S: the state, then the step's scratch (du, 1 / zs, the eliminated Jacobian's upper diagonal and
-# right-hand side, the element bends b in the first N columns)
-S_U, S_V, S_Z, S_DU, S_IZS, S_CP, S_R, S_B = range(8)
-S_ROWS = 8
-# columns of cab: t0, the last tick's tip input, the fixed bends; then the step's scratch per cable: motor
-# travel over the step, the step's tip input, the sweep's carried tension and its slope, the eliminated
-# upper diagonal and right-hand side, the largest correction, Newton iterations, still iterating
-C_T0, C_TIP, C_THETA0, C_THETA1, C_DU0, C_A, C_TL, C_AL, C_CP, C_RP, C_BIG, C_IT, C_ACTIVE, C_FM, C_FL = range(15)
-CAB_COLS = 15
+# rows of S: the state; the step's scratch (du, 1 / zs, the eliminated Jacobian's upper diagonal and
+# right-hand side, the element bends b in the first N columns); the share of theta0, theta1 and |theta| in each
+# element (first N columns; TendonSheathParams.bend_weights)
+S_U, S_V, S_Z, S_DU, S_IZS, S_CP, S_R, S_B, S_W0, S_W1, S_W2 = range(11)
+S_ROWS = 11
+# columns of cab: t0, the last tick's tip input, the fixed bends, the motor input's map x = x0 + s x_in and
+# the kinematic bend's offset; then the step's scratch per cable: motor travel over the step, the step's tip
+# input, the sweep's carried tension and its slope, the eliminated upper diagonal and right-hand side, the
+# largest correction, Newton iterations, still iterating, motor force, tip load force, the tick's motor travel
+(C_T0, C_TIP, C_THETA0, C_THETA1, C_X0, C_XS, C_TH_OFF, C_DU0, C_A, C_TL, C_AL, C_CP, C_RP, C_BIG, C_IT, C_ACTIVE,
+ C_FM, C_FL, C_XT) = range(19)
+CAB_COLS = 19
 # rows of out
 O_MOTOR, O_TIP, O_X_TIP, O_ITER = range(4)
 O_ROWS = 4
@@ -252,27 +256,29 @@ def cables_step(S, cab, p, h):
 
 
 @njit
-def step(S, cab, x_motor, tip_in, theta, W, p, taps, T, out):
-    """One tick of c cables, one call: x_motor (c,) motor travel [m] at the tick's end; tip_in (c,) f_ext [N]
-    or tip travel [m] at the tick's end (by p[P_MODE]); theta (c,) kinematic bend [rad]; W (3, N) the share of
-    theta0, theta1 and |theta| in each element; the tick p[P_TICK] [s] in p[P_NSUB] steps, the motor and tip
-    inputs interpolated linearly. Writes T (c, N) element tensions [N] and out (O_ROWS + len(taps), c): motor
-    force [N], tip load force [N], tip travel [m], Newton iterations of the tick, the tensions of the
-    elements `taps` (int64) [N]."""
+def step(S, cab, p, x_in, tip_in, theta_in, T, out):
+    """One tick of c cables, one call: x_in (c,) the motor input, motor travel x = x0 + s x_in [m] at the
+    tick's end (cab's C_X0, C_XS); tip_in (c,) f_ext [N] or tip travel [m] at the tick's end (by p[P_MODE]);
+    theta_in (c,) kinematic bend theta_in - cab[C_TH_OFF] [rad] (abs taken); the tick p[P_TICK] [s] in
+    p[P_NSUB] steps, the motor and tip inputs interpolated linearly. Writes T (c, N) element tensions [N] and
+    out (O_ROWS + taps, c): motor force [N], tip load force [N], tip travel [m], Newton iterations of the tick,
+    then the tension [N] of each tapped element (indices p[P_COUNT:])."""
     nc = S.shape[1]
     N = S.shape[2] - 1
     n_sub = int(p[P_NSUB])
     h = p[P_TICK] / n_sub
     spring = int(p[P_MODE]) == MODE_SPRING
-    u, b = S[S_U], S[S_B]
+    u, b, W0, W1, W2 = S[S_U], S[S_B], S[S_W0], S[S_W1], S[S_W2]
     for c in range(nc):
-        a = abs(theta[c])
+        a = abs(theta_in[c] - cab[c, C_TH_OFF])
+        t0, t1 = cab[c, C_THETA0], cab[c, C_THETA1]
         for j in range(N):
-            b[c, j] = W[0, j] * cab[c, C_THETA0] + W[1, j] * cab[c, C_THETA1] + W[2, j] * a
+            b[c, j] = W0[c, j] * t0 + W1[c, j] * t1 + W2[c, j] * a
         cab[c, C_IT] = 0.0
+        cab[c, C_XT] = cab[c, C_X0] + cab[c, C_XS] * x_in[c]
     for s in range(n_sub):
         for c in range(nc):
-            cab[c, C_DU0] = (x_motor[c] - u[c, 0]) / (n_sub - s)
+            cab[c, C_DU0] = (cab[c, C_XT] - u[c, 0]) / (n_sub - s)
             if spring:
                 cab[c, C_A] = cab[c, C_TIP] + (tip_in[c] - cab[c, C_TIP]) * (s + 1) / n_sub
             else:
@@ -287,14 +293,14 @@ def step(S, cab, x_motor, tip_in, theta, W, p, taps, T, out):
         out[O_TIP, c] = cab[c, C_FL]
         out[O_X_TIP, c] = u[c, N]
         out[O_ITER, c] = cab[c, C_IT]
-        for q in range(taps.shape[0]):
-            out[O_ROWS + q, c] = R[c, taps[q]]
+        for q in range(out.shape[0] - O_ROWS):
+            out[O_ROWS + q, c] = R[c, int(p[P_COUNT + q])]
 
 
 @njit
-def run(S, cab, X, TIP, THETA, W, p, taps, OUT, TT):
-    """`step` for each tick m of X, TIP, THETA (m, c): OUT (m, O_ROWS + len(taps), c); TT (m, c, N) the element
+def run(S, cab, p, X, TIP, THETA, OUT, TT):
+    """`step` for each tick m of X, TIP, THETA (m, c): OUT (m, O_ROWS + taps, c); TT (m, c, N) the element
     tensions of every tick, or (1, c, N) to keep the last tick's only."""
     keep = TT.shape[0] == X.shape[0]
     for m in range(X.shape[0]):
-        step(S, cab, X[m], TIP[m], THETA[m], W, p, taps, TT[m] if keep else TT[0], OUT[m])
+        step(S, cab, p, X[m], TIP[m], THETA[m], TT[m] if keep else TT[0], OUT[m])
