@@ -28,9 +28,14 @@ from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Scale, Si
 
 BUFFER = 2048         # samples the transport delay keeps: MAX_DELAY_S of history up to 8 kHz
 MAX_DELAY_S = 0.25    # [s] the delay's upper bound
-GUESS_SAMPLES = 4000  # the guesses compare at most about this many samples
+GUESS_SAMPLES = 2000  # the guesses compare at most about this many samples
 
-DELAY = Kernel(transport_delay_step, transport_delay_run, state=(math.nan, 0.0) + (0.0,) * (2 * BUFFER))
+# the delay's start state as a read-only array (the run copies it once per call: from a tuple of 2 BUFFER + 2
+# floats that copy cost several times the run itself on a fit's decimated samples)
+_START = np.zeros(2 + 2 * BUFFER)
+_START[0] = math.nan
+_START.flags.writeable = False
+DELAY = Kernel(transport_delay_step, transport_delay_run, state=_START)
 LAG = Kernel(first_order_lag_step, first_order_lag_run, state=(math.nan, 0.0, 0.0))
 
 
@@ -53,21 +58,23 @@ def _sub(n: int) -> np.ndarray:
     return np.arange(n // 10, n, max(1, n // GUESS_SAMPLES))
 
 
-def _affine_rms(a: np.ndarray, y: np.ndarray) -> float:
-    """RMS of y - (g a + c), g and c by least squares."""
-    A = np.column_stack([a, np.ones(a.size)])
-    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-    return float(np.sqrt(np.mean((y - A @ coef) ** 2)))
+def _affine_rss(A: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """(k,) residual sums of squares of y (m,) fitted as g a + c by least squares, a each row of A (k, m)."""
+    Ac = A - A.mean(axis=1, keepdims=True)
+    yc = y - y.mean()
+    aa = np.einsum("ij,ij->i", Ac, Ac)
+    ay = Ac @ yc
+    return float(yc @ yc) - ay * ay / np.maximum(aa, 1e-300)
 
 
 def _delay_guess(s: Signals, y: np.ndarray) -> dict:
-    # the delay, on a grid of sample intervals (at most 500 steps) up to the bound, whose delayed input
+    # the delay, on a grid of sample intervals (at most 250 steps) up to the bound, whose delayed input
     # explains y best affinely (the link's gain may not have taken its share of the lag yet)
     i = _sub(s.n)
     dt = float(np.median(np.diff(s.t)))
-    grid = np.arange(0.0, MAX_DELAY_S, max(dt, MAX_DELAY_S / 500))
-    costs = [_affine_rms(np.interp(s.t[i] - d, s.t, s.x), y[i]) for d in grid]
-    return {"delay": float(grid[int(np.argmin(costs))])}
+    grid = np.arange(0.0, MAX_DELAY_S, max(dt, MAX_DELAY_S / 250))
+    A = np.interp(s.t[i][None, :] - grid[:, None], s.t, s.x)
+    return {"delay": float(grid[int(np.argmin(_affine_rss(A, y[i])))])}
 
 
 def _lag_guess(s: Signals, y: np.ndarray) -> dict:
@@ -75,8 +82,8 @@ def _lag_guess(s: Signals, y: np.ndarray) -> dict:
     i = _sub(s.n)
     dt = float(np.median(np.diff(s.t)))
     grid = np.geomspace(max(dt, 1e-4), 3.0, 40)
-    costs = [_affine_rms(first_order_lag(s.t, s.x, tau)[i], y[i]) for tau in grid]
-    return {"tau": float(grid[int(np.argmin(costs))])}
+    A = np.array([first_order_lag(s.t, s.x, tau)[i] for tau in grid])
+    return {"tau": float(grid[int(np.argmin(_affine_rss(A, y[i])))])}
 
 
 def _drive_time(s: Scale) -> float:
