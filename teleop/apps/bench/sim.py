@@ -33,7 +33,10 @@ With the batch path (default; `--no-batch` skips it) the same commanded lengths,
 replayed through a fresh SimRobot's batched `run()` (the palpation path), timed the same way
 (pybullet_step, physics_other; arrays: the rest), and its FSR counts compared with the loop's.
 
-`--plant rich|distributed` runs the robot with that plant (`--cable-params` the distributed cable's TOML).
+`--plant rich|distributed` runs the robot with that plant (`--cable-params` the distributed cable's TOML);
+`--vs-matched` then also runs the loop path with the matched plant right after, in the same process, and
+reports the plant's factor over the matched one's: on a shared machine the ratio of two runs made together
+says more than either factor.
 
 JSON: {"seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wall_s", "cpu_s",
 "realtime_factor", "realtime_factor_cpu", "budget_factor", "pass", "ticks", "readings", "physics_steps",
@@ -41,7 +44,9 @@ JSON: {"seed", "pad", "rate_hz", "robot_rate_hz", "substeps", "simulated_s", "wa
 "trajectory": {...},
 "batch": {"simulated_s", "wall_s", "cpu_s", "realtime_factor", "realtime_factor_cpu", "pass", "readings",
 "stages": {stage: {"wall_s", "fraction"}}, "counts_max_abs_diff_vs_loop"}}. Wall-clock numbers depend on
-the machine's load; tests check only their consistency. With --plant other than matched, also "plant".
+the machine's load; tests check only their consistency. With --plant other than matched, also "plant"; with
+--vs-matched, "vs_matched": {"realtime_factor", "realtime_factor_cpu", "wall_s", "cpu_s" (the matched plant's
+loop path), "ratio", "ratio_cpu" (this plant's factors over those)}.
 """
 
 from __future__ import annotations
@@ -89,6 +94,9 @@ def register(subparsers) -> None:
                         "(the distributed tendon-sheath cable, scenes/tendon_sheath.py)")
     p.add_argument("--cable-params", type=input_file, default=None, metavar="TOML",
                    help="with --plant distributed: the cable's [tendon_sheath] table (docs/formats.md)")
+    p.add_argument("--vs-matched", action="store_true",
+                   help="with --plant rich|distributed: also time the matched plant's loop path right after and report "
+                        "the ratio of the two factors (JSON vs_matched)")
     p.add_argument("--no-batch", action="store_true", help="skip the batched SimRobot.run path")
     p.add_argument("--stages", action="store_true",
                    help="split the robot's time (kinematics .. cable_sensor) with timers inside it, which cost "
@@ -177,11 +185,12 @@ def _factor(simulated: float, spent: float) -> float:
 
 def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: int = 1, depth: float = 0.030,
               period: float = 2.0, batch: bool = True, stages: bool = True, plant: str = "matched",
-              cable_params: str | None = None) -> dict:
+              cable_params: str | None = None, vs_matched: bool = False) -> dict:
     """Run the unpaced simulation for `seconds` of simulated time [s]; the result dict (module docstring).
 
     depth: stylus poke depth [m]; period: poke period [s]; plant, cable_params: the robot's plant
-    (scenes.sim_robot.PLANTS; the JSON's "plant" when not matched)."""
+    (scenes.sim_robot.PLANTS; the JSON's "plant" when not matched); vs_matched: with a plant other than matched,
+    time the matched plant's loop path right after (JSON "vs_matched")."""
     n = int(round(seconds * RATE_HZ))
     robot_seed, stylus_seed = _seeds(seed)
     robot = _make_robot(pad, robot_seed, substeps, plant, cable_params)
@@ -277,6 +286,12 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     }
     if plant != "matched":
         out["plant"] = plant
+        if vs_matched:
+            m = bench_sim(seconds, seed, pad, substeps, depth, period, batch=False, stages=stages)
+            out["vs_matched"] = {"realtime_factor": m["realtime_factor"], "realtime_factor_cpu": m["realtime_factor_cpu"],
+                                 "wall_s": m["wall_s"], "cpu_s": m["cpu_s"],
+                                 "ratio": round(m["wall_s"] / max(wall, 1e-9), 4),
+                                 "ratio_cpu": round(m["cpu_s"] / max(cpu, 1e-9), 4)}
     if batch:
         out["batch"] = bench_batch(L_log[:j], counts_log[:j], pad, robot_seed, substeps, plant, cable_params)
     return out
@@ -326,6 +341,8 @@ def _check(args) -> None:
         raise InputError(f"--period-s: expected a poke period in (0, 60] s, got {args.period_s}")
     if not 0 <= args.seed < 2 ** 63:
         raise InputError(f"--seed: expected a non-negative integer, got {args.seed}")
+    if args.vs_matched and args.plant == "matched":
+        raise InputError("--vs-matched: expected --plant rich or distributed (it compares that plant with the matched one)")
 
 
 def format_table(out: dict) -> str:
@@ -348,6 +365,10 @@ def format_table(out: dict) -> str:
         pt = st["per_tick_us"]
         p50, p99 = (f"{pt['p50']:9.1f}", f"{pt['p99']:9.1f}") if pt else (f"{'':9s}", f"{'':9s}")
         lines.append(f"  {name:13s} {st['wall_s']:8.3f} {100 * st['fraction']:6.1f}% {p50} {p99}")
+    if "vs_matched" in out:
+        v = out["vs_matched"]
+        lines.append(f"matched plant's loop right after: {v['realtime_factor']:.2f}x wall, {v['realtime_factor_cpu']:.2f}x "
+                     f"cpu; {out['plant']} / matched: {v['ratio']:.3f} (wall), {v['ratio_cpu']:.3f} (cpu)")
     if "batch" in out:
         b = out["batch"]
         parts = ", ".join(f"{k} {v['wall_s']:.3f} s ({100 * v['fraction']:.1f}%)" for k, v in b["stages"].items())
@@ -360,7 +381,7 @@ def run(args) -> int:
     _check(args)
     out = bench_sim(args.seconds, args.seed, args.pad, args.substeps, args.depth_mm * 1e-3, args.period_s,
                     batch=not args.no_batch, stages=args.stages and not args.no_stages, plant=args.plant,
-                    cable_params=args.cable_params)
+                    cable_params=args.cable_params, vs_matched=args.vs_matched)
     print(format_table(out))
     if hasattr(os, "getloadavg"):  # context for the numbers: other processes sharing the cores
         print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cpus", file=sys.stderr)

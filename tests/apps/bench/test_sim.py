@@ -97,3 +97,25 @@ def test_bad_flags_exit_2(argv, flag, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "error" in err[0] and flag in err[0]
     assert not path.exists()
+
+
+def test_vs_matched_reports_the_ratio_of_the_two_loop_factors(tmp_path, capsys):
+    path = tmp_path / "sim.json"
+    assert main(["bench", "sim", "--seconds", "0.3", "--plant", "distributed", "--vs-matched", "--no-batch",
+                 "--json", str(path)]) == 0
+    out = json.loads(path.read_text())
+    v = out["vs_matched"]
+    assert out["plant"] == "distributed" and list(v) == ["realtime_factor", "realtime_factor_cpu", "wall_s", "cpu_s",
+                                                         "ratio", "ratio_cpu"]
+    assert _factor_ok(v["realtime_factor"], out["simulated_s"], v["wall_s"])
+    assert v["ratio"] == pytest.approx(v["wall_s"] / out["wall_s"], rel=1e-3)
+    assert v["ratio_cpu"] == pytest.approx(v["cpu_s"] / out["cpu_s"], rel=1e-3)
+    assert "matched plant's loop right after" in capsys.readouterr().out
+    assert "vs_matched" not in bench_sim(0.1, batch=False, stages=False, vs_matched=True)  # nothing to compare
+
+
+def test_vs_matched_needs_another_plant(tmp_path, capsys):
+    path = tmp_path / "sim.json"
+    assert main(["bench", "sim", "--seconds", "0.1", "--vs-matched", "--json", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--vs-matched" in err[0] and not path.exists()
