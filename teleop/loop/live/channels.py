@@ -39,7 +39,7 @@ RATES = {**{k: v[0] for k, v in PLOTS.items()}, TOPIC_TF: RATE_TF, TOPIC_SCENE: 
 # the 3D scene (RGBA): a colour nothing else in the scene has for the end effector, red while in FAULT
 EE_COLOR, EE_FAULT_COLOR = (0.9, 0.1, 0.8, 1.0), (0.9, 0.1, 0.1, 1.0)
 EE_DIAMETER = 0.008  # [m]
-CABLE_COLOR, CABLE_PX = (0.8, 0.8, 0.8, 1.0), 2.0  # cables: lines of a constant width on screen [px]
+CABLE_COLOR, CABLE_PX = (0.5, 0.5, 0.55, 1.0), 3.0  # cables: mid grey (light and dark themes), width on screen [px]
 FORCE_COLOR, FORCE_M_PER_N = (1.0, 0.6, 0.0, 1.0), 0.01  # the force arrow: 1 cm per newton
 
 
