@@ -483,7 +483,8 @@ def figure(name: str, res: dict):
         ax.plot(w, [c["tension_B_change_N"] for c in cs], ":", color="grey", label="true tension at B")
         ax.set_xlabel("hanging weight [N]")
         ax.set_ylabel("swing over a back-and-forth [N]")
-        ax.set_title(f"seed 000 Fig 10b protocol: theta = {res['theta_CD_deg']:g} deg", fontsize=9)
+        ax.set_title(f"FSR swing before and after capstan compensation, simulated bench\n(seed 000 Fig 10b protocol, "
+                     f"theta = {res['theta_CD_deg']:g} deg, 3 back-and-forths per weight)", fontsize=9)
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     elif name == "fig11":
         fig, axes = plt.subplots(1, 2, figsize=(14, 4.5))
