@@ -4,13 +4,17 @@
 //
 //   node studio.mjs CONFIG.json
 //
-// CONFIG: {chromium, out (screenshot folder), layout (layout file), ws (ws://127.0.0.1:PORT of
-// `teleop session --live`), robot_pid (the session's robot process: SIGSTOP for fault_hold_ms induces a
-// "robot telemetry stale" fault), fault_hold_ms, ee_rgb ([r, g, b] 0..255 of the end effector), timeout_s}.
-// Stages, each one JSON line {"stage": ...}: "live" (connected, every panel's state twice, 3D pixels),
-// "fault" (the log panel after the induced fault), then, after the line "recording PATH" on stdin,
-// "recording" (the same page opening that MCAP through Studio's remote-file source, with Studio's `time`
-// deep link at the recording's end given as "recording PATH END_ISO").
+// CONFIG: {chromium, out (screenshot folder), layout (layout file), fault_hold_ms, ee_rgb and ee_fault_rgb
+// ([r, g, b] 0..255 of the end effector, normal and in FAULT), timeout_s}. One JSON line {"stage": ...} per
+// stage: "ready" (Studio loaded, no data source: its build is cached while the session starts), then per line
+// on stdin:
+//   live WS_URL ROBOT_PID   -> "live" (Studio's foxglove-websocket deep link with the layout: the sidebar, every
+//                              panel's text twice 2.5 s apart, pixels changed between two screenshots and the
+//                              end effector's colour per panel), then "fault" (ROBOT_PID paused with SIGSTOP for
+//                              fault_hold_ms, past the session's staleness limit; the log panels after it)
+//   recording PATH [ISO]    -> "recording" (the same page opening PATH through Studio's remote-file source, at
+//                              time ISO if given (Studio's `time` deep link): its topic list and problems)
+// and "done" when stdin ends (the console errors and the server's 404s).
 import { mkdtempSync, readFileSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
@@ -25,7 +29,7 @@ const T0 = Date.now();
 const elapsed = () => (Date.now() - T0) / 1000;
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const emit = (obj) => process.stdout.write(JSON.stringify({ ...obj, elapsed_s: elapsed() }) + "\n");
-const stdinLines = createInterface({ input: process.stdin })[Symbol.asyncIterator]();
+const stdinLines = createInterface({ input: process.stdin });
 
 const layout = JSON.parse(readFileSync(cfg.layout, "utf8"));
 const panelIds = Object.keys(layout.configById);
@@ -72,7 +76,8 @@ async function pixels(page, pngA, pngB, boxes, rgb) {
     for (const [id, box] of Object.entries(boxes)) {
       if (!box) continue;
       const x0 = Math.max(0, Math.floor(box.x)), y0 = Math.max(0, Math.floor(box.y));
-      const x1 = Math.min(B.width, Math.floor(box.x + box.width)), y1 = Math.min(B.height, Math.floor(box.y + box.height));
+      const x1 = Math.min(B.width, Math.floor(box.x + box.width));
+      const y1 = Math.min(B.height, Math.floor(box.y + box.height));
       let changed = 0, changedColour = 0, ee = 0, ex = 0, ey = 0;
       for (let y = y0; y < y1; y++) {
         for (let x = x0; x < x1; x++) {
@@ -125,15 +130,20 @@ async function waitFor(what, fn, timeoutMs) {
   return { ...last, timedOut: what };
 }
 
-async function live(page, host, timeout) {
-  await page.goto(`${host}&ds=foxglove-websocket&ds.url=${encodeURIComponent(cfg.ws)}`);
+async function live(page, host, timeout, ws, robotPid) {
+  const asked = elapsed();
+  await page.goto(`${host}&ds=foxglove-websocket&ds.url=${encodeURIComponent(ws)}`);
   const connected = await waitFor("data in every panel", async () => {
     const ps = await panels(page);
     const info = await sidebar(page, "Problems");
-    const ok = /START TIME\s*\n\s*\d{4}-/.test(info) && Object.values(ps).every((p) => p.found) &&
+    // connected: the server's name beside its URL and a start time (Studio 1.48's websocket player takes it from
+    // its own clock; it read 0 once on a loaded machine, with every panel receiving)
+    const ok = /START TIME\s*\n\s*\d/.test(info) && info.includes("cdpr-teleop") &&
+      Object.values(ps).every((p) => p.found) &&
       !Object.values(ps).some((p) => /Waiting for next message/.test(p.text));
     return { ok, info };
   }, timeout);
+  const shown = elapsed();
   await sleep(1000);
   const first = await panels(page);
   const shotA = await page.screenshot({ path: join(cfg.out, "live-1.png") });
@@ -141,15 +151,15 @@ async function live(page, host, timeout) {
   const second = await panels(page);
   const shotB = await page.screenshot({ path: join(cfg.out, "live.png") });
   emit({
-    stage: "live", connected: !connected.timedOut, sidebar: await sidebar(page, "Problems"), first, second,
+    stage: "live", connected: !connected.timedOut, asked_s: asked, shown_s: shown, sidebar: await sidebar(page, "Problems"), first, second,
     pixels: await pixels(page, shotA, shotB, boxes(second), cfg.ee_rgb),
     host_error: await page.evaluate(() => window.hostError ?? null),
   });
 
   // an induced fault: the robot process paused past the staleness limit, then let go
-  process.kill(cfg.robot_pid, "SIGSTOP");
+  process.kill(robotPid, "SIGSTOP");
   await sleep(cfg.fault_hold_ms);
-  process.kill(cfg.robot_pid, "SIGCONT");
+  process.kill(robotPid, "SIGCONT");
   const faulted = await waitFor("a FAULT line in the log panel", async () => {
     const logs = Object.entries(await panels(page)).filter(([, p]) => p.type === "RosOut" || p.type === "Log");
     return { ok: logs.some(([, p]) => /-> FAULT/.test(p.text)), logs: Object.fromEntries(logs) };
@@ -168,7 +178,7 @@ async function recording(page, host, timeout, path, endIso) {
     const info = await sidebar(page, "Topics");
     return { ok: /DURATION\s*\n\s*\d+:\d\d:\d\d/.test(info), info };
   }, timeout);
-  await sleep(2000);
+  await sleep(500);
   const topics = await sidebar(page, "Topics");
   await page.screenshot({ path: join(cfg.out, "recording.png") });
   const problems = await sidebar(page, "Problems");
@@ -190,15 +200,23 @@ const browser = await puppeteer.launch({
 });
 const consoleErrors = [];
 try {
+  const timeout = (cfg.timeout_s ?? 40) * 1000;
+  const host = `${origin}/studio/index.html?layoutId=teleop&layout=/files/layout.json`;
+  // while the session starts: Studio's build fetched, parsed and cached by a first tab, with no data source
+  const warm = await browser.newPage();
+  await warm.goto(host);
+  await warm.waitForFunction(() => window.hostReady || window.hostError, { timeout });
+  emit({ stage: "ready", host_error: await warm.evaluate(() => window.hostError ?? null) });
+  await warm.close();
   const page = await browser.newPage();
   page.on("console", (m) => { if (m.type() === "error") consoleErrors.push(m.text().slice(0, 500)); });
   page.on("pageerror", (e) => consoleErrors.push(`pageerror: ${String(e).slice(0, 500)}`));
-  const timeout = (cfg.timeout_s ?? 40) * 1000;
-  const host = `${origin}/studio/index.html?layoutId=teleop&layout=/files/layout.json`;
-  if (cfg.ws) await live(page, host, timeout);
-  const line = (await stdinLines.next()).value ?? "";
-  const [cmd, path, endIso] = line.trim().split(" ");
-  if (cmd === "recording" && path) await recording(page, host, timeout, path, endIso);
+  for await (const line of stdinLines) {
+    const [cmd, ...args] = line.trim().split(" ");
+    if (cmd === "live") await live(page, host, timeout, args[0], Number(args[1]));
+    else if (cmd === "recording") await recording(page, host, timeout, args[0], args[1]);
+    else break;
+  }
   emit({ stage: "done", console_errors: consoleErrors, http_404: httpLog });
 } finally {
   await browser.close();

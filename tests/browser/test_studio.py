@@ -20,7 +20,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 from collections import Counter
 from pathlib import Path
 
@@ -103,31 +102,38 @@ def test_studio_shows_the_live_session_and_its_recording(tmp_path):
         "run `npm ci --prefix tests/browser` (scripts/install-system-deps.sh does)"
     layout = json.loads(LAYOUT.read_text())
     mcap = tmp_path / "session.mcap"
-    proc, port = start_session(tmp_path)
-    driver = None
-    try:
-        robot = robot_process(proc.pid, port, mcap)
-        cfg = {"chromium": CHROMIUM, "out": str(tmp_path), "layout": str(LAYOUT), "ws": f"ws://127.0.0.1:{port}",
-               "robot_pid": robot, "fault_hold_ms": FAULT_HOLD_MS, "ee_rgb": rgb(EE_COLOR),
-               "ee_fault_rgb": rgb(EE_FAULT_COLOR), "timeout_s": 40}
-        (tmp_path / "studio.json").write_text(json.dumps(cfg))
-        driver = subprocess.Popen([NODE, str(HERE / "studio.mjs"), str(tmp_path / "studio.json")], cwd=HERE,
-                                  stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        stages = {}
+    cfg = {"chromium": CHROMIUM, "out": str(tmp_path), "layout": str(LAYOUT), "fault_hold_ms": FAULT_HOLD_MS,
+           "ee_rgb": rgb(EE_COLOR), "ee_fault_rgb": rgb(EE_FAULT_COLOR), "timeout_s": 60}
+    (tmp_path / "studio.json").write_text(json.dumps(cfg))
+    stages, proc = {}, None
+    # the browser loads Studio while the session starts
+    driver = subprocess.Popen([NODE, str(HERE / "studio.mjs"), str(tmp_path / "studio.json")], cwd=HERE,
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    def until(stage):
         for line in driver.stdout:
             rep = json.loads(line)
             stages[rep["stage"]] = rep
-            if rep["stage"] == "fault":
-                break
-        assert "live" in stages and "fault" in stages, driver.stderr.read()
+            if rep["stage"] == stage:
+                return
+        raise AssertionError(f"studio.mjs ended before stage {stage}: {driver.stderr.read()}")
+
+    try:
+        proc, port = start_session(tmp_path)
+        robot = robot_process(proc.pid, port, mcap)
+        until("ready")
+        assert stages["ready"]["host_error"] is None, stages["ready"]
+        driver.stdin.write(f"live ws://127.0.0.1:{port} {robot}\n")
+        driver.stdin.flush()
+        until("fault")
         # the session is stopped as an operator would (SIGTERM: the recording closed whole, docs/safety.md)
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(60) == 128 + signal.SIGTERM, proc.stderr.read()
-        rec = read_session(mcap)
+        driver.stdin.write(f"recording {mcap}\n")
+        driver.stdin.flush()
+        rec = read_session(mcap)  # while Studio opens it
         assert rec.complete and rec.is_intact, rec.damage
-        end_ns = max(t for _, t, _, _ in rec.records)
-        end_iso = time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(end_ns // 10**9)) + f".{end_ns % 10**9 // 10**6:03d}Z"
-        out, err = driver.communicate(f"recording {mcap} {end_iso}\n", timeout=120)
+        out, err = driver.communicate(timeout=120)
         for line in out.splitlines():
             rep = json.loads(line)
             stages[rep["stage"]] = rep
