@@ -236,6 +236,51 @@ def test_cables_are_independent():
     assert not np.allclose(two.f_tip[:, 0], two.f_tip[:, 1])
 
 
+def test_a_cable_s_numbers_do_not_depend_on_when_the_others_converge():
+    """The cables share each compiled step in lockstep; one that needs more Newton iterations (a reversal, slack)
+    must not change another's numbers."""
+    params = TendonSheathParams()
+    rng = np.random.default_rng(3)
+    x = np.cumsum(rng.normal(0, 3e-5, (300, 4)), axis=0)
+    x[:, 2] = 2e-3 * np.sin(np.linspace(0, 12, 300))  # reversals and slack on cable 2 only
+    all4 = TendonSheath(params, SheathLoad("force"), pretension=2.85, n_cables=4).run(x, 2.85)
+    assert np.ptp(all4.iterations[:, 2]) > 0 and not np.array_equal(all4.iterations[:, 2], all4.iterations[:, 0])
+    for c in range(4):
+        one = TendonSheath(params, SheathLoad("force"), pretension=2.85).run(x[:, c], 2.85)
+        for name in ("f_motor", "x_tip", "iterations"):
+            assert np.array_equal(getattr(all4, name)[:, c], getattr(one, name)[:, 0]), (c, name)
+
+
+def test_taps_report_their_elements_tensions_every_tick():
+    params = TendonSheathParams()
+    sheath = TendonSheath(params, SheathLoad("spring", K_LOAD), pretension=2.0, n_cables=2, taps=(3, 17))
+    x = np.stack([ramp(0.0, 1e-3), ramp(0.0, 5e-4, speed=5e-4)], axis=1)
+    run = sheath.run(x, theta=0.3, keep_tensions=True)
+    assert np.array_equal(run.tapped[:, 0], run.tensions[:, :, 3]) and np.array_equal(run.tapped[:, 1],
+                                                                                        run.tensions[:, :, 17])
+    out = np.empty((sheath.out_rows, 2))
+    sheath.step_into(np.full(2, 1.1e-3), np.zeros(2), np.full(2, 0.3), out)
+    assert sheath.out_rows == 6 and np.array_equal(out[4:], sheath.tensions[:, [3, 17]].T)
+    with pytest.raises(InputError, match="taps"):
+        TendonSheath(params, taps=(20,))
+
+
+def test_the_input_map_gives_the_plain_sheath_s_numbers():
+    """motor_ref, motor_sign, theta_offset: the robot's cable lengths L and capstan wraps drive the cable as its
+    haul-in L_home - L and kinematic bend wrap - theta0 would."""
+    params = TendonSheathParams()
+    rng = np.random.default_rng(5)
+    L_home, theta0 = np.array([0.025, 0.03]), 2.4
+    L = L_home + np.cumsum(rng.normal(0, 2e-5, (200, 2)), axis=0)
+    wrap = theta0 + 0.3 * np.sin(np.linspace(0, 3, 200))[:, None] + np.zeros(2)
+    mapped = TendonSheath(params, pretension=2.85, n_cables=2, motor_ref=L_home, motor_sign=-1.0, theta_offset=theta0)
+    plain = TendonSheath(params, pretension=2.85, n_cables=2)
+    a = mapped.run(L, 2.85, wrap)
+    b = plain.run(L_home - L, 2.85, wrap - theta0)
+    for name in ("x_motor", "f_motor", "f_tip", "x_tip"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+
+
 # ---- parameters --------------------------------------------------------------------------------------------
 
 def test_bend_weights_put_each_bend_where_its_span_is():
