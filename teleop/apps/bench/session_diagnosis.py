@@ -71,7 +71,10 @@ def register(subparsers) -> None:
 def parse_effect(text: str) -> tuple[str, dict]:
     """'coulomb_friction:Fc=0.3' -> ('coulomb_friction', {'Fc': 0.3}); InputError naming the flag otherwise."""
     name, _, rest = text.partition(":")
-    eff = get_effect(name)
+    try:
+        eff = get_effect(name)
+    except InputError as exc:  # the catalogue's message does not know the flag
+        raise InputError(f"--effect {text}: {exc}") from None
     params = {s.name: s.default for s in eff.params}
     for item in filter(None, rest.split(",")):
         key, _, value = item.partition("=")
