@@ -58,7 +58,8 @@ def test_bench_blind_jnd_takes_the_rig_geometry(lab):
 @pytest.mark.parametrize("argv", [["blind-test", "--participants", "1"], ["palpate", "--test", "z", "--limit", "1"],
                                   ["session", "--seconds", "0.1", "--no-realtime", "--robot-inline"],
                                   ["bench", "blind-jnd", "--participants", "1"],
-                                  ["bench", "loop", "--seconds", "0.1", "--no-realtime"]])
+                                  ["bench", "loop", "--seconds", "0.1", "--no-realtime"],
+                                  ["bench", "feedforward", "--seconds", "1"]])
 def test_a_bad_geometry_is_one_line_naming_file_and_key_exit_2_nothing_written(tmp_path, capsys, argv):
     bad = tmp_path / "lab.toml"
     bad.write_text(LAB.replace("mu = 0.07", "mu = -0.07"))
@@ -132,3 +133,15 @@ def test_bench_loop_runs_its_session_on_the_geometry(tmp_path, lab, capsys):
     assert rc == 0
     conf = read_session(str(rec)).metadata["session"]["configuration"]
     assert conf["geometry"]["mu"] == 0.07 and conf["geometry_file"] == str(lab)
+
+
+def test_bench_feedforward_runs_its_sessions_on_the_geometry(tmp_path, lab, capsys):
+    lab.write_text(LAB + "v_max_mm_s = 15.0\n")
+    out = tmp_path / "ff.json"
+    rc = main(["bench", "feedforward", "--seconds", "1", "--settle-s", "0.2", "--geometry", str(lab),
+               "--json", str(out)])
+    capsys.readouterr()
+    assert rc == 0
+    d = json.loads(out.read_text())
+    assert d["geometry_file"] == str(lab)
+    assert d["v_max_step_mm"] == pytest.approx(15.0 * 2e-3)  # the loop's command step: the file's v_max x period

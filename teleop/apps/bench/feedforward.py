@@ -51,7 +51,7 @@ from devices.simulated import OperatorParams, Script, SimulatedStylus
 from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
 from scenes.sim_robot import SimRobot, SimRobotParams
 from scenes.tendon_sheath import TendonSheathParams
-from teleop.apps.argtypes import input_file
+from teleop.apps.argtypes import add_geometry_option, geometry_of, input_file
 from teleop.core.control.feedforward import model_backlash_width
 from teleop.core.errors import InputError
 from teleop.core.kinematics import rotation_zyx
@@ -91,6 +91,7 @@ def register(subparsers) -> None:
     p.add_argument("--recordings", nargs="+", metavar="MCAP", type=input_file,
                    help="measure recorded sessions of the simulated robot instead (e.g. without, then with "
                         "--compensation); the ratio is first / second")
+    add_geometry_option(p)
     p.add_argument("--json", metavar="F", help="write the result JSON here")
     p.add_argument("--plot", metavar="F", help="write the tip error over time (PNG)")
     p.set_defaults(func=run)
@@ -103,15 +104,17 @@ def _seeds(seed: int) -> tuple[int, int]:
 
 
 def run_session(backlash: float, width: float | None, seconds: float, seed: int, axis: str = "x",
-                amp: float = 12e-3, period: float = 2.0, plant: str = "matched") -> dict:
+                amp: float = 12e-3, period: float = 2.0, plant: str = "matched", geometry=None) -> dict:
     """One closed-loop session on the manual clock; the plant's play `backlash` [m], the feed-forward's
-    `width` [m] (None: off), `plant` matched or distributed (module docstring). Returns arrays per robot reading: "t" [s], "err" [m] (tip error), "enabled",
+    `width` [m] (None: off), `plant` matched or distributed (module docstring), `geometry` the robot's (None:
+    the seed robot). Returns arrays per robot reading: "t" [s], "err" [m] (tip error), "enabled",
     and "final_state", "fault_reason", "max_command_step" [m]."""
     robot_seed, stylus_seed = _seeds(seed)
     params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=ROBOT_RATE_HZ,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
     cable = TendonSheathParams() if plant == "distributed" else None
-    sim = SimRobot(params=SimRobotParams(substeps=SUBSTEPS, backlash=backlash, cable=cable), seed=robot_seed)
+    sim = SimRobot(params=SimRobotParams(substeps=SUBSTEPS, backlash=backlash, cable=cable,
+                                         **({} if geometry is None else {"geometry": geometry})), seed=robot_seed)
     logged = LoggedDevice(sim)  # what reaches the robot: the speed check
     clock_t = [0.0]
     robot = logged if width is None else BacklashCompensatedRobot(logged, width, params.dt * params.robot_every,
@@ -122,7 +125,8 @@ def run_session(backlash: float, width: float | None, seconds: float, seed: int,
     n = int(round(seconds * RATE_HZ))
     t_log, err, on = [], [], []
     with robot, stylus:
-        tp = Teleop(stylus, robot, params, estimator=default_estimator(frame_period(params, None)))
+        tp = Teleop(stylus, robot, params, geom=geometry,
+                    estimator=default_estimator(frame_period(params, None), geometry=geometry))
         tp.start(0.0)
         tool = np.asarray(tp.geom.tip, dtype=float)
         gc.collect()
@@ -193,15 +197,16 @@ def _stats_mm(e: np.ndarray) -> dict:
 def bench_feedforward(backlash: float = 0.5e-3, width: float | None = None, source: str = "the plant's own width",
                       seconds: float = 10.0, settle: float = 1.0, seed: int = 0, axis: str = "x",
                       amp: float = 12e-3, period: float = 2.0, progress=None,
-                      plant: str = "matched") -> tuple[dict, dict]:
+                      plant: str = "matched", geometry=None) -> tuple[dict, dict]:
     """(result dict of the module docstring, raw traces by session). width: the feed-forward's play [m]
-    (None: `backlash`); progress(name) is called as each session starts; plant: matched or distributed."""
+    (None: `backlash`); progress(name) is called as each session starts; plant: matched or distributed;
+    geometry: the robot's (None: the seed robot)."""
     width = backlash if width is None else width
     runs, sessions = {}, {}
     for name, play, w in (("plain", backlash, None), ("compensated", backlash, width), ("no_play", 0.0, None)):
         if progress is not None:
             progress(name)
-        tr = run_session(play, w, seconds, seed, axis, amp, period, plant)
+        tr = run_session(play, w, seconds, seed, axis, amp, period, plant, geometry)
         runs[name] = tr
         keep = tr["enabled"] & (tr["t"] >= settle)
         sessions[name] = {"tip_error_mm": _stats_mm(tr["err"][keep]), "readings": int(keep.sum()),
@@ -288,6 +293,7 @@ def _check(args) -> None:
 
 def run(args) -> int:
     _check(args)
+    geometry = geometry_of(args) if args.geometry else None  # a bad file is one line before any session
     if args.recordings:
         out = bench_recordings(args.recordings, args.settle_s)
         print(f"tip tracking error of recorded sessions after {args.settle_s:g} s [mm]:")
@@ -307,7 +313,9 @@ def run(args) -> int:
     out, runs = bench_feedforward(args.backlash_mm * 1e-3, width, source, args.seconds, args.settle_s, args.seed,
                                   args.axis, args.amp_mm * 1e-3, args.period_s,
                                   progress=lambda name: print(f"feedforward: session {name} ...", file=sys.stderr,
-                                                              flush=True), plant=args.plant)
+                                                              flush=True), plant=args.plant, geometry=geometry)
+    if args.geometry:  # listed only when given: the seed robot's JSON is what it was
+        out["geometry_file"] = args.geometry
     print(format_report(out))
     if args.json:
         write_json(args.json, out)
