@@ -59,7 +59,7 @@ def test_bench_blind_jnd_takes_the_rig_geometry(lab):
                                   ["session", "--seconds", "0.1", "--no-realtime", "--robot-inline"],
                                   ["bench", "blind-jnd", "--participants", "1"],
                                   ["bench", "loop", "--seconds", "0.1", "--no-realtime"],
-                                  ["bench", "feedforward", "--seconds", "1"]])
+                                  ["bench", "feedforward", "--seconds", "2"]])
 def test_a_bad_geometry_is_one_line_naming_file_and_key_exit_2_nothing_written(tmp_path, capsys, argv):
     bad = tmp_path / "lab.toml"
     bad.write_text(LAB.replace("mu = 0.07", "mu = -0.07"))
