@@ -6,8 +6,8 @@
 //
 // CONFIG: {chromium, out (screenshot folder), layout (layout file), fault_hold_ms, ee_rgb and ee_fault_rgb
 // ([r, g, b] 0..255 of the end effector, normal and in FAULT), timeout_s}. One JSON line {"stage": ...} per
-// stage: "ready" (Studio loaded, no data source: its build is cached while the session starts), then per line
-// on stdin:
+// stage: "ready" (Studio loaded with no data source, while the session starts), then per line on stdin, each
+// opening Studio again in the same page on a deep link (studio/host.js's studioOpen: no reload of the build):
 //   live WS_URL ROBOT_PID   -> "live" (Studio's foxglove-websocket deep link with the layout: the sidebar, every
 //                              panel's text twice 2.5 s apart, pixels changed between two screenshots and the
 //                              end effector's colour per panel), then "fault" (ROBOT_PID paused with SIGSTOP for
@@ -51,10 +51,10 @@ async function panels(page) {
   }, panelIds);
 }
 
-/** What two screenshots (PNG buffers, `gap` apart) show inside each panel's box: `changed` pixels, of which
- *  `changed_colour` are colourful (a plotted series, a state bar; not grey text or grid), and `ee` pixels of
- *  the colour `rgb` (a lit or shaded surface of it: the same chromaticity at some brightness) in the second.
- *  Decoded in the page itself (an <img> drawn on a 2D canvas): no image library needed. */
+/** What two screenshots (PNG buffers, one taken after the other) show inside each panel's box: `changed`
+ *  pixels, of which `changed_colour` are colourful (a plotted series, a state bar; not grey text or grid), and
+ *  `ee` pixels of the colour `rgb` in the second (a lit or shaded surface of it: the same chromaticity at some
+ *  brightness). Decoded in the page itself (an <img> drawn on a 2D canvas): no image library needed. */
 async function pixels(page, pngA, pngB, boxes, rgb) {
   return page.evaluate(async (a64, b64, boxes, rgb) => {
     const decode = async (b64) => {
@@ -130,9 +130,15 @@ async function waitFor(what, fn, timeoutMs) {
   return { ...last, timedOut: what };
 }
 
+/** Studio on the deep link `url` (the host page's own URL with Studio's parameters), in the page already loaded. */
+async function open(page, url) {
+  await page.evaluate((search) => window.studioOpen(search), new URL(url).search.slice(1));
+}
+
 async function live(page, host, timeout, ws, robotPid) {
   const asked = elapsed();
-  await page.goto(`${host}&ds=foxglove-websocket&ds.url=${encodeURIComponent(ws)}`);
+  await open(page, `${host}&ds=foxglove-websocket&ds.url=${encodeURIComponent(ws)}`);
+  const loaded = elapsed();
   const connected = await waitFor("data in every panel", async () => {
     const ps = await panels(page);
     const info = await sidebar(page, "Problems");
@@ -151,7 +157,8 @@ async function live(page, host, timeout, ws, robotPid) {
   const second = await panels(page);
   const shotB = await page.screenshot({ path: join(cfg.out, "live.png") });
   emit({
-    stage: "live", connected: !connected.timedOut, asked_s: asked, shown_s: shown, sidebar: await sidebar(page, "Problems"), first, second,
+    stage: "live", connected: !connected.timedOut, asked_s: asked, loaded_s: loaded, shown_s: shown,
+    sidebar: await sidebar(page, "Problems"), first, second,
     pixels: await pixels(page, shotA, shotB, boxes(second), cfg.ee_rgb),
     host_error: await page.evaluate(() => window.hostError ?? null),
   });
@@ -173,7 +180,8 @@ async function live(page, host, timeout, ws, robotPid) {
 async function recording(page, host, timeout, path, endIso) {
   files["session.mcap"] = path;
   const time = endIso ? `&time=${encodeURIComponent(endIso)}` : "";
-  await page.goto(`${host}&ds=remote-file&ds.url=${encodeURIComponent(`${origin}/files/session.mcap`)}${time}`);
+  const url = `${origin}/files/session.mcap`;
+  await open(page, `${host}&ds=remote-file&ds.url=${encodeURIComponent(url)}${time}`);
   const opened = await waitFor("the recording's duration shown", async () => {
     const info = await sidebar(page, "Topics");
     return { ok: /DURATION\s*\n\s*\d+:\d\d:\d\d/.test(info), info };
@@ -194,23 +202,23 @@ const browser = await puppeteer.launch({
   executablePath: cfg.chromium,
   headless: true,
   userDataDir: profile,
+  // WebGL (the 3D panel) on the CPU: Chromium 156 still falls back to SwiftShader by itself and says that this
+  // is deprecated; the page is our own, so the fallback is asked for by name
   args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
-    "--disable-component-update", "--disable-sync"],
+    "--disable-component-update", "--disable-sync", "--enable-unsafe-swiftshader"],
   defaultViewport: { width: 1600, height: 1000 },
 });
 const consoleErrors = [];
 try {
   const timeout = (cfg.timeout_s ?? 40) * 1000;
   const host = `${origin}/studio/index.html?layoutId=teleop&layout=/files/layout.json`;
-  // while the session starts: Studio's build fetched, parsed and cached by a first tab, with no data source
-  const warm = await browser.newPage();
-  await warm.goto(host);
-  await warm.waitForFunction(() => window.hostReady || window.hostError, { timeout });
-  emit({ stage: "ready", host_error: await warm.evaluate(() => window.hostError ?? null) });
-  await warm.close();
+  // while the session starts: Studio's build loaded and shown with no data source
   const page = await browser.newPage();
   page.on("console", (m) => { if (m.type() === "error") consoleErrors.push(m.text().slice(0, 500)); });
   page.on("pageerror", (e) => consoleErrors.push(`pageerror: ${String(e).slice(0, 500)}`));
+  await page.goto(host, { timeout });
+  await page.waitForFunction(() => window.hostReady || window.hostError, { timeout });
+  emit({ stage: "ready", host_error: await page.evaluate(() => window.hostError ?? null) });
   for await (const line of stdinLines) {
     const [cmd, ...args] = line.trim().split(" ");
     if (cmd === "live") await live(page, host, timeout, args[0], Number(args[1]));

@@ -34,10 +34,18 @@
   const dataSources = [
     new FoxgloveWebSocketDataSourceFactory(), new McapLocalDataSourceFactory(), new RemoteDataSourceFactory(),
   ];
-  const app = React.createElement(App, {
+  const root = document.getElementById("root");
+  const mount = () => ReactDOM.render(React.createElement(App, {
     deepLinks: [window.location.href], appConfiguration, dataSources, layoutStorage, extensionLoaders: [],
     enableGlobalCss: true,
-  });
-  ReactDOM.render(app, document.getElementById("root"));
+  }), root);
+  // Studio opened again on other deep-link parameters without reloading its 56 MB build: the page's URL set to
+  // them, the app unmounted (its player closed) and mounted afresh, as on a page load
+  window.studioOpen = (search) => {
+    window.history.replaceState(null, "", `${window.location.pathname}?${search}`);
+    ReactDOM.unmountComponentAtNode(root);
+    mount();
+  };
+  mount();
   window.hostReady = true;
 })().catch((err) => { window.hostError = String(err && err.stack || err); console.error(err); });
