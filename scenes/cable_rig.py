@@ -13,6 +13,11 @@ diagnosis' concealed-effect cases (teleop.diagnosis.generator) are recordings of
 It shares with the diagnosis only the physics models (teleop.core.physics); the CSV is written here, not by the
 diagnosis' writer, so a recording from this bench is "made elsewhere" as far as the diagnosis knows.
 
+`ranges`: None draws the rig's own set-up as it always has (bends 60-360 deg, mu 0.04-0.12, 500 Hz unless
+given, noisy encoders, force noise 0.4 % of the mean load); `LITERATURE` (a `RigRanges`) draws it over the
+ranges tendon-sheath rigs are reported at (each range's source on the field), the cable's axial stiffness
+setting the sheath's stick stiffness through Kaneko's dead zone.
+
 Units: SI inside (m, N, s, rad); the CSV carries mm, deg, N, C.
 """
 
@@ -25,6 +30,7 @@ import numpy as np
 
 from pathlib import Path
 
+from scenes.tendon_sheath import dead_zone_uniform
 from teleop.core.physics import REGISTRY, Signals, get_effect
 from teleop.core.physics.base import Scale
 from teleop.core.physics.capstan import tip2motor_transitions
@@ -38,6 +44,96 @@ CHANNEL_COLUMNS = {"temperature": "temperature_C", "theta": "bend_angle_deg"}
 OUTSIDE = ("stiffening_spring", "eccentric_pulley", "sensor_delay")
 #: the interchange columns the bench can write (t_s always)
 COLUMNS = ("motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "temperature_C")
+
+
+#: the optional sensors of a literature-range recording (the motor encoder, the drive, is always recorded)
+OPTIONAL_COLUMNS = COLUMNS[1:]
+
+
+@dataclass(frozen=True)
+class RigRanges:
+    """What a rig's set-up is drawn over (SI unless the name says otherwise), with each range's source.
+
+    mu: sheath friction coefficient [-], uniform: issue 26 item 6's literature range 0.05-0.25; its low end is
+        the seed's own sheath (seed 000 Fig 9, the project's mu 0.056), the high end a polymer cable in a
+        polymer liner (Do, Tjahjowidodo, Lau, Phee, Mech Syst Signal Process 2015, report coefficients of
+        that order for their endoscopic sheaths).
+    bend_deg: total bend of the sheath [deg], uniform: up to seed 000 Fig 8's route (A-B 360 deg) plus its
+        scaffold (B-C 140 deg) plus a kinematic bend, 540 deg; from 30 deg, a nearly straight sheath.
+    max_capstan_ratio: exp(mu Theta) at most (issue 26: capstan ratios 1.0-5.0); pairs beyond it are redrawn.
+    cables: {material: ((EA_min, EA_max) [N], (L_min, L_max) [m])}, the material drawn uniformly, then EA
+        and L uniform. Steel: a 0.3-0.45 mm 7x7 rope, E = 200 GPa at a rope modulus of about half the full
+        section (scenes.tendon_sheath's EA source: 7 kN and 16 kN), from 5 kN. Polymer: a 0.3-0.5 mm UHMWPE
+        braid (Dyneema SK75 datasheet: fibre modulus about 110 GPa; a braid about a third of it on a 0.6
+        fill): 1.5-4 kN. Lengths: seed 000's sheath (about 1 m) to a 1.5 m endoscope, from 0.5 m.
+    load_N: mean tip load [N], uniform (seed 000 Fig 9-11: 0.49-4.9 N weights to 20 N pretensions).
+    noise_fs: every analog sensor's noise as a fraction of its full scale, log-uniform: 0.2-3 %, from a
+        strain-gauge cell through an amplifier (seed 000 Table 4's [17]: 0.03 N on 5 N, 0.6 %) to an FSR
+        (seed 000's quintic FSR calibration leaves several % of its range).
+    drive_hz: the drive's frequencies [Hz], log-uniform: 0.05-5 Hz, from a quasi-static haul to the hand's
+        voluntary band (MRDLab's da Vinci runs: 0.1-0.5 Hz sines; shared/data/README.md).
+    max_speed: the drive's peak speed [m/s] (a frequency beyond it is lowered): a NEMA17 stepper (seed 000's
+        actuator) at 600 rpm on a 10 mm drum, about 0.3 m/s.
+    fs_hz: sampling rate [Hz], log-uniform: 200 Hz (seed 000's Arduino Mega loop) to 2 kHz (a DAQ; MRDLab
+        logs at 1 kHz).
+    exact_encoder: the probability that an encoder is exact (a commanded or optical-encoder position:
+        quantised at 1 um, no noise); else it is an analog position sensor with the analog noise.
+    sensor_present: the probability that each optional sensor (OPTIONAL_COLUMNS) is recorded."""
+
+    mu: tuple = (0.05, 0.25)
+    bend_deg: tuple = (30.0, 540.0)
+    max_capstan_ratio: float = 5.0
+    cables: tuple = (("steel", (5.0e3, 16.0e3), (0.5, 1.5)), ("polymer", (1.5e3, 4.0e3), (0.5, 1.5)))
+    load_N: tuple = (3.0, 20.0)
+    noise_fs: tuple = (0.002, 0.03)
+    drive_hz: tuple = (0.05, 5.0)
+    max_speed: float = 0.3
+    fs_hz: tuple = (200.0, 2000.0)
+    exact_encoder: float = 0.5
+    sensor_present: float = 0.6
+
+
+LITERATURE = RigRanges()
+
+
+def _loguniform(rng: np.random.Generator, lo_hi) -> float:
+    return float(math.exp(rng.uniform(math.log(lo_hi[0]), math.log(lo_hi[1]))))
+
+
+def draw_setup(rng: np.random.Generator, ranges: RigRanges) -> dict:
+    """A literature-range set-up: {"fs_hz", "mu", "bend_rad", "capstan_ratio", "cable", "EA_N", "length_m",
+    "load_N", "dead_zone_m" (Kaneko's, at the mean load), "noise_fs", "motor_encoder", "tip_encoder"
+    ("exact" or "noisy")}."""
+    fs = _loguniform(rng, ranges.fs_hz)
+    while True:
+        mu = float(rng.uniform(*ranges.mu))
+        bend = math.radians(float(rng.uniform(*ranges.bend_deg)))
+        if math.exp(mu * bend) <= ranges.max_capstan_ratio:
+            break
+    cable, ea, length = ranges.cables[int(rng.integers(len(ranges.cables)))]
+    EA, L = float(rng.uniform(*ea)), float(rng.uniform(*length))
+    load = float(rng.uniform(*ranges.load_N))
+    enc = ["exact" if rng.random() < ranges.exact_encoder else "noisy" for _ in range(2)]
+    return {"fs_hz": fs, "mu": mu, "bend_rad": bend, "capstan_ratio": math.exp(mu * bend), "cable": cable,
+            "EA_N": EA, "length_m": L, "load_N": load, "dead_zone_m": dead_zone_uniform(load, EA, L, mu * bend),
+            "noise_fs": _loguniform(rng, ranges.noise_fs), "motor_encoder": enc[0], "tip_encoder": enc[1]}
+
+
+def draw_columns(rng: np.random.Generator, ranges: RigRanges, effects=("none",), load: str = "spring") -> tuple:
+    """The columns of a literature-range recording: the motor encoder and each optional sensor present with
+    probability `ranges.sensor_present`, redrawn until every catalogue effect of `effects` is `observable`
+    (an effect-free recording: until some rig effect would be, i.e. it has a link); ValueError when no
+    columns could show them under `load`."""
+    want = [e for e in effects if e in REGISTRY]
+    hidden = [e for e in want if not observable(e, COLUMNS, load)]
+    if hidden:
+        raise ValueError(f"cable rig: {hidden} cannot show in any recording with a {load} load")
+    while True:
+        cols = ("motor_pos_mm",) + tuple(c for c in OPTIONAL_COLUMNS if rng.random() < ranges.sensor_present)
+        if want and all(observable(e, cols, load) for e in want):
+            return cols
+        if not want and any(observable(e, cols, load) for e in rig_effects()):
+            return cols
 
 
 def rig_effects() -> tuple[str, ...]:
@@ -62,20 +158,31 @@ class RigRecording:
         Path(path).write_text(self.csv, encoding="utf-8")
 
 
-def _trajectory(rng: np.random.Generator, t: np.ndarray, fs: float) -> tuple[str, np.ndarray]:
-    """Motor haul-in [m] about its mean: sine, sum of sines, or strokes of changing speed (3-10 mm)."""
+def trajectory(rng: np.random.Generator, t: np.ndarray, fs: float, ranges: RigRanges | None = None,
+               travel: float = 0.0) -> tuple[str, np.ndarray]:
+    """Motor haul-in [m] about its mean: sine, sum of sines, or strokes of changing speed (a variable-speed
+    triangle), 3-10 mm. ranges: frequencies from ranges.drive_hz (log-uniform), each lowered to keep the
+    peak speed within ranges.max_speed; travel: a least amplitude [m] (a drive that reaches past the dead
+    zone)."""
     kind = ("sine", "sines", "strokes")[int(rng.integers(3))]
-    A = rng.uniform(3e-3, 10e-3)
+    A = max(rng.uniform(3e-3, 10e-3), travel)
+
+    def hz(lo, hi, size=None):
+        if ranges is None:
+            return rng.uniform(lo, hi, size)
+        f = np.exp(rng.uniform(math.log(ranges.drive_hz[0]), math.log(ranges.drive_hz[1]), size))
+        return np.minimum(f, ranges.max_speed / (2 * np.pi * A))
     if kind == "sine":
-        x = A * np.sin(2 * np.pi * rng.uniform(0.15, 0.7) * t + rng.uniform(0, 2 * np.pi))
+        x = A * np.sin(2 * np.pi * hz(0.15, 0.7) * t + rng.uniform(0, 2 * np.pi))
     elif kind == "sines":
         x = np.zeros_like(t)
-        for amp, f in zip(rng.dirichlet(np.ones(3)) * A, rng.uniform(0.1, 0.8, 3)):
+        for amp, f in zip(rng.dirichlet(np.ones(3)) * A, hz(0.1, 0.8, 3)):
             x += amp * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
     else:
         x = np.empty_like(t)
         pos, k, direction = 0.0, 0, 1.0
-        speeds = np.geomspace(0.25, 3.0, 5) * A
+        # stroke speeds: a triangle of amplitude A at frequency f moves at 4 A f
+        speeds = np.geomspace(0.25, 3.0, 5) * A if ranges is None else np.sort(4 * A * hz(0, 0, 5))
         while k < t.size:
             speed = speeds[int(rng.integers(speeds.size))]
             target = float(np.clip(pos + direction * speed * rng.uniform(0.6, 1.5), -A, A))
@@ -135,8 +242,9 @@ def _switched_on(effects, link: str, with_load: bool | None = None) -> list[str]
             and (with_load is None or ("load" in get_effect(n).inputs) == with_load)]
 
 
-def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_hz: float = 500.0,
-             duration_s: float = 20.0, noise: float = 1.0, given: dict | None = None) -> RigRecording:
+def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_hz: float | None = 500.0,
+             duration_s: float = 20.0, noise: float = 1.0, given: dict | None = None,
+             ranges: RigRanges | None = None) -> RigRecording:
     """One recording of the bench with `effects` switched on (catalogue names of `rig_effects()`, OUTSIDE
     names, or 'none') at random parameters drawn from `seed` (int or sequence), each catalogue effect's by
     its own draw (Rules.draw); `columns` of COLUMNS are written. Effects act link by link: the position
@@ -147,15 +255,26 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     (n,) [m] with n = duration_s * fs_hz, "theta" bend [rad] (scalar or (n,)), "mu", "k_stick" [N/m],
     "spring_N_per_m" and "preload_N" (load = spring), "tip_force" (n,) [N] (load = external), and
     "ideal_sensors": True for unit gains and zero offsets. The random draws happen all the same, so the
-    rest of the recording is the one `seed` gives without `given`."""
+    rest of the recording is the one `seed` gives without `given`.
+
+    `ranges` (a RigRanges, e.g. LITERATURE): the set-up is drawn over them (`draw_setup`; its record in
+    `setup`), fs_hz None taking the drawn sampling rate; the sheath's stick stiffness is the one whose
+    transition spans Kaneko's dead zone at the mean load (scenes.tendon_sheath.dead_zone_uniform), every
+    analog sensor's noise the drawn fraction of its full scale times `noise`."""
     rng = np.random.default_rng(seed)
+    lit = draw_setup(rng, ranges) if ranges is not None else None
+    if fs_hz is None:
+        if lit is None:
+            raise ValueError("cable rig: fs_hz None needs ranges to draw it from")
+        fs_hz = lit["fs_hz"]
     given = dict(given or {})
     effects = tuple(e for e in effects if e != "none")
     unknown = [e for e in effects if e not in rig_effects() + OUTSIDE]
     if unknown:
         raise ValueError(f"cable rig: cannot switch on {unknown} (known: {rig_effects() + OUTSIDE})")
     t = np.arange(int(duration_s * fs_hz)) / fs_hz
-    traj, x = _trajectory(rng, t, fs_hz)
+    travel = 0.0 if lit is None else 1.2 * lit["dead_zone_m"]
+    traj, x = trajectory(rng, t, fs_hz, ranges, travel)
     if "x" in given:
         traj, x = "given", np.asarray(given["x"], dtype=float)
         if x.shape != t.shape:
@@ -173,6 +292,11 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         levels = rng.uniform(math.pi / 3, 2 * math.pi, 4)
         theta = levels[np.minimum((t / duration_s * 4).astype(int), 3)]
     mu = rng.uniform(0.04, 0.12)
+    if lit is not None:   # the drawn total bend, constant or stepped down to half of it
+        theta = np.full(t.shape, lit["bend_rad"])
+        if "bend_angle_deg" in columns and rng.random() < 0.5:
+            theta = (lit["bend_rad"] * rng.uniform(0.5, 1.0, 4))[np.minimum((t / duration_s * 4).astype(int), 3)]
+        mu = lit["mu"]
     if "theta" in given:
         theta = np.broadcast_to(np.asarray(given["theta"], dtype=float), t.shape).copy()
     mu = float(given.get("mu", mu))
@@ -188,6 +312,9 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     if load == "spring":
         ks = rng.uniform(200.0, 2000.0)                 # N/m
         pre = ks * A * rng.uniform(1.2, 2.0)            # keeps the cable taut
+        if lit is not None:                             # the drawn mean load, the spring keeping it taut
+            pre = lit["load_N"]
+            ks = min(ks, pre / (1.5 * A))
         ks, pre = float(given.get("spring_N_per_m", ks)), float(given.get("preload_N", pre))
         k3 = 0.0
         if "stiffening_spring" in effects:
@@ -200,6 +327,7 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         F_tip = spring(z)
     else:
         L0 = rng.uniform(5.0, 20.0)
+        L0 = L0 if lit is None else lit["load_N"]
         fl = rng.uniform(0.05, 0.4)
         F_tip = L0 * (1 + rng.uniform(0.3, 0.6) * np.sin(2 * np.pi * fl * t + rng.uniform(0, 6.3))
                       + 0.1 * np.sin(2 * np.pi * 1.7 * fl * t))
@@ -222,6 +350,8 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     # the sheath: capstan friction over the bend, stick transitions at reversals
     band = 2 * L0 * math.sinh(mu * float(np.mean(theta)))
     k_stick = band / (rng.uniform(0.02, 0.08) * A)
+    if lit is not None:   # the transition spans the cable's dead zone (Kaneko) at the mean load
+        k_stick = band / dead_zone_uniform(L0, lit["EA_N"], lit["length_m"], mu * float(np.mean(theta)))
     k_stick = float(given.get("k_stick", k_stick))
     F_m = tip2motor_transitions(x, F_tip, mu, theta, k_stick)
     Fc = rng.uniform(0.08, 0.2) * L0           # the rig's friction level, drawn whatever is switched on
@@ -255,12 +385,17 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         tau = rng.uniform(0.05, 0.15)
         truth["sensor_delay"] = {"channel": "tip_force", "params": {"tau": tau}}
         readings["tip_force"] = np.interp(t - tau, t, readings["tip_force"])
-    sf = 0.004 * L0 * noise
+    sf = {"motor_force": 0.004 * L0 * noise, "tip_force": 0.004 * L0 * noise}
+    sx = {"motor": 2e-6 * noise, "tip": 5e-6 * noise}
+    if lit is not None:   # a fraction of each sensor's full scale (its peak reading, the travel's span)
+        sf = {c: lit["noise_fs"] * noise * float(np.max(np.abs(readings[c]))) for c in sf}
+        sx = {e: 0.0 if lit[f"{e}_encoder"] == "exact" else lit["noise_fs"] * noise * float(np.ptp(x))
+              for e in sx}
     cols = {
-        "motor_pos_mm": 1e3 * (np.round((x + rng.normal(0, 2e-6 * noise, t.size)) / 1e-6) * 1e-6),
-        "tip_pos_mm": 1e3 * (np.round((z + rng.normal(0, 5e-6 * noise, t.size)) / 1e-6) * 1e-6),
-        "motor_force_N": readings["motor_force"] + rng.normal(0, sf, t.size),
-        "tip_force_N": readings["tip_force"] + rng.normal(0, sf, t.size),
+        "motor_pos_mm": 1e3 * (np.round((x + rng.normal(0, sx["motor"], t.size)) / 1e-6) * 1e-6),
+        "tip_pos_mm": 1e3 * (np.round((z + rng.normal(0, sx["tip"], t.size)) / 1e-6) * 1e-6),
+        "motor_force_N": readings["motor_force"] + rng.normal(0, sf["motor_force"], t.size),
+        "tip_force_N": readings["tip_force"] + rng.normal(0, sf["tip_force"], t.size),
         "bend_angle_deg": np.rad2deg(theta),
         "temperature_C": temp + rng.normal(0, 0.02, t.size),
     }
@@ -270,5 +405,9 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
              ",".join(names)]
     lines += [",".join(f"{v:.9g}" for v in row) for row in data]
     setup = {"mu": mu, "k_stick": k_stick, "theta_mean": float(np.mean(theta)),
-             "spring_N_per_m": ks if load == "spring" else None}
+             "spring_N_per_m": ks if load == "spring" else None, "fs_hz": fs_hz,
+             "capstan_ratio": math.exp(mu * float(np.mean(theta))),
+             "noise_N": {c: float(v) for c, v in sf.items()}, "noise_m": {e: float(v) for e, v in sx.items()}}
+    if lit is not None:
+        setup.update({k: lit[k] for k in ("cable", "EA_N", "length_m", "noise_fs", "motor_encoder", "tip_encoder")})
     return RigRecording(truth, "\n".join(lines) + "\n", tuple(names[1:]), traj, load, setup)

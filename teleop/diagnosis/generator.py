@@ -10,6 +10,13 @@ real-time path), with sensor noise and encoder quantisation. The diagnosis tool 
 What is drawn is read from the physics registry: every effect with a generator draw (Rules.draw), drawn
 relative to the signals so each effect is material but not dominant (`case_effects()`), and scored on its
 primary parameters (`primary()`, Rules.primary).
+
+Two set-ups of the rig (GenConfig.ranges): "project", the rig's own draws (every column, an external load,
+the rate and duration given); "literature", the set-up drawn over the ranges tendon-sheath rigs are reported
+at (scenes.cable_rig.LITERATURE, each range's source there: mu 0.05-0.25, total bend up to 540 deg at a
+capstan ratio up to 5, steel and polymer cables, noise 0.2-3 % of full scale, drives 0.05-5 Hz, 200 Hz-2 kHz
+sampling unless the rate is given, exact and noisy encoders), each optional sensor present or absent
+(redrawn until the effect shows: scenes.cable_rig.observable) and a spring or external load.
 """
 
 from __future__ import annotations
@@ -19,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenes.cable_rig import COLUMNS, rig_effects, simulate
+from scenes.cable_rig import COLUMNS, LITERATURE, draw_columns, observable, rig_effects, simulate
 from teleop.io.recording_io import interchange_text
 from teleop.io.outputs import atomic_write
 from teleop.core.physics import REGISTRY, get_effect, linear_force
@@ -41,19 +48,26 @@ def primary() -> dict:
     return {n: get_effect(n).rules.primary for n in case_effects()}
 
 
+#: the rig set-ups a generator may draw (GenConfig.ranges -> scenes.cable_rig ranges; None: the rig's own)
+RANGES = {"project": None, "literature": LITERATURE}
+
+
 @dataclass(frozen=True)
 class GenConfig:
-    """Sampling rate [Hz], duration [s] and a factor on every sensor noise level."""
+    """Sampling rate [Hz] (None: drawn, literature ranges only), duration [s], a factor on every sensor
+    noise level, and the rig's set-up ranges (a key of RANGES)."""
 
-    fs_hz: float = 500.0
+    fs_hz: float | None = 500.0
     duration_s: float = 20.0
     noise: float = 1.0
+    ranges: str = "project"
 
 
 @dataclass(frozen=True)
 class Case:
     """One generated recording: effect ('none' for effect-free), its channel and true parameters, the
-    setup ('rig' or 'pad'), trajectory kind and the interchange CSV text."""
+    setup ('rig' or 'pad'), trajectory kind and the interchange CSV text; a rig case also its columns,
+    load and the simulation's own set-up (scenes.cable_rig RigRecording.setup: mu, capstan ratio, noise...)."""
 
     index: int
     effect: str
@@ -62,6 +76,9 @@ class Case:
     setup: str
     trajectory: str
     csv: str = field(repr=False)
+    columns: tuple = ()
+    load: str = ""
+    rig: dict = field(default_factory=dict, repr=False)
 
     def write(self, path: str | Path) -> Path:
         return atomic_write(path, lambda tmp: tmp.write_text(self.csv, encoding="utf-8"))
@@ -81,10 +98,20 @@ def _run_steps(name: str, params: dict, **channels) -> np.ndarray:
 
 
 def _rig(effect: str, index: int, seed: int, cfg: GenConfig) -> Case:
-    """The cable rig with every column and an external load, `effect` switched on (or 'none')."""
-    rig = simulate([seed, index], (effect,), COLUMNS, "external", cfg.fs_hz, cfg.duration_s, cfg.noise)
+    """The cable rig with `effect` switched on (or 'none'): every column and an external load ("project"),
+    or columns and load drawn ("literature": from the stream [seed, index, 1])."""
+    ranges = RANGES[cfg.ranges]
+    cols, load = COLUMNS, "external"
+    if ranges is not None:
+        rng = np.random.default_rng([seed, index, 1])
+        load = ("spring", "external")[int(rng.integers(2))]
+        if effect in REGISTRY and not observable(effect, COLUMNS, load):   # e.g. a stretch under a spring
+            load = "external" if load == "spring" else "spring"
+        cols = draw_columns(rng, ranges, (effect,), load)
+    rig = simulate([seed, index], (effect,), cols, load, cfg.fs_hz, cfg.duration_s, cfg.noise, ranges=ranges)
     truth = rig.effects.get(effect, {"channel": None, "params": {}})
-    return Case(index, effect, truth["channel"], dict(truth["params"]), "rig", rig.trajectory, rig.csv)
+    return Case(index, effect, truth["channel"], dict(truth["params"]), "rig", rig.trajectory, rig.csv,
+                rig.columns, load, dict(rig.setup))
 
 
 def _pokes(rng: np.random.Generator, t: np.ndarray, cfg: GenConfig) -> np.ndarray:
@@ -104,8 +131,13 @@ def _pokes(rng: np.random.Generator, t: np.ndarray, cfg: GenConfig) -> np.ndarra
     return d
 
 
-def _pad(rng: np.random.Generator, effect: str, index: int, cfg: GenConfig) -> Case:
-    """Pokes on a linear pad with the contact effect `effect` (or 'none') at its own draw's parameters."""
+def _pad(rng: np.random.Generator, effect: str, index: int, seed: int, cfg: GenConfig) -> Case:
+    """Pokes on a linear pad with the contact effect `effect` (or 'none') at its own draw's parameters (a
+    rate to draw: log-uniform over the ranges' fs_hz, from the stream [seed, index, 2])."""
+    if cfg.fs_hz is None:
+        lo, hi = RANGES[cfg.ranges].fs_hz
+        fs = float(np.exp(np.random.default_rng([seed, index, 2]).uniform(np.log(lo), np.log(hi))))
+        cfg = GenConfig(fs, cfg.duration_s, cfg.noise, cfg.ranges)
     t = np.arange(int(cfg.duration_s * cfg.fs_hz)) / cfg.fs_hz
     d = _pokes(rng, t, cfg)
     d_dot = np.gradient(d, t)
@@ -125,7 +157,7 @@ def _pad(rng: np.random.Generator, effect: str, index: int, cfg: GenConfig) -> C
     meta = {"source": f"teleop.diagnosis.generator case {index}"}
     channel = get_effect(effect).rules.channel if effect != "none" else None
     return Case(index, effect, channel, params, "pad", "pokes",
-                interchange_text(t, chans, {"indentation": "m", "force": "N"}, meta))
+                interchange_text(t, chans, {"indentation": "m", "force": "N"}, meta), ("indentation", "force"))
 
 
 def case_plan(n: int) -> list[tuple[str, str]]:
@@ -143,7 +175,7 @@ def case_plan(n: int) -> list[tuple[str, str]]:
 def make_case(index: int, effect: str, setup: str, seed: int, cfg: GenConfig = GenConfig()) -> Case:
     """Case `index` of a run seeded with `seed` (independent of the other cases)."""
     if setup == "pad":
-        return _pad(np.random.default_rng([seed, index]), effect, index, cfg)
+        return _pad(np.random.default_rng([seed, index]), effect, index, seed, cfg)
     return _rig(effect, index, seed, cfg)
 
 

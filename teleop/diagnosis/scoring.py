@@ -3,11 +3,13 @@ and the confusion matrix (true effect -> first named effect)."""
 
 from __future__ import annotations
 
+import math
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from scenes.cable_rig import COLUMNS
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.generator import Case, case_effects, primary
 from teleop.io.recording_io import read_interchange
@@ -15,25 +17,60 @@ from teleop.io.recording_io import read_interchange
 PARAM_TOL = 0.2
 
 
+#: a channel's quantisation step in the rig's CSV [m] (positions written to 1 um)
+QUANTUM_M = 1e-6
+
+
 def run_case(case: Case, workdir: str | Path | None = None, sindy: bool = False) -> dict:
     """Write the case as CSV, diagnose the CSV, and score the report against the truth (sindy: with the
-    PySINDy peer on the effect's channel)."""
+    PySINDy peer on every channel the diagnosis fits, `peer_rows`)."""
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         path = Path(tmp) / f"case_{case.index:04d}.csv"
         case.write(path)
         doc = diagnose(read_interchange(path), sindy=sindy).as_dict()
     row = score(case, doc)
-    if sindy and case.channel in doc["peer"]:
-        row["peer"] = peer_row(doc, case.channel)
+    if case.rig:
+        row.update(rig_context(case.columns, case.load, case.rig))
+    row["peer"] = peer_rows(doc, true_noise(case.rig) if case.rig else {})
     return row
 
 
-def peer_row(doc: dict, channel: str) -> dict:
-    """The physics model's and the peers' held-out RMSE on `channel`, and whether physics <= PySINDy."""
-    p = doc["peer"][channel]
-    return {"channel": channel, "model_rmse": p["model_rmse"], "arx_rmse": p["arx_rmse"],
-            "sindy_rmse": p.get("sindy_rmse"),
-            "model_le_sindy": p.get("sindy_rmse") is not None and p["model_rmse"] <= p["sindy_rmse"]}
+def true_noise(setup: dict) -> dict:
+    """{channel: the noise the rig added [SI]} from a cable-rig recording's setup (scenes.cable_rig
+    RigRecording.setup): the force sensors' noise, the encoders' noise with their 1 um quantisation."""
+    out = {c: float(v) for c, v in setup.get("noise_N", {}).items()}
+    for enc, s in setup.get("noise_m", {}).items():
+        out[f"{enc}_pos"] = math.sqrt(float(s) ** 2 + QUANTUM_M ** 2 / 12.0)
+    return out
+
+
+def rig_context(columns, load: str, setup: dict) -> dict:
+    """The row keys of a rig recording's set-up: "columns", "subset" (which optional sensors are missing),
+    "load", "capstan_ratio", "cable" and "fs_hz" (where the set-up has them)."""
+    missing = [c for c in COLUMNS if c not in columns]
+    return {"columns": list(columns), "subset": "all columns" if not missing else "no " + ", ".join(missing),
+            "load": load, "capstan_ratio": setup.get("capstan_ratio"), "cable": setup.get("cable"),
+            "fs_hz": setup.get("fs_hz")}
+
+
+def peer_rows(doc: dict, noise: dict | None = None) -> list[dict]:
+    """Per channel the diagnosis fits (doc["peer"]): the physics model's held-out RMSE beside the ARX peer's
+    and the PySINDy peer's static, free-run and better fit (None where --sindy was not asked or the fit
+    failed), "ratio" = model / PySINDy's better fit and "worse" = ratio > 1.0; with `noise` ({channel: the
+    true noise}), "noise" and "model_over_noise"."""
+    out = []
+    for ch, p in doc["peer"].items():
+        best = p.get("sindy_rmse")
+        ratio = p["model_rmse"] / max(best, 1e-300) if best is not None else None
+        row = {"channel": ch, "model_rmse": p["model_rmse"], "baseline_rmse": p.get("baseline_rmse"),
+               "arx_rmse": p["arx_rmse"], "sindy_static_rmse": p.get("sindy_static_rmse"),
+               "sindy_free_run_rmse": p.get("sindy_free_run_rmse"), "sindy_rmse": best, "ratio": ratio,
+               "worse": ratio is not None and ratio > 1.0}
+        if noise and ch in noise and noise[ch] > 0:
+            row["noise"] = noise[ch]
+            row["model_over_noise"] = p["model_rmse"] / noise[ch]
+        out.append(row)
+    return out
 
 
 def score(case: Case, doc: dict) -> dict:

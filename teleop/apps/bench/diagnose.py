@@ -1,6 +1,14 @@
 """`teleop bench diagnose --cases N --seed S [--json F]`: concealed-effect recordings from the generator,
-diagnosed from their CSV alone; prints the confusion matrix and the rates of issue 6. With --speed, also
-times the diagnosis of a 40 s, 1 kHz recording."""
+diagnosed from their CSV alone; prints the confusion matrix and the rates of issue 6, and the rates per
+column subset and capstan-ratio band. With --speed, also times the diagnosis of a 40 s, 1 kHz recording.
+
+Suites: the concealed-effect generator, the single-cable bench's column subsets and compounds (rig), the
+distributed tendon-sheath plant (distributed: teleop.apps.bench.diagnose_distributed), or all of them;
+--ranges literature (default) draws the rigs' set-ups over the literature's ranges (scenes.cable_rig
+LITERATURE), project over the rig's own. --sindy: per channel, the physics' held-out RMSE beside PySINDy's
+static and free-run fits on the same split, and the channels where the physics is worse (ratio > 1.0).
+--recordings: real recordings (any layout with --map), the peer comparison alone (no truth to score).
+"""
 
 from __future__ import annotations
 
@@ -8,14 +16,21 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
+from teleop.apps.bench.diagnose_distributed import (distributed_plan, distributed_text, run_distributed_case,
+                                                    summarise_distributed)
 from teleop.apps.bench.diagnose_rig import rates, rig_plan, rig_text, run_rig_case, summarise_rig
 from teleop.core.errors import InputError
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.generator import GenConfig, case_plan, make_case
-from teleop.diagnosis.scoring import confusion_text, run_case, summarise
+from teleop.diagnosis.generator import RANGES, GenConfig, case_plan, make_case
+from teleop.diagnosis.scoring import confusion_text, peer_rows, run_case, summarise
 from teleop.io.outputs import write_json
 from teleop.io.progress import progress
-from teleop.io.recording_io import read_interchange
+from teleop.io.recording_io import read_interchange, read_recording
+
+#: capstan-ratio bands the figures are given per (lower edges; the last open)
+BANDS = (1.0, 1.5, 2.5, 4.0)
 
 
 def register(subparsers) -> None:
@@ -24,14 +39,26 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="generator seed (0)")
     p.add_argument("--json", metavar="PATH", help="write per-case rows and the summary as JSON")
     p.add_argument("--speed", action="store_true", help="also time a 40 s, 1 kHz recording")
-    p.add_argument("--rate", type=float, default=500.0, help="sampling rate of the cases [Hz] (500)")
+    p.add_argument("--rate", type=float, default=None,
+                   help="sampling rate of the cases [Hz] (default: drawn 200-2000 Hz with --ranges literature, "
+                        "500 with project)")
     p.add_argument("--seconds", type=float, default=20.0, help="duration of each case [s] (20)")
     p.add_argument("--noise", type=float, default=1.0, help="factor on every sensor noise level (1)")
     p.add_argument("--sindy", action="store_true",
-                   help="also fit the PySINDy peer on each effect's channel and count where physics <= PySINDy")
-    p.add_argument("--suite", choices=("all", "generator", "rig"), default="all",
+                   help="also fit the PySINDy peer on every channel: the physics' held-out RMSE beside PySINDy's "
+                        "static and free-run fits, and the channels where the physics is worse")
+    p.add_argument("--suite", choices=("all", "generator", "rig", "distributed"), default="all",
                    help="cases from the concealed-effect generator, the simulated single-cable bench "
-                        "(column subsets, loads, compounds; scenes.cable_rig), or half each (all)")
+                        "(column subsets, loads, compounds; scenes.cable_rig), the distributed tendon-sheath "
+                        "plant (scenes.tendon_sheath), or all: half generator, an eighth distributed, the rest rig")
+    p.add_argument("--ranges", choices=tuple(RANGES), default="literature",
+                   help="the rigs' set-up ranges: literature (mu 0.05-0.25, bends to 540 deg, capstan ratio to 5, "
+                        "steel and polymer cables, noise 0.2-3 %% of full scale, 0.05-5 Hz drives, 200-2000 Hz, "
+                        "exact and noisy encoders, sensors present or absent; default) or project (the rig's own)")
+    p.add_argument("--recordings", nargs="+", metavar="REC",
+                   help="instead of generated cases: real recordings, diagnosed with the PySINDy peer; prints "
+                        "the per-channel comparison")
+    p.add_argument("--map", metavar="MAP", help="column map of --recordings (a .toml path or a shipped name)")
     p.set_defaults(func=run)
 
 
@@ -40,34 +67,163 @@ def speed_case(seed: int = 0):
     return make_case(999, "dahl_hysteresis", "rig", seed, GenConfig(fs_hz=1000.0, duration_s=40.0))
 
 
+def _band(ratio) -> str:
+    """The capstan-ratio band of `ratio` ("1.0-1.5", ..., "4.0+"), or "n/a"."""
+    if ratio is None:
+        return "n/a"
+    lo = [b for b in BANDS if ratio >= b - 1e-12]
+    if not lo:
+        return f"<{BANDS[0]}"
+    i = BANDS.index(lo[-1])
+    return f"{BANDS[i]:.1f}-{BANDS[i + 1]:.1f}" if i + 1 < len(BANDS) else f"{BANDS[i]:.1f}+"
+
+
+def grouped(rows: list[dict], key) -> dict:
+    """{group: rates} of scored rows grouped by key(row) (rows where it gives None are left out)."""
+    groups: dict = {}
+    for r in rows:
+        k = key(r)
+        if k is not None:
+            groups.setdefault(k, []).append(r)
+    return {k: rates(v) for k, v in sorted(groups.items())}
+
+
+def peer_summary(items: list[tuple[str, dict]]) -> dict:
+    """Over (case label, peer row) pairs: per channel the cases, the ratio physics / PySINDy (median,
+    max), the physics' and PySINDy's held-out RMSE medians, and the count where physics is worse;
+    "worse": every (case, channel) with ratio > 1.0; "model_le_sindy": "k/n" channels where physics <= PySINDy."""
+    by: dict = {}
+    worse = []
+    fitted = [(lab, p) for lab, p in items if p.get("ratio") is not None]
+    for lab, p in fitted:
+        by.setdefault(p["channel"], []).append(p)
+        if p["worse"]:
+            worse.append({"case": lab, "channel": p["channel"], "model_rmse": p["model_rmse"],
+                          "sindy_static_rmse": p["sindy_static_rmse"], "sindy_free_run_rmse": p["sindy_free_run_rmse"],
+                          "ratio": p["ratio"]})
+    out = {}
+    for ch, ps in sorted(by.items()):
+        r = [p["ratio"] for p in ps]
+        out[ch] = {"cases": len(ps), "ratio_median": float(np.median(r)), "ratio_max": float(max(r)),
+                   "model_rmse_median": float(np.median([p["model_rmse"] for p in ps])),
+                   "sindy_static_rmse_median": float(np.median([p["sindy_static_rmse"] for p in ps])),
+                   "worse": sum(p["worse"] for p in ps)}
+        mon = [p["model_over_noise"] for p in ps if "model_over_noise" in p]
+        if mon:
+            out[ch]["model_over_noise_median"] = float(np.median(mon))
+    return {"by_channel": out, "worse": worse,
+            "model_le_sindy": f"{len(fitted) - len(worse)}/{len(fitted)}"}
+
+
+def _num(v, fmt=".4g") -> str:
+    return "-" if v is None else format(v, fmt)
+
+
+def peer_text(summary: dict) -> str:
+    """The per-channel table of peer_summary and the list of channels where physics is worse."""
+    lines = [f"{'channel':<12} {'cases':>5} {'physics':>10} {'SINDy stat':>10} {'ratio med':>9} {'ratio max':>9} "
+             f"{'worse':>5} {'RMSE/noise':>10}"]
+    for ch, c in summary["by_channel"].items():
+        lines.append(f"{ch:<12} {c['cases']:>5d} {c['model_rmse_median']:>10.4g} {c['sindy_static_rmse_median']:>10.4g} "
+                     f"{c['ratio_median']:>9.3f} {c['ratio_max']:>9.3f} {c['worse']:>5d} "
+                     f"{_num(c.get('model_over_noise_median'), '.3g'):>10}")
+    for w in summary["worse"]:
+        lines.append(f"physics worse than PySINDy: {w['case']} {w['channel']}: physics {w['model_rmse']:.4g}, "
+                     f"PySINDy static {_num(w['sindy_static_rmse'])}, free run {_num(w['sindy_free_run_rmse'])} "
+                     f"(ratio {w['ratio']:.3f})")
+    if not summary["worse"]:
+        lines.append("physics worse than PySINDy: none")
+    return "\n".join(lines)
+
+
+def run_recordings(args) -> int:
+    """--recordings: each diagnosed with the PySINDy peer; per recording and channel the physics' held-out
+    RMSE beside the peers'."""
+    out_rows, items = [], []
+    with progress(len(args.recordings), "bench diagnose", unit="recordings") as bar:
+        for path in args.recordings:
+            doc = diagnose(read_recording(path, args.map), seed=args.seed, sindy=True).as_dict()
+            rows = peer_rows(doc)
+            out_rows.append({"recording": str(path), "peer": rows,
+                             "findings": [{"channel": f["channel"], "effect": f["effect"]} for f in doc["findings"]]})
+            items += [(Path(path).name, p) for p in rows]
+            bar.update()
+    print(f"{'recording':<22} {'channel':<12} {'physics':>10} {'SINDy stat':>10} {'SINDy free':>10} {'ARX':>10} {'ratio':>7}")
+    for r in out_rows:
+        for p in r["peer"]:
+            print(f"{Path(r['recording']).name:<22} {p['channel']:<12} {p['model_rmse']:>10.4g} "
+                  f"{_num(p['sindy_static_rmse']):>10} {_num(p['sindy_free_run_rmse']):>10} {p['arx_rmse']:>10.4g} "
+                  f"{_num(p['ratio'], '.3f'):>7}")
+    summary = peer_summary(items)
+    print(peer_text(summary))
+    if args.json:
+        write_json(args.json, {"recordings": out_rows, "map": args.map, "seed": args.seed, "peer": summary})
+    return 0
+
+
 def run(args) -> int:
+    if args.recordings:
+        return run_recordings(args)
+    if args.map:
+        raise InputError("--map belongs to --recordings")
     if args.cases < 1:
         raise InputError("--cases must be >= 1")
-    if not (50 <= args.rate <= 20000 and 5 <= args.seconds <= 600 and 0 <= args.noise <= 20):
+    if args.rate is None and args.ranges == "project":
+        args.rate = 500.0
+    if not ((args.rate is None or 50 <= args.rate <= 20000) and 5 <= args.seconds <= 600 and 0 <= args.noise <= 20):
         raise InputError("--rate must be 50..20000 Hz, --seconds 5..600, --noise 0..20")
-    cfg = GenConfig(args.rate, args.seconds, args.noise)
+    cfg = GenConfig(args.rate, args.seconds, args.noise, args.ranges)
 
-    n_gen = {"all": args.cases // 2, "generator": args.cases, "rig": 0}[args.suite]
-    rows, rig_rows = [], []
+    n_gen = {"all": args.cases // 2, "generator": args.cases, "rig": 0, "distributed": 0}[args.suite]
+    n_dist = {"all": args.cases // 8, "distributed": args.cases}.get(args.suite, 0)
+    rows, rig_rows, dist_rows = [], [], []
     plan = case_plan(n_gen)
-    rplan = rig_plan(args.cases - n_gen, args.seed)
-    with progress(len(plan) + len(rplan), "bench diagnose", unit="cases") as bar:
+    rplan = rig_plan(args.cases - n_gen - n_dist, args.seed)
+    dplan = distributed_plan(n_dist)
+    with progress(len(plan) + len(rplan) + len(dplan), "bench diagnose", unit="cases") as bar:
         for i, (effect, setup) in enumerate(plan):
             rows.append(run_case(make_case(i, effect, setup, args.seed, cfg), sindy=args.sindy))
             bar.update()
         for case in rplan:
-            rig_rows.append(run_rig_case(case, args.seed, args.rate, args.seconds, args.noise, args.sindy))
+            rig_rows.append(run_rig_case(case, args.seed, args.rate, args.seconds, args.noise, args.sindy,
+                                         args.ranges))
+            bar.update()
+        for case in dplan:
+            dist_rows.append(run_distributed_case(case, args.seed, args.seconds, args.noise, args.rate, args.sindy))
             bar.update()
     summary = summarise(rows) if rows else {}
     rig_summary = summarise_rig(rig_rows) if rig_rows else {}
-    combined = rates(rows + rig_rows)
+    scored = rows + rig_rows
+    combined = rates(scored) if scored else {}
+    out = {"cases": args.cases, "seed": args.seed, "suite": args.suite, "ranges": args.ranges,
+           "rate_hz": args.rate, "seconds": args.seconds, "noise": args.noise, "summary": combined}
+    if rows:
+        out.update({"generator": summary, "rows": rows})
+    out.update({"rig": rig_summary, "rig_rows": rig_rows})
+    if dist_rows:
+        out["distributed"] = summarise_distributed(dist_rows)
+        out["distributed_rows"] = dist_rows
+    rig_like = [r for r in scored if r.get("capstan_ratio") is not None]
+    out["by_subset"] = grouped(rig_like, lambda r: r.get("subset"))
+    out["by_capstan_band"] = grouped(rig_like, lambda r: _band(r.get("capstan_ratio")))
     if args.sindy:
-        peers = [r["peer"] for r in rows if "peer" in r] + [p for r in rig_rows for p in r.get("peer", [])]
-        le = [p for p in peers if p["model_le_sindy"]]
-        combined["model_le_sindy"] = f"{len(le)}/{len(peers)}"
-        for p_ in peers:
-            if not p_["model_le_sindy"]:
-                print(f"PySINDy better on {p_['channel']}: model {p_['model_rmse']:.4g}, PySINDy {p_['sindy_rmse']:.4g}")
+        items = ([(f"case {r['index']}", p) for r in rows for p in r["peer"]]
+                 + [(f"rig case {r['index']}", p) for r in rig_rows for p in r["peer"]]
+                 + [(f"distributed case {r['index']}", p) for r in dist_rows for p in r["peer"]])
+        out["peer"] = peer_summary(items)
+        if combined:
+            combined["model_le_sindy"] = out["peer"]["model_le_sindy"]
+    if rows:
+        print("concealed-effect generator (teleop.diagnosis.generator):")
+        print(confusion_text(summary))
+        for key in ("cases", "effect_cases", "clean_cases", "named_first_rate", "none_rate",
+                    "params_within_20pct_rate", "improved_2x_rate", "improvement_min"):
+            v = summary[key]
+            print(f"{key}: {v:.4g}" if isinstance(v, float) else f"{key}: {v}")
+        for r in rows:
+            if not r["correct"]:
+                print(f"miss: case {r['index']} ({r['setup']}, {r.get('subset', 'all columns')}, "
+                      f"{r['trajectory']}): {r['truth']} -> {r['all_named'] or ['none']}")
     if rig_rows:
         print("simulated single-cable bench (scenes.cable_rig):")
         print(rig_text(rig_summary))
@@ -75,27 +231,21 @@ def run(args) -> int:
             if not r["correct"]:
                 print(f"miss: rig case {r['index']} ({r['subset']}, {r['load']}, {r['trajectory']}): "
                       f"{'+'.join(r['truth'])} -> {r['all_named'] or ['none']}")
-    if not rows:
+    if rig_like:
+        for title, key in (("per column subset", "by_subset"), ("per capstan-ratio band", "by_capstan_band")):
+            print(f"generator and rig cases {title}:")
+            for g, rt in out[key].items():
+                print(f"  {g}: {rt['cases']} cases, named first {_num(rt['named_first_rate'], '.2f')}, none "
+                      f"{_num(rt['none_rate'], '.2f')}, params {_num(rt['params_within_20pct_rate'], '.2f')}, 2x "
+                      f"{_num(rt['improved_2x_rate'], '.2f')}")
+    if dist_rows:
+        print("distributed tendon-sheath plant (scenes.tendon_sheath):")
+        print(distributed_text(out["distributed"], dist_rows))
+    if args.sindy:
+        print("physics against the PySINDy peer per channel (held-out RMSE, ratio = physics / PySINDy's better fit):")
+        print(peer_text(out["peer"]))
+    if combined:
         print("all: " + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in combined.items()))
-        out = {"cases": args.cases, "seed": args.seed, "suite": args.suite, "rate_hz": args.rate,
-               "seconds": args.seconds, "noise": args.noise, "summary": combined, "rig": rig_summary,
-               "rig_rows": rig_rows}
-        if args.json:
-            write_json(args.json, out)
-        return 0
-    print("concealed-effect generator (teleop.diagnosis.generator):")
-    print(confusion_text(summary))
-    for key in ("cases", "effect_cases", "clean_cases", "named_first_rate", "none_rate",
-                "params_within_20pct_rate", "improved_2x_rate", "improvement_min"):
-        v = summary[key]
-        print(f"{key}: {v:.4g}" if isinstance(v, float) else f"{key}: {v}")
-    misses = [r for r in rows if not r["correct"]]
-    for r in misses:
-        print(f"miss: case {r['index']} ({r['setup']}, {r['trajectory']}): {r['truth']} -> {r['all_named'] or ['none']}")
-    print("all: " + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in combined.items()))
-    out = {"cases": args.cases, "seed": args.seed, "suite": args.suite, "rate_hz": args.rate,
-           "seconds": args.seconds, "noise": args.noise, "summary": combined, "generator": summary,
-           "rows": rows, "rig": rig_summary, "rig_rows": rig_rows}
     if args.speed:
         case = speed_case(args.seed)
         with tempfile.TemporaryDirectory() as tmp:

@@ -20,7 +20,8 @@ from scenes.cable_rig import OUTSIDE, observable, rig_effects, simulate
 from teleop.core.physics import REGISTRY, get_effect
 from teleop.core.physics.base import alike
 from teleop.diagnosis.diagnose import diagnose
-from teleop.diagnosis.scoring import peer_row
+from teleop.diagnosis.generator import RANGES
+from teleop.diagnosis.scoring import peer_rows, rig_context, true_noise
 from teleop.io.recording_io import read_interchange
 
 #: column subsets of the interchange format a rig may record (name -> columns)
@@ -63,12 +64,13 @@ def rig_plan(n: int, seed: int) -> list[dict]:
     return plan
 
 
-def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float = 20.0, noise: float = 1.0,
-                 sindy: bool = False) -> dict:
-    """Simulate, write, diagnose and score one rig case (sindy: with the PySINDy peer on the channels of
-    the true effects)."""
+def run_rig_case(case: dict, seed: int, fs_hz: float | None = 500.0, duration_s: float = 20.0,
+                 noise: float = 1.0, sindy: bool = False, ranges: str = "project") -> dict:
+    """Simulate, write, diagnose and score one rig case (sindy: with the PySINDy peer on every channel;
+    ranges: the rig's set-up ranges, a key of teleop.diagnosis.generator.RANGES; fs_hz None: drawn)."""
     cols = SUBSETS[case["subset"]]
-    rig = simulate([seed, case["index"], 7], case["effects"], cols, case["load"], fs_hz, duration_s, noise)
+    rig = simulate([seed, case["index"], 7], case["effects"], cols, case["load"], fs_hz, duration_s, noise,
+                   ranges=RANGES[ranges])
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"rig_{case['index']:04d}.csv"
         rig.write(path)
@@ -82,10 +84,11 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
         correct = bool(named) and named[0] in truth
     else:
         correct = set(named[: len(truth)]) == set(truth)
-    row = {"index": case["index"], "source": "rig", "subset": case["subset"], "load": case["load"],
-           "trajectory": rig.trajectory, "switched_on": list(case["effects"]), "truth": sorted(truth) or ["none"],
-           "named": named[0] if named else "none", "all_named": named, "correct": correct,
-           "unexplained": [u["correlate"] for u in doc["unexplained"]]}
+    row = {"index": case["index"], "source": "rig", **rig_context(cols, case["load"], rig.setup),
+           "subset": case["subset"], "trajectory": rig.trajectory, "switched_on": list(case["effects"]),
+           "truth": sorted(truth) or ["none"], "named": named[0] if named else "none", "all_named": named,
+           "correct": correct, "unexplained": [u["correlate"] for u in doc["unexplained"]],
+           "peer": peer_rows(doc, true_noise(rig.setup))}
     if truth:
         errs, imps = {}, {}
         for e, v in truth.items():
@@ -103,9 +106,6 @@ def run_rig_case(case: dict, seed: int, fs_hz: float = 500.0, duration_s: float 
             len(get_effect(e).rules.primary) for e in truth)
         row["improvement"] = min(imps.values()) if imps else 1.0
         row["improved_2x"] = row["improvement"] >= 2.0
-        if sindy:
-            chans = sorted({f["channel"] for f in findings if f["effect"] in truth})
-            row["peer"] = [peer_row(doc, ch) for ch in chans]
     return row
 
 
