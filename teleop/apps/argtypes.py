@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from teleop.core.config import input_problem
-from teleop.core.geometry import Geometry, default_geometry, load_geometry
+from teleop.core.geometry import Geometry, load_geometry
 from teleop.io.outputs import FIGURE_FORMATS, output_problem
 
 
@@ -115,11 +115,12 @@ def add_geometry_option(p) -> None:
                         "examples/geometry.toml)")
 
 
-def geometry_of(args) -> Geometry:
+def geometry_of(args) -> Geometry | None:
     """The geometry `--geometry` names (teleop.core.geometry.load_geometry: a bad file or key is an InputError
-    naming both), or the seed robot's when the option is absent or not given."""
+    naming both), or None when the option is absent or not given: the callee's default, the seed robot (a
+    device that takes no geometry, a stylus or a replayed robot, is then not handed one)."""
     path = getattr(args, "geometry", None)
-    return load_geometry(path) if path else default_geometry()
+    return load_geometry(path) if path else None
 
 
 def output_file(text: str) -> str:

@@ -293,7 +293,7 @@ def _check(args) -> None:
 
 def run(args) -> int:
     _check(args)
-    geometry = geometry_of(args) if args.geometry else None  # a bad file is one line before any session
+    geometry = geometry_of(args)  # a bad file is one line before any session
     if args.recordings:
         out = bench_recordings(args.recordings, args.settle_s)
         print(f"tip tracking error of recorded sessions after {args.settle_s:g} s [mm]:")

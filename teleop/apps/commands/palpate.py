@@ -58,7 +58,7 @@ def run(args) -> int:
     if args.limit is not None and args.limit < 1:
         raise InputError(f"--limit must be >= 1, got {args.limit}")
     res = palpation.run_test(args.test, args.speed_profile, args.seed, params, limit=args.limit, progress=True,
-                   plant=args.plant, cable_params=args.cable_params, geometry=geometry if args.geometry else None)
+                   plant=args.plant, cable_params=args.cable_params, geometry=geometry)
     print(res.table())
     if args.json:  # the geometry only when given: the seed robot's JSON is what it was
         extra = {"geometry_file": args.geometry, "geometry": geometry_dict(geometry)} if args.geometry else {}
