@@ -20,6 +20,7 @@ import numpy as np
 
 from teleop.apps.bench.diagnose_distributed import (distributed_plan, distributed_text, run_distributed_case,
                                                     summarise_distributed)
+from teleop.apps.argtypes import input_file
 from teleop.apps.bench.diagnose_rig import rates, rig_plan, rig_text, run_rig_case, summarise_rig
 from teleop.core.errors import InputError
 from teleop.diagnosis.diagnose import diagnose
@@ -55,7 +56,7 @@ def register(subparsers) -> None:
                    help="the rigs' set-up ranges: literature (mu 0.05-0.25, bends to 540 deg, capstan ratio to 5, "
                         "steel and polymer cables, noise 0.2-3 %% of full scale, 0.05-5 Hz drives, 200-2000 Hz, "
                         "exact and noisy encoders, sensors present or absent; default) or project (the rig's own)")
-    p.add_argument("--recordings", nargs="+", metavar="REC",
+    p.add_argument("--recordings", nargs="+", metavar="REC", type=input_file,
                    help="instead of generated cases: real recordings, diagnosed with the PySINDy peer; prints "
                         "the per-channel comparison")
     p.add_argument("--map", metavar="MAP", help="column map of --recordings (a .toml path or a shipped name)")
@@ -140,9 +141,10 @@ def run_recordings(args) -> int:
     """--recordings: each diagnosed with the PySINDy peer; per recording and channel the physics' held-out
     RMSE beside the peers'."""
     out_rows, items = [], []
+    recs = [read_recording(path, args.map) for path in args.recordings]   # every one read before any work
     with progress(len(args.recordings), "bench diagnose", unit="recordings") as bar:
-        for path in args.recordings:
-            doc = diagnose(read_recording(path, args.map), seed=args.seed, sindy=True).as_dict()
+        for path, rec in zip(args.recordings, recs):
+            doc = diagnose(rec, seed=args.seed, sindy=True).as_dict()
             rows = peer_rows(doc)
             out_rows.append({"recording": str(path), "peer": rows,
                              "findings": [{"channel": f["channel"], "effect": f["effect"]} for f in doc["findings"]]})

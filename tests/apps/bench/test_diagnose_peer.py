@@ -88,3 +88,11 @@ def test_map_without_recordings_is_refused(capsys):
     assert main(["bench", "diagnose", "--map", "mrdlab"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--map" in err[0]
+
+
+def test_a_missing_recording_is_refused_before_any_work(tmp_path, capsys):
+    assert main(["bench", "diagnose", "--recordings", str(tmp_path / "absent.csv"), "--json",
+                 str(tmp_path / "r.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "absent.csv" in err[0]
+    assert not (tmp_path / "r.json").exists()
