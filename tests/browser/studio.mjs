@@ -4,14 +4,14 @@
 //
 //   node studio.mjs CONFIG.json
 //
-// CONFIG: {chromium, out (screenshot folder), layout (layout file), fault_hold_ms, ee_rgb and ee_fault_rgb
+// CONFIG: {chromium, out (screenshot folder), layout (layout file), fault_wait_s, ee_rgb and ee_fault_rgb
 // ([r, g, b] 0..255 of the end effector, normal and in FAULT), timeout_s}. One JSON line {"stage": ...} per
 // stage: "ready" (Studio loaded with no data source, while the session starts), then per line on stdin, each
 // opening Studio again in the same page on a deep link (studio/host.js's studioOpen: no reload of the build):
 //   live WS_URL ROBOT_PID   -> "live" (Studio's foxglove-websocket deep link with the layout: the sidebar, every
 //                              panel's text twice 2.5 s apart, pixels changed between two screenshots and the
-//                              end effector's colour per panel), then "fault" (ROBOT_PID paused with SIGSTOP for
-//                              fault_hold_ms, past the session's staleness limit; the log panels after it)
+//                              end effector's colour per panel), then "fault" (ROBOT_PID paused with SIGSTOP
+//                              until a log panel shows a FAULT line, at most fault_wait_s; the log panels)
 //   recording PATH [ISO]    -> "recording" (the same page opening PATH through Studio's remote-file source, at
 //                              time ISO if given (Studio's `time` deep link): its topic list and problems)
 // and "done" when stdin ends (the console errors and the server's 404s).
@@ -143,7 +143,7 @@ async function live(page, host, timeout, ws, robotPid) {
     const ps = await panels(page);
     const info = await sidebar(page, "Problems");
     // connected: the server's name beside its URL and a start time (Studio 1.48's websocket player takes it from
-    // its own clock; it read 0 once on a loaded machine, with every panel receiving)
+    // its own clock; it read 0 in two runs on a loaded machine, with every panel receiving)
     const ok = /START TIME\s*\n\s*\d/.test(info) && info.includes("cdpr-teleop") &&
       Object.values(ps).every((p) => p.found) &&
       !Object.values(ps).some((p) => /Waiting for next message/.test(p.text));
@@ -163,14 +163,18 @@ async function live(page, host, timeout, ws, robotPid) {
     host_error: await page.evaluate(() => window.hostError ?? null),
   });
 
-  // an induced fault: the robot process paused past the staleness limit, then let go
+  // an induced fault: the robot process paused until the log panel shows the fault (the loop, slower than real
+  // time on a loaded machine, takes its staleness limit in its own ticks), then let go
   process.kill(robotPid, "SIGSTOP");
-  await sleep(cfg.fault_hold_ms);
-  process.kill(robotPid, "SIGCONT");
-  const faulted = await waitFor("a FAULT line in the log panel", async () => {
-    const logs = Object.entries(await panels(page)).filter(([, p]) => p.type === "RosOut" || p.type === "Log");
-    return { ok: logs.some(([, p]) => /-> FAULT/.test(p.text)), logs: Object.fromEntries(logs) };
-  }, 15000);
+  let faulted;
+  try {
+    faulted = await waitFor("a FAULT line in the log panel", async () => {
+      const logs = Object.entries(await panels(page)).filter(([, p]) => p.type === "RosOut" || p.type === "Log");
+      return { ok: logs.some(([, p]) => /-> FAULT/.test(p.text)), logs: Object.fromEntries(logs) };
+    }, cfg.fault_wait_s * 1000);
+  } finally {
+    process.kill(robotPid, "SIGCONT");
+  }
   const ps = await panels(page);
   const shotF = await page.screenshot({ path: join(cfg.out, "fault.png") });
   emit({ stage: "fault", found: !faulted.timedOut, log_panels: faulted.logs, sidebar: await sidebar(page, "Problems"),
