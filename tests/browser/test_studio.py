@@ -3,9 +3,15 @@ Debian Chromium through puppeteer-core (tests/browser/studio.mjs), connected to 
 shipped examples/foxglove-layout.json, then opening that session's recording.
 
 Asserted as a person would see it: no problems listed, every panel of the layout receiving, a fault line in the
-log panel after an induced fault (the robot process paused past the staleness limit), the end effector drawn in
-the 3D panel (pixels of its colour inside the panel); the recording opens with no problems, its topics listed.
-The screenshots stay in the test's tmp dir (live.png, fault.png, recording.png, ...) for a person to look at.
+log panel after an induced fault (the robot process paused until the loop's staleness limit trips), the end
+effector drawn in the 3D panel (pixels of its colour inside the panel); the recording opens with no problems,
+every topic listed with the count the project's own reader gives. The screenshots stay in the test's tmp dir
+(live-1.png, live.png, fault.png, recording.png, recording-problems.png) for a person to look at.
+
+The session is the simulated stylus and robot, paced in real time (--no-realtime: time-sharing beside Chromium)
+with the robot in its own process, which is what lets a fault be induced from outside; the simulated clock
+(--sim-clock) needs the robot inline and runs as fast as it can, which is not a live view. The staleness limit
+is raised to 500 ms so that a starved loop does not fault by itself; the test stops the session with SIGTERM.
 
 Needs node and Debian's chromium (scripts/install-system-deps.sh installs both and runs `npm ci --prefix
 tests/browser`); skipped only when either is missing.
