@@ -133,12 +133,7 @@ def recover_file(src, dst) -> Recovery:
         raise InputError(f"{src}: file not found") from None
     except IsADirectoryError:
         raise InputError(f"{src}: is a directory, expected an .mcap recording") from None
-    result = {}
-
-    def write(tmp: Path) -> None:
-        buf = io.BytesIO()
-        result["rep"] = recover_bytes(data, buf, str(src))
-        tmp.write_bytes(buf.getvalue())
-
-    atomic_write(dst, write)
-    return result["rep"]
+    buf = io.BytesIO()
+    rep = recover_bytes(data, buf, str(src))  # before anything is created: a bad input leaves no trace
+    atomic_write(dst, lambda tmp: tmp.write_bytes(buf.getvalue()))
+    return rep
