@@ -421,9 +421,9 @@ class TendonSheath:
         return np.ascontiguousarray(a)
 
     def step(self, x_motor, tip_input=None, theta=0.0) -> np.ndarray:
-        """One tick to motor travel x_motor [m] (scalar or (c,); through the inputs' map): tip_input f_ext [N] ("spring", "force") or
-        tip travel [m] ("position"), default `held_tip_input`; theta the kinematic bend [rad]. Returns
-        (c, 3): motor force [N], tip load force [N], tip travel [m]."""
+        """One tick to motor travel x_motor [m] (scalar or (c,); through the inputs' map): tip_input f_ext [N]
+        ("spring", "force") or tip travel [m] ("position"), default `held_tip_input`; theta the kinematic bend
+        [rad]. Returns (c, 3): motor force [N], tip load force [N], tip travel [m]."""
         X, TIP, TH = self._tick_input(x_motor), self._tick_input(tip_input, True), self._tick_input(theta)
         if not math.isfinite(float(X.sum() + TIP.sum() + TH.sum())):
             raise InputError("tendon sheath: motor, tip and theta inputs must be finite")
@@ -451,7 +451,8 @@ class TendonSheath:
         t = self.t + self.tick * np.arange(1, m + 1)
         self.t += m * self.tick
         x_motor = self._cab[:, K.C_X0] + self._cab[:, K.C_XS] * X  # the motor's travel (the inputs' map)
-        return SheathRun(t=t, x_motor=x_motor, f_motor=OUT[:, K.O_MOTOR], f_tip=OUT[:, K.O_TIP], x_tip=OUT[:, K.O_X_TIP],
+        return SheathRun(t=t, x_motor=x_motor, f_motor=OUT[:, K.O_MOTOR], f_tip=OUT[:, K.O_TIP],
+                         x_tip=OUT[:, K.O_X_TIP],
                          iterations=OUT[:, K.O_ITER], tensions=TT if keep_tensions else None,
                          tapped=OUT[:, K.O_ROWS:])
 

@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import math
 
-
 from teleop.core.kernels.jit import njit
 
 # parameter vector p

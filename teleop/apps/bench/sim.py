@@ -288,7 +288,8 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
         out["plant"] = plant
         if vs_matched:
             m = bench_sim(seconds, seed, pad, substeps, depth, period, batch=False, stages=stages)
-            out["vs_matched"] = {"realtime_factor": m["realtime_factor"], "realtime_factor_cpu": m["realtime_factor_cpu"],
+            out["vs_matched"] = {"realtime_factor": m["realtime_factor"],
+                                 "realtime_factor_cpu": m["realtime_factor_cpu"],
                                  "wall_s": m["wall_s"], "cpu_s": m["cpu_s"],
                                  "ratio": round(m["wall_s"] / max(wall, 1e-9), 4),
                                  "ratio_cpu": round(m["cpu_s"] / max(cpu, 1e-9), 4)}
@@ -342,7 +343,8 @@ def _check(args) -> None:
     if not 0 <= args.seed < 2 ** 63:
         raise InputError(f"--seed: expected a non-negative integer, got {args.seed}")
     if args.vs_matched and args.plant == "matched":
-        raise InputError("--vs-matched: expected --plant rich or distributed (it compares that plant with the matched one)")
+        raise InputError("--vs-matched: expected --plant rich or distributed (it compares that plant with the "
+                         "matched one)")
 
 
 def format_table(out: dict) -> str:
@@ -367,7 +369,8 @@ def format_table(out: dict) -> str:
         lines.append(f"  {name:13s} {st['wall_s']:8.3f} {100 * st['fraction']:6.1f}% {p50} {p99}")
     if "vs_matched" in out:
         v = out["vs_matched"]
-        lines.append(f"matched plant's loop right after: {v['realtime_factor']:.2f}x wall, {v['realtime_factor_cpu']:.2f}x "
+        lines.append(f"matched plant's loop right after: {v['realtime_factor']:.2f}x wall, "
+                     f"{v['realtime_factor_cpu']:.2f}x "
                      f"cpu; {out['plant']} / matched: {v['ratio']:.3f} (wall), {v['ratio_cpu']:.3f} (cpu)")
     if "batch" in out:
         b = out["batch"]
