@@ -26,12 +26,14 @@ from teleop.core.estimation.sensor_reading import make_estimator
 from teleop.core.geometry import Geometry, default_geometry, geometry_dict
 from teleop.core.kinematics import pose2lengths
 from teleop.io.recording import Recorder, Ring
+from teleop.io.recording.sensors import TOPIC_FBG
 from teleop.io.stop_signals import STOP
 from teleop.loop.core import Teleop
 from teleop.loop.devices_by_url import open_device, process_robot
 from teleop.loop.live import LiveView
 from teleop.loop.loop_progress import LoopProgress
 from teleop.loop.params import LoopParams
+from teleop.loop.sensor_tap import FbgTap, with_fbg_channel
 from teleop.loop.tap import RowTap, numeric_extras, session_layout
 from teleop.loop.timing import SimClock, TimingLog, run_paced, run_stepped, set_normal, set_realtime
 
@@ -119,7 +121,7 @@ def _start_live(tp, layout, extras, recorder, live: tuple, scene: dict | None):
         ring = recorder.ring
     else:
         ring = Ring(layout.width, 4096, gated=False)
-        tp.tap = RowTap(layout, ring.push, extras)
+        tp.tap = session_tap(layout, ring.push, extras, tp.estimator)
     g = tp.geom
     # home lengths and steps per metre turn the motors' steps into the lengths they measure
     spec = getattr(tp.robot, "spec", None)
@@ -140,6 +142,13 @@ def _start_live(tp, layout, extras, recorder, live: tuple, scene: dict | None):
         view.event(vars(ev))
     tp.on_event = both
     return view
+
+
+def session_tap(layout, push, extras: dict, estimator):
+    """The session's Teleop.tap: a RowTap on `layout`, behind an FbgTap when the layout has the FBG channel
+    (teleop.loop.sensor_tap.with_fbg_channel for an estimator of the FBG sensor kinds)."""
+    tap = RowTap(layout, push, extras)
+    return FbgTap(tap, layout, estimator) if TOPIC_FBG in layout.topics() else tap
 
 
 def frame_period(params: LoopParams, robot_process_hz: float | None) -> float:
@@ -234,12 +243,12 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
             first = robot.read()  # telemetry only; no motion command is sent before ENABLED
             tp.last_reading = first
             extras = numeric_extras(first)
-            layout = session_layout(extras)
+            layout = with_fbg_channel(session_layout(extras), estimator)  # + the FBG channel (sensor_tap)
             if record:
                 meta = session_metadata(tp, haptic_url, robot_url, seconds, seed, geometry_file)
                 recorder = Recorder(record, layout, meta, flush_interval=flush_interval,
                                     t0_ns=meta["start_time_ns"]).start()
-                tp.tap = RowTap(layout, recorder.push, extras)
+                tp.tap = session_tap(layout, recorder.push, extras, estimator)
                 tp.on_event = lambda ev: recorder.event(vars(ev))
             if live is not None:
                 live_view = _start_live(tp, layout, extras, recorder, live,

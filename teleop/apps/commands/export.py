@@ -7,6 +7,11 @@ not increase); motor_pos_mm (cable hauled in by the motor, from the step count,
 the recording has it); motor_force_N (the FSR's calibrated tension, the sensor side of the distal sheath
 segment); tip_force_N (tension at the end effector, when the recording has the simulator's truth);
 bend_angle_deg (eq 6 bend at the setpoint pose plus the scaffold bend theta0); cmd_len_mm (commanded length).
+A session with distal FBGs (`sim://robot?sensor=fbg|one`: the recording's /sensors/fbg channel) adds
+fbg_dl1_pm, fbg_dl2_pm, fbg_force_N (the cable's FBG shifts and its eq 3 tension, when the cable carries one)
+and est_tip_force_N (the loop's tip-side tension estimate: the FBG's, or for sensor one eq 7's); its
+motor_force_N is the proximal FSR tension the one-sensor model read (sensor one), none for sensor fbg (whose
+estimate is tip-side).
 
 `--truth` (simulated robot only): motor_force_N is the simulator's tension at the FSR (x_t_fsr) instead of
 the FSR-calibrated estimate, and motor_pos_mm the motor position its cable physics runs on (its steppers are
@@ -30,6 +35,7 @@ from teleop.core.errors import InputError
 from teleop.core.kinematics import bending_angles, pose2cables, pose2lengths, rotation_zyx
 from teleop.io.outputs import atomic_write
 from teleop.io.recording import TOPIC_ROBOT, TOPIC_SETPOINT, read_session
+from teleop.io.recording.sensors import TOPIC_FBG
 from teleop.loop.replay import geometry_from
 
 
@@ -56,7 +62,10 @@ def export_rows(session, cable: int, truth: bool = False):
     i = cable - 1
     est = {m["tick"]: m for m in session.messages("/estimation")}
     sp = {m["tick"]: m for m in session.messages(TOPIC_SETPOINT)}
+    fbg = {m["tick"]: m for m in session.messages(TOPIC_FBG)}  # FBG sensor kinds (module docstring)
     header = ["t_s", "motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "cmd_len_mm"]
+    if fbg:
+        header += ["fbg_dl1_pm", "fbg_dl2_pm", "fbg_force_N", "est_tip_force_N"]
     rows, loop_t = [], []
     last_seq = None
     for m in session.messages(TOPIC_ROBOT):
@@ -81,6 +90,14 @@ def export_rows(session, cable: int, truth: bool = False):
         motor_pos = ((L_home[i] - m["commanded_lengths"][i]) if truth else m["position_steps"][i] / steps_per_m) * 1e3
         rows.append([m.get("t_robot", m["t"]), motor_pos, tip_pos, motor_force, tip_force,
                      float(np.rad2deg(theta)), m["commanded_lengths"][i] * 1e3])
+        if fbg:
+            s = {f: np.atleast_1d(v) for f, v in fbg.get(k, {}).items()}  # k = 1 cable: numbers, not lists
+            on = np.flatnonzero(s.get("fbg_cable", np.empty(0)) == i)
+            if not truth:
+                rows[-1][3] = float(s["proximal"][i]) if "proximal" in s else float("nan")
+            rows[-1] += [float(s[f][on[0]]) if on.size else float("nan") for f in ("fbg_dl1_pm", "fbg_dl2_pm",
+                                                                                     "fbg_force")]
+            rows[-1].append(est[k]["tensions"][i])
     t_robot = np.array([r[0] for r in rows], dtype=float)
     if rows and not (np.all(np.isfinite(t_robot)) and np.all(np.diff(t_robot) > 0)):
         for r, t in zip(rows, loop_t):   # the robot's stamps restart or repeat: the loop's receive times

@@ -12,6 +12,14 @@ Per kind (teleop.core.sensors.SENSOR_KINDS; docs/formats.md "Robot readings: sen
   Kp Fp + bp and the releasing line Kr Fp + br, a play operator per cable), with Kp, Kr identified on the
   instrumented cable (`identify_one_sensor`, or a `teleop calibrate one-sensor` file); that cable's own
   distal tension is its FBG's (eq 3).
+  Rest identification (`update`, while the robot has not moved since the first reading or a reset): eq 7
+  says where a cable's distal tension lies only once the cable has been pulled or released onto a line; at
+  rest it holds anywhere between the two lines (static friction), so the modelled cables' start cannot come
+  from eq 7 (its lower line, Kp Fp, reads a pretensioned sheath in its neutral state, Fd = Fp, Kp-fold low).
+  All cables were brought to rest the same way, so at rest the instrumented cable's distal/proximal ratio
+  rho = sum Fd / sum Fp over the rest readings (clipped to the band [min(Kp, Kr), max(Kp, Kr)]) is every
+  cable's: a modelled cable's eq 7 state is rho times its mean proximal tension at rest. The first commanded
+  length change (the robot moves, e.g. once ENABLED) ends it; eq 7 then runs on from that state.
 Both give tip-side tensions: no sheath is left between them and the end effector, so the sheath friction
 compensation of the named estimators (single, double, dynamic) has nothing to remove; every name runs the
 shared rest of the estimate (f = -A t at the commanded pose, the steady-state Kalman: the non_compensated
@@ -59,6 +67,7 @@ class FbgReadingEstimator:
                                     deadband_counts=deadband_counts) if kind == "one" else None
         self.tick = TickComputer(geom, "non_compensated", kalman=kalman)
         self._t = np.zeros(self.n)
+        self.proximal = np.full(self.n, math.nan)  # one: the last reading's proximal FSR tensions [N]
         # compile (or load) the kernels now, not on the loop's first frame
         z = np.zeros((2, self.n))
         if kind == "fbg":
@@ -69,6 +78,13 @@ class FbgReadingEstimator:
 
     def reset(self) -> None:
         self._fd = np.full(self.n, math.nan)  # eq 7 state per cable: the last distal tension [N]
+        # rest identification (module docstring): on until the commanded lengths leave those of its first reading
+        self.at_rest = self.kind == "one"
+        self._rest_L = None  # commanded lengths [m] of the first rest reading
+        self._rest_fp = np.zeros(self.n)  # sums over the rest readings: proximal tensions [N]
+        self._rest_fd = 0.0  # and the instrumented cable's distal (FBG) tension [N]
+        self._rest_m = 0
+        self.rest_ratio = math.nan  # rho: the identified distal/proximal ratio at rest (NaN: none yet)
         if self.fsr is not None:
             self.fsr.reset()
         self.tick.reset()
@@ -88,11 +104,41 @@ class FbgReadingEstimator:
         Fp = self.fsr.tensions_into(np.ascontiguousarray(fsr_counts, dtype=float))
         m = self.model  # eq 7 per cable (kernel sensor.eq7_step = ProximalDistalModel.step), the FBG's on its own
         KS.one_sensor_row(Fp, self._fd, m.Kp, m.Kr, m.bp, m.br, fbg, self.cable, p.r, p.S_pm_N, t)
+        self.proximal[:] = Fp
+        return t
+
+    #: a commanded length change larger than this [m] ends the rest identification (the robot moved)
+    REST_MOVE_M = 1e-6
+
+    def rest_into(self, commanded_lengths, t: np.ndarray) -> np.ndarray:
+        """One: the rest identification's step (module docstring) after `tensions_into` gave `t` (n,) [N] for
+        a reading with `commanded_lengths` (n,) [m]: while at rest, add the reading to the sums and set each
+        modelled cable's eq 7 state and tension in `t` to rho times its mean proximal tension. Returns t."""
+        if not self.at_rest:
+            return t
+        L = np.asarray(commanded_lengths, dtype=float)
+        if self._rest_L is None:
+            self._rest_L = L.copy()
+        elif np.max(np.abs(L - self._rest_L)) > self.REST_MOVE_M:
+            self.at_rest = False  # moving: eq 7 runs on from the rest state
+            return t
+        c, m = self.cable, self.model
+        self._rest_fp += self.proximal
+        self._rest_fd += t[c]
+        self._rest_m += 1
+        lo, hi = min(m.Kp, m.Kr), max(m.Kp, m.Kr)
+        self.rest_ratio = rho = min(max(self._rest_fd / self._rest_fp[c], lo), hi)
+        others = np.arange(self.n) != c
+        self._fd[others] = rho * self._rest_fp[others] / self._rest_m
+        t[others] = self._fd[others]
         return t
 
     def update(self, reading, pose, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """(tip-side tensions (n,) [N], wrench (6,) [N, N m] in {B}) of a RobotReading at the commanded pose."""
+        """(tip-side tensions (n,) [N], wrench (6,) [N, N m] in {B}) of a RobotReading at the commanded pose
+        (sensor kind one: with the rest identification's step, `rest_into`, on its commanded lengths)."""
         t = self.tensions_into(reading.fsr_counts, reading.fbg_pm)
+        if self.kind == "one":
+            self.rest_into(reading.commanded_lengths, t)
         out = self.tick.estimate_into(np.ascontiguousarray(pose, dtype=float), t, float(dt))
         return t.copy(), out[1, :6].copy()
 
