@@ -89,7 +89,7 @@ def plot_fsr_fit(fit: FsrFit):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
-    fig, (ax, axr) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.4]})
+    fig, (ax, axr) = plt.subplots(2, 1, figsize=(9.5, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.4]})
     t = np.linspace(0.0, fit.cal.t_max, 300)
     d = fit.data
     for br, name in BRANCHES:
@@ -101,10 +101,10 @@ def plot_fsr_fit(fit: FsrFit):
         axr.plot(d.tension[m], fit.residual[m] * 1e6, "o", ms=4, color=color, label=name)
     axr.axhline(0.0, color="k", lw=0.6)
     ax.set_ylabel("conductance [uS]")
-    ax.set_title(f"FSR calibration, seed 000 eq 2 ({Path(d.source).name})", fontsize=9)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title(f"teleop calibrate fsr: FSR calibration, seed 000 eq 2 ({Path(d.source).name})", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside: off the data
     axr.set_xlabel("tension [N]")
     axr.set_ylabel("residual [uS]")
-    axr.legend(fontsize=7, loc="upper left", ncol=2)
+    axr.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
     return fig
