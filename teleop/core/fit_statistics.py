@@ -6,7 +6,25 @@
 
 Read by the calibration fits (FSR, FBG, one sensor), the effect fits (teleop.core.physics.fit) and the
 diagnosis's link fits. Successive samples of a recording are correlated, so these standard errors are a
-floor unless the caller inflates s^2 (the diagnosis does, by m / n_eff).
+floor unless the caller inflates s^2 (the diagnosis does, by m / n_eff) or uses the residual-based
+(sandwich) covariance below.
+
+Model choice and errors that hold when the model's assumptions do not (the calibration fits):
+
+    bic = n ln(r . r / m) + p ln n       (Schwarz's criterion: the smallest wins; a parameter must lower
+                                          n ln s^2 by ln n to be kept; n = m for independent residuals,
+                                          m / L for residuals correlated over blocks of L samples)
+    aic = n ln(r . r / m) + 2 p          (Akaike's: the lighter penalty, for parameters whose omission biases)
+    sandwich: cov = B (sum_g u_g u_g^T) B,  B = (J^T J)^+,  u_g = J_g^T r_g
+        blocks of one residual, each scaled by 1 / (1 - h_i) (HC3, MacKinnon & White 1985: heteroscedastic
+        noise, the leverage's shrinking of the residual undone), or contiguous blocks of residuals as long
+        as their correlation (block-robust / cluster sandwich, scaled by G / (G - 1) (m - 1) / (m - p),
+        CR1): coloured noise and a model that misses a slow shape leave correlated residuals, which the
+        plain s^2 (J^T J)^-1 counts as independent; the blocks count them as what they are.
+    block length: twice the residuals' integrated autocorrelation time (their normalised autocorrelation
+        summed over lags until it first drops below zero), at least m^(1/3) samples (the usual bandwidth
+        rule of heteroscedasticity-and-autocorrelation-consistent errors: the regressors' own slow shape
+        carries the products J r further than r alone), at most m / 4.
 """
 
 from __future__ import annotations
@@ -30,3 +48,66 @@ def parameter_covariance(J, s2: float) -> np.ndarray:
 def standard_errors(cov) -> np.ndarray:
     """(p,) standard errors sqrt(diag(cov)), negative round-off clipped to 0."""
     return np.sqrt(np.clip(np.diag(cov), 0, None))
+
+
+def bic(r, n_params: int, block: float = 1.0) -> float:
+    """Bayesian information criterion n ln(r . r / m) + p ln n of residuals r (m,) after fitting n_params
+    parameters, n = m / block the effective number of independent samples when residuals stay correlated
+    over `block` samples (module docstring; dimensionless, only differences between fits of the same data
+    mean anything)."""
+    r = np.asarray(r, dtype=float)
+    m = r.size
+    n = m / max(float(block), 1.0)
+    return n * float(np.log(max(float(r @ r) / m, 1e-300))) + int(n_params) * float(np.log(n))
+
+
+def aic(r, n_params: int, block: float = 1.0) -> float:
+    """Akaike's criterion n ln(r . r / m) + 2 p on the effective size n = m / block (as `bic`): a parameter is
+    kept when it lowers n ln s^2 by 2, a lighter penalty than ln n (a likelihood-ratio test at about 16 %):
+    for a parameter whose wrongful omission biases the others by more than their standard error."""
+    r = np.asarray(r, dtype=float)
+    m = r.size
+    n = m / max(float(block), 1.0)
+    return n * float(np.log(max(float(r @ r) / m, 1e-300))) + 2.0 * int(n_params)
+
+
+def correlation_length(r) -> int:
+    """Block length [samples] over which residuals r (m,) in their recorded order stay correlated: twice
+    their integrated autocorrelation time, at least m^(1/3), at most m // 4 (module docstring)."""
+    r = np.asarray(r, dtype=float)
+    m = r.size
+    x = r - r.mean()
+    v = float(x @ x)
+    if m < 8 or v <= 0:
+        return 1
+    n = 1 << int(np.ceil(np.log2(2 * m)))
+    f = np.fft.rfft(x, n)
+    acf = np.fft.irfft(f * np.conj(f), n)[:m // 4] / v
+    neg = np.flatnonzero(acf[1:] <= 0.0)
+    stop = int(neg[0]) + 1 if neg.size else acf.size
+    tau = 0.5 + float(np.sum(acf[1:stop]))
+    return int(min(max(int(np.ceil(m ** (1.0 / 3.0))), int(np.ceil(2.0 * tau))), max(1, m // 4)))
+
+
+def sandwich_covariance(J, r, block: int | None = None) -> np.ndarray:
+    """(p, p) residual-based covariance of the parameters of a least-squares fit with Jacobian J (m, p)
+    and residuals r (m,) in their recorded order (module docstring). block: None or 1 for HC3 (independent
+    rows, any variance each), L > 1 for contiguous blocks of L rows (correlated residuals); "auto" picks
+    `correlation_length(r)`."""
+    J = np.asarray(J, dtype=float)
+    r = np.asarray(r, dtype=float)
+    m, p = J.shape
+    B = np.linalg.pinv(J.T @ J)
+    if block == "auto":
+        block = correlation_length(r)
+    if block is None or int(block) <= 1:
+        h = np.einsum("ij,jk,ik->i", J, B, J)
+        u = J * (r / np.maximum(1.0 - h, 1e-3))[:, None]
+        return B @ (u.T @ u) @ B
+    L = min(int(block), max(1, m // 2))       # two blocks at least
+    g = np.arange(m) // L
+    G = int(g[-1]) + 1
+    U = np.zeros((G, p))
+    np.add.at(U, g, J * r[:, None])
+    scale = G / (G - 1) * (m - 1) / max(m - p, 1)
+    return B @ (U.T @ U) @ B * scale

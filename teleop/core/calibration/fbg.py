@@ -13,7 +13,7 @@ Model (linear in its parameters, solved by ordinary least squares; seed 001 eq 2
 Tm is the mean temperature, c1 and c2 the shifts' zeros. The hysteresis is a loop: the loading - unloading
 gap 2 h(u) [pm] is a function of the force, zero at the ends of the loop (F_lo, F_hi: the smallest and
 largest reference force, where the branches meet) and largest in between; P_k are Legendre polynomials,
-their number (3 to 6, HYSTERESIS_TERMS) chosen by the Bayesian information criterion. Three at least: the
+their number (3 to 6, HYSTERESIS_TERMS) chosen by the Bayesian information criterion (below). Three at least: the
 arch, its tilt and its flattening (an arch alone misses a half sine's largest gap by 3 %, and the criterion,
 on a noisy sensor, keeps to one term: a gap biased low by more than its standard error); more when the
 data ask for them (a flat-topped or lopsided loop). Reported: the sensitivity S [pm/N], the temperature
@@ -21,10 +21,14 @@ sensitivities kT1, kT2 [pm/degC] and their ratio r = kT2 / kT1 (eq 3), the hyste
 (sec. 3.1: 4.798 %): the MAXIMUM loading - unloading gap over the full-scale output S (F_hi - F_lo) [%], that
 gap in pm and as a force, / S [N], and the force where it is largest; the RMSE of dl2 [pm], that of the
 compensated shift dl2 - r dl1 [pm] and the force error it means, / S [N] (seed: 12.59 pm, 0.37 N). Standard
-errors from cov = s^2 (X^T X)^-1 per equation (teleop.core.fit_statistics); r's by the delta method, the
-maximum gap's through the gradient of 2 h at its maximum (the envelope theorem: the place of the maximum
-moves to first order without changing it). Samples of a hold are not independent draws of everything (the
-load cell's own error is shared), so the errors are a floor, not a bound.
+errors per equation from the block-robust sandwich (teleop.core.fit_statistics.sandwich_covariance over
+contiguous blocks of the residuals' correlation length: a grating's noise that wanders within a hold and
+across holds, a load cell's error shared by a hold's samples, a loop shape the terms miss, are counted as
+the correlated errors they are, where s^2 (X^T X)^-1 would count every sample as independent); r's by the
+delta method, the maximum gap's through the gradient of 2 h at its maximum (the envelope theorem: the
+place of the maximum moves to first order without changing it). The loop's terms are chosen by the BIC
+on the effective size m / L (teleop.core.fit_statistics.bic), L the fullest loop's residual correlation
+length.
 
 The loading state s is the catalogue's sensor-hysteresis switch (teleop.core.physics.hysteresis_offset with
 h = 1) applied to the reference force, its half-width five times the force noise (so noise does not flip
@@ -39,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from teleop.core.errors import InputError
-from teleop.core.fit_statistics import parameter_covariance, residual_variance
+from teleop.core.fit_statistics import bic, correlation_length, sandwich_covariance
 from teleop.core.physics import hysteresis_offset
 from teleop.core.sensors import FbgParams
 
@@ -109,17 +113,12 @@ def loop_basis(u: np.ndarray, terms: int) -> np.ndarray:
     return np.column_stack([arch * np.polynomial.legendre.Legendre.basis(k)(2.0 * u - 1.0) for k in range(terms)])
 
 
-def _bic(r: np.ndarray, p: int) -> float:
-    n = r.size
-    return n * float(np.log(max(float(np.mean(r ** 2)), 1e-300))) + p * float(np.log(n))
-
-
-def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(beta, cov, residual) of y ~ X beta."""
+def _ols(X: np.ndarray, y: np.ndarray, block: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(beta, cov, residual) of y ~ X beta; cov the block-robust sandwich over blocks of `block` rows
+    (default: the residuals' correlation length)."""
     beta, *_ = np.linalg.lstsq(X, y, rcond=None)
     r = y - X @ beta
-    cov = parameter_covariance(X, residual_variance(r, X.shape[1]))
-    return beta, cov, r
+    return beta, sandwich_covariance(X, r, correlation_length(r) if block is None else block), r
 
 
 def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
@@ -144,7 +143,8 @@ def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
         lo, hi = HYSTERESIS_TERMS
         fits = {m: _ols(np.column_stack(base + list((data.s[:, None] * loop_basis(u, m)).T)), data.dl2)
                 for m in range(lo, hi + 1)}
-        terms = min(fits, key=lambda m: _bic(fits[m][2], len(base) + m))
+        block = correlation_length(fits[hi][2])   # the fullest loop's residuals: the effective size m / L
+        terms = min(fits, key=lambda m: bic(fits[m][2], len(base) + m, block))
         b2, cov2, r2 = fits[terms]
     S, kT2, kT1 = float(b2[0]), float(b2[1]), float(b1[0])
     se_S, se_kT2, se_kT1 = (float(np.sqrt(max(c, 0.0))) for c in (cov2[0, 0], cov2[1, 1], cov1[0, 0]))

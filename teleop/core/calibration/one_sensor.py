@@ -2,13 +2,24 @@
 instrumented cable, from its proximal (motor) and distal (tip) force.
 
 The recording is interchange CSV (docs/formats.md) with `motor_force_N` and `tip_force_N` (or N m), or any
-layout through a column map (`--map`, e.g. the shipped `mrdlab`). The fit is
-`teleop.core.sensors.fit_proximal_distal` (line fits of the pulling and releasing phases, then least squares
-of the play-operator prediction); this module adds standard errors (teleop.core.fit_statistics:
-cov = s^2 (J^T J)^-1, J by central differences of the same prediction) and the transition widths: at a
-distal force Fd the motor must change its force by w(Fd) = |(Fd - bp) / Kp - (Fd - br) / Kr| while the tip
-stays put (the flat phases of seed 001 Fig 2b), reported at the record's top and bottom turns. Successive
-samples of a recording are correlated, so the standard errors are a floor.
+layout through a column map (`--map`, e.g. the shipped `mrdlab`). Start values are
+`teleop.core.sensors.fit_proximal_distal` (line fits of the pulling and releasing phases; when its phase
+detection finds too few samples, `fit_proximal_distal_origin`'s ratios), then least squares of the
+play-operator prediction (ProximalDistalModel.distal) against the distal force for each of four models:
+the slopes Kp, Kr alone (lines through the origin, eqs 4-6), with the pulling intercept bp, with the
+releasing intercept br, with both (eq 7 as written). The model kept is the one of least Bayesian
+information criterion (teleop.core.fit_statistics.bic) counted on the record's effective size m / L, L the
+residuals' correlation length (`correlation_length` of the fullest model's residuals): successive samples
+are not independent, and counted one by one they would keep every intercept. An intercept left out is 0
+with standard error 0 (`model` in the summary names the free parameters).
+
+Standard errors: the block-robust sandwich (teleop.core.fit_statistics.sandwich_covariance, contiguous
+blocks of L samples) of the kept model, J by central differences of the same prediction: it holds with
+coloured sensor noise and with a shape the model misses, where s^2 (J^T J)^-1 counts correlated
+samples as independent (the errors came out 5-40x too small on such records). The transition widths: at a distal force Fd the
+motor must change its force by w(Fd) = |(Fd - bp) / Kp - (Fd - br) / Kr| while the tip stays put (the
+flat phases of seed 001 Fig 2b), reported at the record's top and bottom turns, their errors by the delta
+method.
 """
 
 from __future__ import annotations
@@ -18,11 +29,15 @@ from pathlib import Path
 
 import numpy as np
 
+from scipy.optimize import least_squares
+
 from teleop.core.errors import InputError
-from teleop.core.fit_statistics import parameter_covariance, residual_variance, standard_errors
-from teleop.core.sensors import ProximalDistalModel, fit_proximal_distal
+from teleop.core.fit_statistics import aic, correlation_length, sandwich_covariance, standard_errors
+from teleop.core.sensors import ProximalDistalModel, fit_proximal_distal, fit_proximal_distal_origin
 
 NAMES = ("Kp", "Kr", "bp", "br")
+#: the candidate models, by their free parameters (the others 0); the last is eq 7 as written
+MODELS = (("Kp", "Kr"), ("Kp", "Kr", "bp"), ("Kp", "Kr", "br"), ("Kp", "Kr", "bp", "br"))
 
 
 def transition_width(model: ProximalDistalModel, Fd) -> np.ndarray:
@@ -43,6 +58,9 @@ class OneSensorFit:
     rmse: float
     unit: str
     source: str
+    free: tuple = NAMES          # the kept model's free parameters (MODELS)
+    block: int = 1               # the residuals' correlation length [samples] (standard errors, criterion)
+    criterion: dict = None       # each candidate's AIC on the effective size, by "+".join(free)
 
     @property
     def predicted(self) -> np.ndarray:
@@ -52,28 +70,72 @@ class OneSensorFit:
         m = self.model
         return {"kind": "one-sensor", "source": self.source, "unit": self.unit,
                 "values": {"Kp": m.Kp, "Kr": m.Kr, "bp": m.bp, "br": m.br, "rmse": self.rmse},
-                "stderr": self.stderr, "transition_width": self.widths, "samples": int(self.Fp.size)}
+                "stderr": self.stderr, "transition_width": self.widths, "samples": int(self.Fp.size),
+                "model": list(self.free), "block_samples": self.block, "aic": self.criterion}
+
+
+def _start(Fp: np.ndarray, Fd: np.ndarray, where: str) -> np.ndarray:
+    """Kp, Kr, bp, br to start the least squares from (module docstring)."""
+    try:
+        m = fit_proximal_distal(Fp, Fd)
+    except InputError:
+        try:
+            m = fit_proximal_distal_origin(Fp, Fd)
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}") from None
+    return np.array([m.Kp, m.Kr, m.bp, m.br])
 
 
 def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
-    """Fit seed 001 eq 7 to one cable's proximal Fp (n,) and distal Fd (n,) forces [unit]."""
+    """Fit seed 001 eq 7 to one cable's proximal Fp (n,) and distal Fd (n,) forces [unit]: the model the
+    data ask for and block-robust standard errors (module docstring)."""
     Fp = np.asarray(Fp, dtype=float)
     Fd = np.asarray(Fd, dtype=float)
-    try:
-        model = fit_proximal_distal(Fp, Fd)
-    except InputError as exc:
-        raise InputError(f"{source or 'one-sensor'}: {exc}") from None
-    z = np.array([model.Kp, model.Kr, model.bp, model.br])
+    where = source or "one-sensor"
+    if Fp.shape != Fd.shape or Fp.ndim != 1 or Fp.size < 20:
+        raise InputError(f"{where}: proximal and distal force must be 1-D series of the same length (>= 20)")
+    z0 = _start(Fp, Fd, where)
+    scale = float(np.ptp(Fp)) or 1.0
 
     def predict(zz):
         return ProximalDistalModel(*zz).distal(Fp, Fd[0])
 
-    r = predict(z) - Fd
-    scale = float(np.ptp(Fp)) or 1.0
+    def fit(free, start, rows):
+        idx = [NAMES.index(k) for k in free]
+
+        def resid(x):
+            zz = np.zeros(4)
+            zz[idx] = x
+            return (predict(zz) - Fd)[rows]
+
+        sol = least_squares(resid, start[idx], x_scale=0.1)
+        z = np.zeros(4)
+        z[idx] = sol.x
+        return z, sol.fun
+
+    # the samples on a line: the flats' levels are set by the proximal force's extreme at the turn, where
+    # its noise is rectified (the play keeps the largest excursion), so they are left out
+    z_all, _ = fit(NAMES, z0, slice(None))
+    m = ProximalDistalModel(*z_all)
+    pred = predict(z_all)
+    tol = 1e-9 * (1.0 + float(np.max(np.abs(pred))))
+    rows = (np.abs(pred - (m.Kp * Fp + m.bp)) <= tol) | (np.abs(pred - (m.Kr * Fp + m.br)) <= tol)
+    if np.count_nonzero(rows) < 10:
+        rows = np.ones(Fp.size, dtype=bool)
+    fits = {}
+    for free in MODELS[::-1]:                       # the fullest first: its optimum starts the others
+        fits[free] = fit(free, fits[NAMES][0] if NAMES in fits else z_all, rows)
+    block = correlation_length(fits[NAMES][1])
+    crit = {free: aic(r, len(free), block) for free, (z, r) in fits.items()}
+    free = min(crit, key=crit.get)
+    z, r = fits[free]
+    idx = [NAMES.index(k) for k in free]
+    model = ProximalDistalModel(*map(float, z))
     steps = np.array([1e-6, 1e-6, 1e-6 * scale, 1e-6 * scale]) * np.maximum(1.0, np.abs(z))
-    J = np.column_stack([(predict(z + h * e) - predict(z - h * e)) / (2 * h)
-                         for h, e in zip(steps, np.eye(4))])
-    cov = parameter_covariance(J, residual_variance(r, len(NAMES)))
+    J = np.column_stack([(predict(z + steps[k] * e) - predict(z - steps[k] * e))[rows] / (2 * steps[k])
+                         for k, e in zip(idx, np.eye(4)[idx])])
+    cov = np.zeros((4, 4))
+    cov[np.ix_(idx, idx)] = sandwich_covariance(J, r, correlation_length(r))
     stderr = dict(zip(NAMES, standard_errors(cov).tolist()))
     widths = {}
     for name, level in (("top", float(np.max(Fd))), ("bottom", float(np.min(Fd)))):
@@ -82,7 +144,8 @@ def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
                        - float(transition_width(ProximalDistalModel(*(z - h * e)), level))) / (2 * h)
                       for h, e in zip(steps, np.eye(4))])
         widths[name] = {"distal": level, "width": w, "stderr": float(np.sqrt(max(g @ cov @ g, 0.0)))}
-    return OneSensorFit(Fp, Fd, model, stderr, widths, float(np.sqrt(np.mean(r ** 2))), unit, source)
+    return OneSensorFit(Fp, Fd, model, stderr, widths, float(np.sqrt(np.mean(r ** 2))), unit, source,
+                        tuple(free), int(block), {"+".join(f): float(c) for f, c in crit.items()})
 
 
 def plot_one_sensor_fit(fit: OneSensorFit):
@@ -107,15 +170,21 @@ def plot_one_sensor_fit(fit: OneSensorFit):
     ax.set_xlabel(f"proximal (motor) force [{u}]")
     ax.set_ylabel(f"distal (tip) force [{u}]")
     w = fit.widths
-    ax.set_title(f"transition widths: {w['top']['width']:.3g} {u} at the top, "
-                 f"{w['bottom']['width']:.3g} {u} at the bottom", fontsize=9)
-    ax.legend(fontsize=7)
+    for name, marker in (("top", "v"), ("bottom", "^")):  # each width drawn where it is measured
+        Fd_turn = w[name]["distal"]
+        ends = [(Fd_turn - m.bp) / m.Kp, (Fd_turn - m.br) / m.Kr]
+        ax.plot(ends, [Fd_turn] * 2, "-", color="m", lw=1.2, alpha=0.8, marker=marker, ms=5,
+                label="transition widths (proximal change at the turns)" if name == "top" else None)
+    ax.set_title(f"transition widths: {w['top']['width']:.3g} {u} at the top (distal {w['top']['distal']:.3g} {u}), "
+                 f"{w['bottom']['width']:.3g} {u} at the bottom (distal {w['bottom']['distal']:.3g} {u})", fontsize=9)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2)  # below: off the data
     k = np.arange(fit.Fp.size)
     axr.plot(k, fit.predicted - fit.Fd, lw=0.6, color="tab:blue", label="prediction - measured")
     axr.axhline(0, color="k", lw=0.6)
-    axr.set_xlabel("sample")
+    axr.set_xlabel("sample index [-]")
     axr.set_ylabel(f"distal force residual [{u}]")
-    axr.legend(fontsize=7)
-    fig.suptitle(f"one sensor for all cables, seed 001 eq 7 ({Path(fit.source).name})", fontsize=10)
+    axr.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18))
+    fig.suptitle(f"teleop calibrate one-sensor: one sensor for all cables, seed 001 eq 7 "
+                 f"({Path(fit.source).name})", fontsize=10)
     fig.tight_layout()
     return fig
