@@ -149,7 +149,7 @@ def test_studio_shows_the_live_session_and_its_recording(tmp_path):
             if p is not None and p.poll() is None:
                 p.kill()
                 p.wait(30)
-    (tmp_path / "studio-report.json").write_text(json.dumps(stages, indent=1))
+        (tmp_path / "studio-report.json").write_text(json.dumps(stages, indent=1))  # what was seen, if a step failed
     live, fault, recording = stages["live"], stages["fault"], stages.get("recording")
     session = json.loads((tmp_path / "session.json").read_text())
 
