@@ -189,7 +189,7 @@ class Diagnosis:
             d = res.data
             r = d.y - predict(d, res.final.model)
             rh = r[self.hold]
-            noise = max(noise_level(r), float(np.std(np.diff(r))) / math.sqrt(2.0) * 0.5, 1e-300)
+            noise = max(noise_estimate(r), 1e-300)
             loc = locate(d, r, d.y, index=self.hold)
             best_r2 = loc.evidence[loc.condition]
             if res.delay:
@@ -245,6 +245,13 @@ class Diagnosis:
             "holdout": {"fraction": self.holdout, "t_start": float(self.rec.t[self.hold][0])},
             "peer": self.peer,
         }
+
+
+def noise_estimate(r: np.ndarray) -> float:
+    """The white noise [r's unit] on a channel, from its model's residual r (n,) (locate.noise_level: robust
+    third differences): the level against which a residual left is structure (STRUCTURE) and a model's
+    held-out RMSE is at the noise floor."""
+    return noise_level(r)
 
 
 def sensor_correction(res: LinkResult) -> np.ndarray | None:

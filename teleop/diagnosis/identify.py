@@ -64,6 +64,40 @@ def fixed_params(d: LinkData, name: str, general: bool = False, direction: float
     return {**out, **known}
 
 
+def fit_samples(d: LinkData, fit_idx: slice, dt: float) -> slice | np.ndarray:
+    """The samples a fit runs on: the fit part decimated (FIT_SAMPLES, MIN_FIT_RATE_DT), and every sample
+    within one stride of the drive's reversals (a slice where that adds nothing). A decimated step across a
+    reversal would hide where the direction turned, which a friction's switch and a stick's travel since the
+    turn depend on to the sample, and the parameters fitted on it would be those of a later switch."""
+    start, stop = fit_idx.start or 0, fit_idx.stop
+    stride = max(1, min((stop - start) // FIT_SAMPLES, int(MIN_FIT_RATE_DT / dt)))
+    if stride == 1 or d.x is None:
+        return slice(start, stop, stride)
+    rev = d.reversals()
+    rev = rev[(rev >= start) & (rev < stop)]
+    if rev.size == 0:
+        return slice(start, stop, stride)
+    keep = np.zeros(stop - start, dtype=bool)
+    keep[::stride] = True
+    reach = max(1, min(stride, (MAX_REVERSAL_SAMPLES // (2 * rev.size))))   # a tremor's hundreds of turns
+    for off in range(-reach, reach + 1):
+        k = rev - start + off
+        keep[k[(k >= 0) & (k < keep.size)]] = True
+    return np.flatnonzero(keep) + start
+
+
+def sample_weights(idx: np.ndarray) -> np.ndarray:
+    """(m,) the samples of record each of the increasing indices idx stands for (half the gaps to its
+    neighbours, a whole gap at the ends)."""
+    gaps = np.diff(idx).astype(float)
+    if not gaps.size:
+        return np.ones(idx.size)
+    return 0.5 * (np.r_[gaps[0], gaps] + np.r_[gaps, gaps[-1]])
+
+
+MAX_REVERSAL_SAMPLES = 2 * FIT_SAMPLES   # at most about this many samples added around reversals
+
+
 @dataclass(frozen=True)
 class Fit:
     """One fitted chain: model, standard errors {effect: {param: se}}, RMSE on fit and held-out samples,
@@ -201,8 +235,10 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
     ysc = max(float(np.std(d.y[fit_idx])), 1e-12)
     g0 = start.gain if start.gain != 0 else 1.0
     dt = float(np.median(np.diff(d.t[:100])))
-    stride = max(1, min((fit_idx.stop - (fit_idx.start or 0)) // FIT_SAMPLES, int(MIN_FIT_RATE_DT / dt)))
-    dfit = d.window(slice(fit_idx.start, fit_idx.stop, stride))
+    samples = fit_samples(d, fit_idx, dt)
+    dfit = d.window(samples)
+    # each sample weighs the stretch of record it stands for (a uniform record's least squares)
+    wts = None if isinstance(samples, slice) else np.sqrt(sample_weights(samples))
     contact_law = d.link.kind == "contact" and any(is_contact_law(n) for n, _ in effects)
 
     def unpack(w):
@@ -215,6 +251,8 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
 
     def resid(w, data):
         r = (predict(data, unpack(w)) - data.y) / ysc
+        if wts is not None:
+            r = r * wts
         return r if np.isfinite(r).all() else np.nan_to_num(r, nan=1e3, posinf=1e3, neginf=-1e3)
 
     # bounded unit-space parameters u in [0, 1] enter as u = (1 + sin w) / 2 (unbounded w: MINPACK's
@@ -338,9 +376,13 @@ def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tup
     if not names:
         return base
     start = base.model.with_effects(())
+    # a load read from a spring's travel has no known zero: the sheath grips the spring's tension, the load
+    # plus a pretension, so the baseline effects' general form (the capstan's preload) is the baseline's own
+    general = d.link.spring_load
+    free = tuple(f"{n}.{s.name}" for n in names for s in get_effect(n).params if s.shape) if general else ()
     fits = []
     try:
-        fits.append(fit_chain(d, start, names, fit_idx, hold_idx, starts=2, seed=seed))
+        fits.append(fit_chain(d, start, names, fit_idx, hold_idx, starts=2, seed=seed, free_shape=free))
     except (ValueError, FloatingPointError, np.linalg.LinAlgError):
         pass
     idx = np.arange(fit_idx.start or 0, fit_idx.stop)
@@ -352,8 +394,8 @@ def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tup
         for direction, g_s, c_s, p0 in rule(record(d), idx, start.gain, start.offset, start.direction):
             try:
                 seeded = LinkModel(start.link, g_s, c_s, direction, start.load_sign,
-                                   ((name, {**p0, **fixed_params(d, name)}),))
-                fits.append(fit_chain(d, seeded, others, fit_idx, hold_idx, seed=seed))
+                                   ((name, {**p0, **fixed_params(d, name, general=general)}),))
+                fits.append(fit_chain(d, seeded, others, fit_idx, hold_idx, seed=seed, free_shape=free))
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                 pass
     if not fits:

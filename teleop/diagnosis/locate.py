@@ -18,6 +18,7 @@ harmonics over the travel), with indentation rate, with indentation depth (d^2: 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -138,9 +139,16 @@ class Location:
 
 
 def noise_level(r: np.ndarray) -> float:
-    """White-noise standard deviation of r from its first differences (robust: MAD)."""
-    dr = np.diff(r)
-    return float(1.4826 * np.median(np.abs(dr - np.median(dr))) / np.sqrt(2.0))
+    """White-noise standard deviation of r [r's unit] from its third differences (white noise of sigma gives
+    them a variance of 20 sigma^2), robustly (MAD): a residual's smooth structure (a slow misfit, an input's
+    smoothed noise carried through the model) leaves almost nothing in them, and its short events (a
+    misfit at each reversal) fall outside the median; first differences kept both and read a misfit as
+    noise. Their standard deviation where the MAD is 0 (a residual on a lattice)."""
+    d3 = np.diff(r, 3)
+    if not d3.size:
+        return 0.0
+    mad = float(np.median(np.abs(d3 - np.median(d3))))
+    return (1.4826 * mad if mad > 0 else float(np.std(d3))) / math.sqrt(20.0)
 
 
 def windows_from(t: np.ndarray, score: np.ndarray, frac: float = 0.5, max_windows: int = 40) -> list:

@@ -28,9 +28,12 @@ def _strokes(seed: int, fs: float = 500.0, seconds: float = 20.0):
     return t, x, 2.0 + multisine(rng, t, 1.5, 2, 0.05, 0.3)
 
 
-def _stepped(params: dict, x: np.ndarray, load: np.ndarray) -> np.ndarray:
+def _stepped(params: dict, x: np.ndarray, load: np.ndarray, fs: float = 500.0) -> np.ndarray:
+    # the step reads the drive's time and rate too (the array form's central difference, as Signals derives it)
     st = get_effect("capstan_friction").make_step(params)
-    return np.array([st.step(x=float(a), load=float(b)) for a, b in zip(x, load)])
+    t = np.arange(x.size) / fs
+    v = np.gradient(x, t)
+    return np.array([st.step(t=float(c), x=float(a), v=float(w), load=float(b)) for c, a, w, b in zip(t, x, v, load)])
 
 
 def _recording(tmp_path, seed: int, preload: float, k: float):

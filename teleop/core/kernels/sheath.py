@@ -13,6 +13,9 @@ estimator, holds the same state as phi in [-1, 1], the FSR-side tension being t 
     phi <- clamp(phi + k dx / (mu Theta t_fsr), -1, 1),  t = t_fsr e^(-phi mu Theta)   (`tip_tension`)
 phi = 0 at the first sample, the same start. The seed's own compensation (eq 7) is the law without stick:
 t = t_fsr e^-mu Theta while pulling, e^+mu Theta while paying out (`hold_tension`).
+The catalogue fits the forward law to a recorded drive (`capstan_rate_step`): there the direction is the sign
+of the recording's rate (its convention, central or backward, the diagnosis's to pick), the travel still x's,
+and a stick stiffness at the fit's upper bound is the instant switch, which no finite k reaches on samples.
 
 Constants: a (N_CONST,) float64 array, `Sheath.constants()`, indices MU, THETA0, STICK_K, PRETENSION; a
 kernel holding more constants keeps the sheath's at the head of its array.
@@ -143,6 +146,61 @@ def forward_step(x_prev, f, x, t_tip, mu_theta, k):
     if x_prev != x_prev:
         return start_on_tip(t_tip, mu_theta, k)
     return capstan_play_step(f, x - x_prev, t_tip, mu_theta, k)
+
+
+# ------------------------------------------------------------------ the law on a recorded drive (the catalogue's)
+#: the catalogue's capstan_friction kernel: its constants are the sheath's, then PRELOAD [N] and INSTANT [N/m]
+#: (the stick stiffness from which on a reversal is a plain switch); its state the sheath's rows, then T_PREV
+PRELOAD, INSTANT, N_RATE_CONST = N_CONST, N_CONST + 1, N_CONST + 2
+T_PREV, N_RATE_STATE = N_STATE, N_STATE + 1
+
+
+@njit
+def rate_play_step(f, dx, s, lead, F_tip, mu_theta, k, instant):
+    """Motor force [N] after a sample of a recorded drive: the forward law's clamp(f + k dx) into the band of
+    the tip force F_tip [N], its direction taken from the drive's rate sign s (+1, -1; 0: at rest, f held
+    in the band) rather than from the travel dx [m] since the last sample. They differ for a sample after a
+    reversal the rate places inside the last interval (a central difference sees the turn half a sample
+    before a backward one): then the travel since the turn is `lead` [m] (a fraction of |v| dt) in the new
+    direction. k >= instant [N/m] is the limit of an instant switch: the band's side of s."""
+    lo, hi = capstan_band(F_tip, mu_theta)
+    if s == 0.0:
+        return clamp(f, lo, hi)
+    if k >= instant:
+        return hi if s > 0.0 else lo
+    if dx * s <= 0.0:
+        dx = s * lead
+    return clamp(f + k * dx, lo, hi)
+
+
+@njit
+def capstan_rate_step(st, u, c):
+    """The catalogue's capstan_friction step: u = (t [s], x [m], v [m/s], load [N], theta [rad]) one sample of
+    a recorded drive and its tip load; c (N_RATE_CONST,) the sheath's constants, PRELOAD, INSTANT; st
+    (N_RATE_STATE,) one cable's state. Motor force [N] of the sheath's law (`rate_play_step`) on the tension
+    load + preload, read from the preload. The first sample starts on the tip tension (at once on the side
+    of the motion for an instant switch)."""
+    t, x, v, load, theta = u[0], u[1], u[2], u[3], u[4]
+    P = c[PRELOAD]
+    mt = c[MU] * theta
+    s = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+    if st[X] != st[X]:
+        f = start_on_tip(load + P, mt, c[STICK_K])
+        if c[STICK_K] >= c[INSTANT] and s != 0.0:
+            f = rate_play_step(f, 0.0, s, 0.0, load + P, mt, c[STICK_K], c[INSTANT])
+    else:
+        lead = 0.125 * abs(v) * (t - st[T_PREV])   # a quadratic turn's travel since: |v| dt / 8 on average
+        f = rate_play_step(st[F], x - st[X], s, lead, load + P, mt, c[STICK_K], c[INSTANT])
+    st[F], st[X], st[T_PREV] = f, x, t
+    return f - P
+
+
+@njit
+def capstan_rate_run(st, U, c, out):
+    """out (n,): capstan_rate_step along U (n, 5) from the state st."""
+    for i in range(U.shape[0]):
+        out[i] = capstan_rate_step(st, U[i], c)
+    return out
 
 
 # ------------------------------------------------------------------ per cable, on the state and constants

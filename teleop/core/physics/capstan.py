@@ -10,8 +10,10 @@ force follows the cable stretch, F_m <- F_m + k dx, clamped to the band
 gives the plain sign(dx) switch. The inverse (compensation) needs no k: the tip force is the play of the
 motor force, F_t <- clamp(F_t, F_m exp(-mu Theta), F_m exp(+mu Theta)). The law, its state and its start
 on the tip force are the sheath's kernels (teleop.core.kernels.sheath), shared with the simulated robot and
-the estimators; the catalogue effect's step kernel (kernels.effects.capstan_friction_step) applies them, its
-array form is the catalogue's driver loop over that step.
+the estimators (`tip2motor_transitions` runs the sheath's forward law itself). The catalogue effect, fitted to
+recordings, runs it on the recorded drive (kernel sheath.capstan_rate_step): the direction is the sign of the
+drive's rate in the convention the diagnosis picked (central or backward), and k at its upper bound
+(K_INSTANT) is the instant switch, so that a fit can reach the limit a sampled stiff stick only approaches.
 """
 
 from __future__ import annotations
@@ -21,11 +23,12 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.kernels.effects import capstan_friction_run, capstan_friction_step
-from teleop.core.kernels.sheath import STIFF_STICK_K, Sheath, capstan_band_loop, capstan_tip_run, new_state
+from teleop.core.kernels.sheath import (INSTANT, N_RATE_CONST, PRELOAD, STICK_K, STIFF_STICK_K, Sheath,
+                                        capstan_band_loop, capstan_rate_run, capstan_rate_step, capstan_tip_run,
+                                        motor_force_run, new_state)
 from teleop.core.kernels.jit import broadcast_call
 from teleop.core.kernels.ufuncs import hold_loop, tip_loop
-from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, kernel_call, register
+from teleop.core.physics.base import Effect, Kernel, ParamSpec, Rules, Signals, register
 
 
 def capstan_out(T_in, mu, theta):
@@ -82,20 +85,45 @@ def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
     F_m,k = clamp(F_m,k-1 + k (x_k - x_k-1), F_t,k e^-mu theta, F_t,k e^+mu theta) (kernel
     sheath.motor_force).
     """
-    x = np.asarray(x, dtype=float)
-    st = new_state(1).reshape(-1)
+    x, F_tip, theta = (np.ascontiguousarray(a, dtype=float).reshape(-1)
+                       for a in np.broadcast_arrays(np.asarray(x, dtype=float), F_tip, theta))
+    st = new_state(1)
     if F0 is not None:  # a given motor force at the first position
-        st[:2] = float(x[0]), float(F0)
-    return kernel_call(KERNEL, _pack({"mu": mu, "k": k, "preload": 0.0}), x, F_tip, theta, state=st)
+        st[:2, 0] = float(x[0]), float(F0)
+    return motor_force_run(x, F_tip, theta, Sheath(mu=float(mu), stick_k=float(k)).constants(), st, 0,
+                           np.empty(x.shape[0]))
 
 
 def _pack(p: Mapping[str, float]) -> np.ndarray:
-    """The step kernel's parameters: the sheath's kernel constants for friction mu [-] and stick stiffness k
-    [N/m] (the wrap comes with the signals), then the preload [N]."""
-    return np.append(Sheath(mu=float(p["mu"]), stick_k=float(p["k"])).constants(), p.get("preload", 0.0))
+    """The step kernel's parameters (kernels.sheath.capstan_rate_step): the sheath's kernel constants for
+    friction mu [-] and stick stiffness k [N/m] (the wrap comes with the signals), then the preload [N] and
+    the stick stiffness of an instant switch (k's fit bound)."""
+    c = np.empty(N_RATE_CONST)
+    c[:PRELOAD] = Sheath(mu=float(p["mu"]), stick_k=float(p["k"])).constants()
+    c[STICK_K] = stick_stiffness(float(p["k"]))
+    c[PRELOAD], c[INSTANT] = p.get("preload", 0.0), math.inf
+    return c
 
 
-KERNEL = Kernel(capstan_friction_step, capstan_friction_run, state=tuple(new_state(1).reshape(-1)), pack=_pack)
+#: the stick stiffness [N/m] of an instant switch, the fit's upper bound on k: on sampled data a stiff but
+#: finite stick still crosses the band a sample late at a slow turn, where the motor moves least. Over k's
+#: top decade the kernel's stiffness grows without bound (`stick_stiffness`), so that a fit ending near the
+#: bound (a sin-mapped bound is reached only to rounding) is the switch.
+K_INSTANT = 1e12
+
+
+def stick_stiffness(k: float) -> float:
+    """The kernel's stick stiffness [N/m] for the parameter k [N/m]: k itself below K_INSTANT / 10, then
+    k / (1 - top / TOP), top = log10(10 k / K_INSTANT), infinite from top = TOP on (continuous and
+    increasing): the last per cent of the decade is the switch, where a fit's start on the bound lands."""
+    top = math.log10(10.0 * k / K_INSTANT)
+    if top <= 0.0:
+        return k
+    return k / (1.0 - top / TOP) if top < TOP else math.inf
+
+
+TOP = 0.99
+KERNEL = Kernel(capstan_rate_step, capstan_rate_run, state=(math.nan, math.nan, 0.0, 0.0), pack=_pack)
 
 
 def motor2tip_transitions(F_motor, mu, theta, F0=None):
@@ -133,7 +161,8 @@ PARAMS = (
     ParamSpec("theta", "rad", 0.0, 8 * np.pi, Sheath.theta0,
               "total wrap angle Theta (ignored when the signals carry a 'theta' channel; "
               "mu and theta are identifiable only as a product: fix one when fitting)"),
-    ParamSpec("k", "N/m", 1.0, 1e8, STIFF_STICK_K, "stick stiffness during reversals (motor force per motor travel)",
+    ParamSpec("k", "N/m", 1.0, K_INSTANT, STIFF_STICK_K, "stick stiffness during reversals (motor force per motor "
+              "travel; the upper bound is an instant switch on the rate's sign)",
               log=True),
     ParamSpec("preload", "N", 0.0, 50.0, 0.0, "pretension the cable carries beside the load (an antagonistic "
               "pair's, or a load sensor zeroed under tension): the sheath grips load + preload, the motor "
@@ -198,14 +227,21 @@ def _baseline_starts(rec, index, gain, offset, direction) -> list:
         g_mid = math.sqrt(lines[0][0] * lines[1][0]) * math.copysign(1.0, lines[0][0])
         ratio = abs(lines[0][0] / lines[1][0])
         mt = 0.5 * abs(math.log(ratio)) if ratio > 0 else 0.1
-        starts = [(g_mid, 0.5 * (lines[0][1] + lines[1][1]), mt)]
+        # a preload P beside the load moves the lines apart by P (e^mu Theta - e^-mu Theta) (the general form;
+        # held at 0 unless the baseline fits it)
+        pre = PARAMS[3].clip((lines[0][1] - lines[1][1]) / (2.0 * math.sinh(max(mt, 0.02))))
+        c_mid = 0.5 * (lines[0][1] + lines[1][1]) - pre * (math.cosh(mt) - 1.0)
+        starts = [(g_mid, c_mid, mt, pre)]
     else:
-        starts = [(g, c, mt) for g, c in starts for mt in (0.1, 0.3)]
+        starts = [(g, c, mt, 0.0) for g, c in starts for mt in (0.1, 0.3)]
     out = []
-    for g_s, c_s, mu_theta in starts:
-        band = 2.0 * float(np.mean(np.abs(rec.u))) * abs(g_s) * math.sinh(max(mu_theta, 0.02))
-        out.append((direction, float(g_s), float(c_s),
-                    {"mu": min(mu_theta / th, 1.4), "theta": PARAMS[1].default, "k": max(band / (0.05 * span), 1.0)}))
+    for g_s, c_s, mu_theta, pre in starts:
+        band = 2.0 * float(np.mean(np.abs(g_s * rec.u + pre))) * math.sinh(max(mu_theta, 0.02))
+        p0 = {"mu": min(mu_theta / th, 1.4), "theta": PARAMS[1].default, "preload": float(pre)}
+        # the instant switch (first: where the fit part has no turn a sample decides, it is the limit the
+        # data allows) and a stick crossing the band over 5 % of the travel
+        for k in ((K_INSTANT,) if len(starts) == 1 else ()) + (max(band / (0.05 * span), 1.0),):
+            out.append((direction, float(g_s), float(c_s), {**p0, "k": k}))
     return out
 
 
@@ -215,7 +251,7 @@ CAPSTAN_FRICTION = register(Effect(
     doc="motor force from tip load: F_t exp(+mu Theta) pulling, exp(-mu Theta) releasing, "
         "stick transitions of stiffness k at reversals",
     params=PARAMS,
-    inputs=("x", "load"),
+    inputs=("t", "x", "v", "load"),
     optional=("theta",),
     output="load",
     guess=_guess,

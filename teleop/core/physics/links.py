@@ -78,6 +78,12 @@ class Link:
         return f"{self.kind} link ({self.input} -> {self.output})"
 
     @property
+    def spring_load(self) -> bool:
+        """A force link whose load is a spring's travel (no tip force recorded): the load's zero is the
+        spring's rest, which the recording does not give."""
+        return self.kind == "force" and not self.input.endswith("force")
+
+    @property
     def through_spring(self) -> bool:
         """A position link observed through a spring: its output is the tip force, F = g z + c with z the
         tip's travel; position effects act on z in the input's units, the gain is the spring's."""
@@ -117,11 +123,39 @@ class LinkData:
     def n(self) -> int:
         return int(self.t.shape[0])
 
+    def motion(self) -> tuple:
+        """(x, v) of the drive as the link's effects see it (`clean_motion` on all samples; the given rate
+        where there is one), or (None, None) without a drive (cached)."""
+        if self.x is None:
+            return None, None
+        if self.v is not None:
+            return self.x, self.v
+        if "motion" not in self.cache:
+            self.cache["motion"] = clean_motion(self.x, self.t, self.backward)
+        return self.cache["motion"]
+
+    def reversals(self) -> np.ndarray:
+        """Sample indices where the drive's direction (sign of its rate, `motion`, held through rests) turns:
+        the first sample moving the new way (cached; empty without a drive)."""
+        if "reversals" not in self.cache:
+            v = self.motion()[1]
+            s = np.sign(v) if v is not None else np.zeros(0)
+            k = np.flatnonzero(s)
+            turn = k[1:][s[k[1:]] != s[k[:-1]]]
+            self.cache["reversals"] = turn
+        return self.cache["reversals"]
+
     def window(self, sl) -> "LinkData":
-        """The samples `sl` (a decimating stride included). An exact drive's rate is taken on all samples
-        first: a stride would step over the reversals of an operator's tremor, where a friction flips."""
+        """The samples `sl` (a decimating stride included, or an increasing index array). An exact drive's
+        rate is taken on all samples first: a stride would step over the reversals of an operator's tremor,
+        where a friction flips. On an index array every drive's motion is (`motion`)."""
         def cut(a):
             return None if a is None else a[sl]
+        if isinstance(sl, np.ndarray):
+            x, v = self.motion()
+            return LinkData(self.link, self.t[sl], self.u[sl], self.y[sl], cut(x), cut(self.load),
+                            cut(self.temperature), cut(self.theta), self.resolution_s, self.known, self.backward,
+                            cut(v))
         v = self.v
         if v is None and self.x is not None and sl.step not in (None, 1):
             if "exact_rate" not in self.cache:   # once per LinkData: fits decimate it again and again
