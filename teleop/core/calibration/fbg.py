@@ -115,10 +115,10 @@ def loop_basis(u: np.ndarray, terms: int) -> np.ndarray:
 
 def _ols(X: np.ndarray, y: np.ndarray, block: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(beta, cov, residual) of y ~ X beta; cov the block-robust sandwich over blocks of `block` rows
-    (default: the residuals' correlation length)."""
+    (default "auto": prewhitened, teleop.core.fit_statistics)."""
     beta, *_ = np.linalg.lstsq(X, y, rcond=None)
     r = y - X @ beta
-    return beta, sandwich_covariance(X, r, correlation_length(r) if block is None else block), r
+    return beta, sandwich_covariance(X, r, "auto" if block is None else block), r
 
 
 def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:

@@ -2,24 +2,32 @@
 instrumented cable, from its proximal (motor) and distal (tip) force.
 
 The recording is interchange CSV (docs/formats.md) with `motor_force_N` and `tip_force_N` (or N m), or any
-layout through a column map (`--map`, e.g. the shipped `mrdlab`). Start values are
-`teleop.core.sensors.fit_proximal_distal` (line fits of the pulling and releasing phases; when its phase
-detection finds too few samples, `fit_proximal_distal_origin`'s ratios), then least squares of the
-play-operator prediction (ProximalDistalModel.distal) against the distal force for each of four models:
-the slopes Kp, Kr alone (lines through the origin, eqs 4-6), with the pulling intercept bp, with the
-releasing intercept br, with both (eq 7 as written). The model kept is the one of least Bayesian
-information criterion (teleop.core.fit_statistics.bic) counted on the record's effective size m / L, L the
-residuals' correlation length (`correlation_length` of the fullest model's residuals): successive samples
-are not independent, and counted one by one they would keep every intercept. An intercept left out is 0
-with standard error 0 (`model` in the summary names the free parameters).
+layout through a column map (`--map`, e.g. the shipped `mrdlab`).
 
-Standard errors: the block-robust sandwich (teleop.core.fit_statistics.sandwich_covariance, contiguous
-blocks of L samples) of the kept model, J by central differences of the same prediction: it holds with
-coloured sensor noise and with a shape the model misses, where s^2 (J^T J)^-1 counts correlated
-samples as independent (the errors came out 5-40x too small on such records). The transition widths: at a distal force Fd the
-motor must change its force by w(Fd) = |(Fd - bp) / Kp - (Fd - br) / Kr| while the tip stays put (the
-flat phases of seed 001 Fig 2b), reported at the record's top and bottom turns, their errors by the delta
-method.
+The fit:
+1. Phases. The play-operator model (ProximalDistalModel.distal) is fitted by least squares to all samples,
+   from `teleop.core.sensors.fit_proximal_distal`'s line fits (or, when its phase detection finds too few
+   samples, `fit_proximal_distal_origin`'s ratios), driven by the proximal force seen through a centred
+   moving average of n / 200 samples: each sample is then pulling (on the line Kp Fp + bp), releasing (on
+   Kr Fp + br) or flat. The flats are left out of what follows: their level is the proximal force's extreme
+   at the turn, where its noise is rectified (the play keeps the largest excursion), and a phase decided by
+   the raw proximal force would count as "on the line" exactly the samples whose noise set a record.
+2. Model. On the line samples eq 7 is linear: Fd = Kp Fp + bp pulling, Kr Fp + br releasing. Four models
+   (MODELS): the slopes alone (lines through the origin, eqs 4-6), with bp, with br, with both (eq 7 as
+   written), each by ordinary least squares; the one of least Akaike criterion on the effective size m / L
+   is kept (teleop.core.fit_statistics.aic, L the fullest model's residual correlation length: samples
+   counted one by one would keep every intercept). Akaike's and not Schwarz's penalty: an intercept wrongly
+   left out moves the slope by more than its error (the forces are far from zero). An intercept left out
+   is 0 with standard error 0 (`model` in the summary names the free parameters).
+3. Errors. Each candidate's covariance is the AR(1)-prewhitened block sandwich
+   (teleop.core.fit_statistics.sandwich_covariance(..., "auto")): it holds with coloured sensor noise,
+   where s^2 (X^T X)^-1 counts correlated samples as independent. The kept model's covariance is
+   unconditional on the choice (Buckland, Burnham & Augustin 1997): the candidates' covariances plus
+   their estimates' outer distances from the kept one, weighted by exp(-delta AIC / 2) (`aic` in the
+   summary): a slope is as uncertain as the question of its intercept moves it.
+4. Transition widths: at a distal force Fd the motor must change its force by
+   w(Fd) = |(Fd - bp) / Kp - (Fd - br) / Kr| while the tip stays put (the flat phases of seed 001 Fig 2b),
+   reported at the record's top and bottom turns, their errors by the delta method.
 """
 
 from __future__ import annotations
@@ -59,7 +67,7 @@ class OneSensorFit:
     unit: str
     source: str
     free: tuple = NAMES          # the kept model's free parameters (MODELS)
-    block: int = 1               # the residuals' correlation length [samples] (standard errors, criterion)
+    block: int = 1               # the fullest model's residual correlation length [samples] (the criterion's m / L)
     criterion: dict = None       # each candidate's AIC on the effective size, by "+".join(free)
 
     @property
@@ -86,6 +94,16 @@ def _start(Fp: np.ndarray, Fd: np.ndarray, where: str) -> np.ndarray:
     return np.array([m.Kp, m.Kr, m.bp, m.br])
 
 
+def _moving_average(x: np.ndarray, w: int) -> np.ndarray:
+    """Centred moving average of w samples (odd), the window shortened at the ends."""
+    if w <= 1:
+        return x
+    c = np.r_[0.0, np.cumsum(x)]
+    k = np.arange(x.size)
+    lo, hi = np.maximum(k - w // 2, 0), np.minimum(k + w // 2 + 1, x.size)
+    return (c[hi] - c[lo]) / (hi - lo)
+
+
 def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
     """Fit seed 001 eq 7 to one cable's proximal Fp (n,) and distal Fd (n,) forces [unit]: the model the
     data ask for and block-robust standard errors (module docstring)."""
@@ -96,46 +114,57 @@ def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
         raise InputError(f"{where}: proximal and distal force must be 1-D series of the same length (>= 20)")
     z0 = _start(Fp, Fd, where)
     scale = float(np.ptp(Fp)) or 1.0
+    # which phase each sample is in: the play model (least squares over all samples) driven by the proximal
+    # force seen through a centred moving average (its noise would decide the phase: the play's clip
+    # keeps the largest excursion, so a sample counted "on the line" would be one whose noise set a record)
+    Fp_phase = _moving_average(Fp, max(1, Fp.size // 200) | 1)
 
-    def predict(zz):
-        return ProximalDistalModel(*zz).distal(Fp, Fd[0])
+    def predict(zz, x=Fp_phase):
+        return ProximalDistalModel(*zz).distal(x, Fd[0])
 
-    def fit(free, start, rows):
-        idx = [NAMES.index(k) for k in free]
-
-        def resid(x):
-            zz = np.zeros(4)
-            zz[idx] = x
-            return (predict(zz) - Fd)[rows]
-
-        sol = least_squares(resid, start[idx], x_scale=0.1)
-        z = np.zeros(4)
-        z[idx] = sol.x
-        return z, sol.fun
-
-    # the samples on a line: the flats' levels are set by the proximal force's extreme at the turn, where
-    # its noise is rectified (the play keeps the largest excursion), so they are left out
-    z_all, _ = fit(NAMES, z0, slice(None))
+    z_all = least_squares(lambda zz: predict(zz) - Fd, z0, x_scale=0.1).x
     m = ProximalDistalModel(*z_all)
     pred = predict(z_all)
     tol = 1e-9 * (1.0 + float(np.max(np.abs(pred))))
-    rows = (np.abs(pred - (m.Kp * Fp + m.bp)) <= tol) | (np.abs(pred - (m.Kr * Fp + m.br)) <= tol)
-    if np.count_nonzero(rows) < 10:
-        rows = np.ones(Fp.size, dtype=bool)
+    pull = np.abs(pred - (m.Kp * Fp_phase + m.bp)) <= tol
+    release = (np.abs(pred - (m.Kr * Fp_phase + m.br)) <= tol) & ~pull
+    if min(np.count_nonzero(pull), np.count_nonzero(release)) < 5:
+        raise InputError(f"{where}: the record needs both pulling and releasing phases (the distal force "
+                         f"following the proximal one up and down), found {np.count_nonzero(pull)} and "
+                         f"{np.count_nonzero(release)} samples")
+    rows = pull | release
+    # on the lines the model is linear: Fd = Kp Fp + bp pulling, Kr Fp + br releasing (the measured Fp)
+    columns = {"Kp": Fp * pull, "Kr": Fp * release, "bp": pull * 1.0, "br": release * 1.0}
     fits = {}
-    for free in MODELS[::-1]:                       # the fullest first: its optimum starts the others
-        fits[free] = fit(free, fits[NAMES][0] if NAMES in fits else z_all, rows)
+    for free in MODELS:
+        X = np.column_stack([columns[k][rows] for k in free])
+        beta, *_ = np.linalg.lstsq(X, Fd[rows], rcond=None)
+        z = np.zeros(4)
+        z[[NAMES.index(k) for k in free]] = beta
+        fits[free] = (z, Fd[rows] - X @ beta, X)
     block = correlation_length(fits[NAMES][1])
-    crit = {free: aic(r, len(free), block) for free, (z, r) in fits.items()}
+    crit = {free: aic(r, len(free), block) for free, (z, r, X) in fits.items()}
     free = min(crit, key=crit.get)
-    z, r = fits[free]
+    z, r, X = fits[free]
     idx = [NAMES.index(k) for k in free]
     model = ProximalDistalModel(*map(float, z))
     steps = np.array([1e-6, 1e-6, 1e-6 * scale, 1e-6 * scale]) * np.maximum(1.0, np.abs(z))
-    J = np.column_stack([(predict(z + steps[k] * e) - predict(z - steps[k] * e))[rows] / (2 * steps[k])
-                         for k, e in zip(idx, np.eye(4)[idx])])
+    # the kept model's errors, unconditional on the choice (Buckland, Burnham & Augustin 1997; Burnham &
+    # Anderson 2002 eq 6.12): over the candidates, weighted by exp(-delta AIC / 2), each one's covariance
+    # plus its estimate's distance from the kept one's -- a slope is as uncertain as the intercept
+    # question moves it. A dropped intercept is 0 exactly (its rows and columns zeroed).
+    weights = {f: float(np.exp(-(c - crit[free]) / 2)) for f, c in crit.items()}
+    total = sum(weights.values())
     cov = np.zeros((4, 4))
-    cov[np.ix_(idx, idx)] = sandwich_covariance(J, r, correlation_length(r))
+    for f, (zf, rf, Xf) in fits.items():
+        i_f = [NAMES.index(k) for k in f]
+        cf = np.zeros((4, 4))
+        cf[np.ix_(i_f, i_f)] = sandwich_covariance(Xf, rf, "auto")
+        d = zf - z
+        cov += weights[f] / total * (cf + np.outer(d, d))
+    drop = [k for k in range(4) if k not in idx]
+    cov[drop, :] = 0.0
+    cov[:, drop] = 0.0
     stderr = dict(zip(NAMES, standard_errors(cov).tolist()))
     widths = {}
     for name, level in (("top", float(np.max(Fd))), ("bottom", float(np.min(Fd)))):
@@ -144,7 +173,8 @@ def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
                        - float(transition_width(ProximalDistalModel(*(z - h * e)), level))) / (2 * h)
                       for h, e in zip(steps, np.eye(4))])
         widths[name] = {"distal": level, "width": w, "stderr": float(np.sqrt(max(g @ cov @ g, 0.0)))}
-    return OneSensorFit(Fp, Fd, model, stderr, widths, float(np.sqrt(np.mean(r ** 2))), unit, source,
+    rmse = float(np.sqrt(np.mean((model.distal(Fp, Fd[0]) - Fd) ** 2)))
+    return OneSensorFit(Fp, Fd, model, stderr, widths, rmse, unit, source,
                         tuple(free), int(block), {"+".join(f): float(c) for f, c in crit.items()})
 
 
