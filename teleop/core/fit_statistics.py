@@ -28,6 +28,10 @@ Model choice and errors that hold when the model's assumptions do not (the calib
         long as the prewhitened residuals stay correlated, at least m^(1/3) samples (the usual bandwidth
         rule). On a line fitted to AR(1) noise (rho 0 to 0.97, 1500 samples, 300 draws) its 95 %
         intervals held 94-95 % of the time.
+    model-averaged covariance of the kept fit (Buckland, Burnham & Augustin 1997; Burnham & Anderson 2002
+        eq 6.12): sum_f w_f (C_f + (b_f - b_kept)(b_f - b_kept)^T), w_f = exp(-delta_f / 2) / sum, delta_f a
+        candidate's criterion above the least: the errors unconditional on which candidate was kept (a
+        slope is as uncertain as the question of its intercept moves it).
     correlation length: twice the residuals' integrated autocorrelation time (their normalised
         autocorrelation summed over lags until it first drops below zero), at least 1, at most m / 4.
 """
@@ -124,3 +128,19 @@ def sandwich_covariance(J, r, block: int | str | None = None) -> np.ndarray:
     np.add.at(U, g, u)
     scale = G / (G - 1) * (m - 1) / max(m - p, 1) / (1.0 - rho) ** 2
     return B @ (U.T @ U) @ B * scale
+
+
+def model_averaged_covariance(estimates: dict, covariances: dict, criteria: dict, kept) -> np.ndarray:
+    """(p, p) covariance of the kept candidate's parameters unconditional on the choice (module docstring).
+
+    estimates, covariances, criteria: by candidate, its (p,) parameters (a parameter the candidate does not
+    fit: 0), their (p, p) covariance (0 there) and its information criterion; kept: the key of the one kept."""
+    best = min(criteria.values())
+    w = {f: float(np.exp(-(c - best) / 2.0)) for f, c in criteria.items()}
+    total = sum(w.values())
+    b0 = np.asarray(estimates[kept], dtype=float)
+    cov = np.zeros((b0.size, b0.size))
+    for f, b in estimates.items():
+        d = np.asarray(b, dtype=float) - b0
+        cov += w[f] / total * (np.asarray(covariances[f], dtype=float) + np.outer(d, d))
+    return cov

@@ -40,7 +40,8 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from teleop.core.errors import InputError
-from teleop.core.fit_statistics import aic, correlation_length, sandwich_covariance, standard_errors
+from teleop.core.fit_statistics import (aic, correlation_length, model_averaged_covariance, sandwich_covariance,
+                                        standard_errors)
 from teleop.core.sensors import ProximalDistalModel, fit_proximal_distal, fit_proximal_distal_origin
 
 NAMES = ("Kp", "Kr", "bp", "br")
@@ -149,19 +150,13 @@ def fit_one_sensor(Fp, Fd, unit: str = "N", source: str = "") -> OneSensorFit:
     idx = [NAMES.index(k) for k in free]
     model = ProximalDistalModel(*map(float, z))
     steps = np.array([1e-6, 1e-6, 1e-6 * scale, 1e-6 * scale]) * np.maximum(1.0, np.abs(z))
-    # the kept model's errors, unconditional on the choice (Buckland, Burnham & Augustin 1997; Burnham &
-    # Anderson 2002 eq 6.12): over the candidates, weighted by exp(-delta AIC / 2), each one's covariance
-    # plus its estimate's distance from the kept one's -- a slope is as uncertain as the intercept
-    # question moves it. A dropped intercept is 0 exactly (its rows and columns zeroed).
-    weights = {f: float(np.exp(-(c - crit[free]) / 2)) for f, c in crit.items()}
-    total = sum(weights.values())
-    cov = np.zeros((4, 4))
+    # errors unconditional on the choice (module docstring); a dropped intercept is 0 exactly
+    covs = {}
     for f, (zf, rf, Xf) in fits.items():
         i_f = [NAMES.index(k) for k in f]
-        cf = np.zeros((4, 4))
-        cf[np.ix_(i_f, i_f)] = sandwich_covariance(Xf, rf, "auto")
-        d = zf - z
-        cov += weights[f] / total * (cf + np.outer(d, d))
+        covs[f] = np.zeros((4, 4))
+        covs[f][np.ix_(i_f, i_f)] = sandwich_covariance(Xf, rf, "auto")
+    cov = model_averaged_covariance({f: v[0] for f, v in fits.items()}, covs, crit, free)
     drop = [k for k in range(4) if k not in idx]
     cov[drop, :] = 0.0
     cov[:, drop] = 0.0

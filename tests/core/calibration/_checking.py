@@ -10,7 +10,7 @@ The data below vary what the generator holds fixed, each run drawn from its own 
   levels (8 at least in one pass) up to 3-9 N, 1 to 4 passes; noise 0.05-1 uS RMS, white or growing with the conductance
   (heteroscedastic), or with an AR(1) drift along the protocol.
 - fbg_runs: S 8-60 pm/N, kT1 4-20 pm/degC, r 1.3-3.2; 2-4 temperatures; 5-15 force levels to 5-40 N;
-  holds of 5-40 samples; a loop gap shaped 4u(1-u)(1 + c (2u - 1)) (lopsided arch) of 0-6 % of full scale;
+  holds of 5-25 samples; a loop gap shaped 4u(1-u)(1 + c (2u - 1)) (lopsided arch) of 0-6 % of full scale;
   noise 1-15 pm, white or AR(1) (rho 0.3-0.9, a slow wander inside each hold and across holds);
   reference-force noise 0-0.02 N; zero offsets on both gratings.
 - one_sensor_runs: eq 7's play between the lines Kp Fp + bp and Kr Fp + br (Kp 0.4-0.9, Kr 1.1-2.4, the
@@ -94,7 +94,7 @@ def fbg_runs(n_runs: int, seed: int = 0):
         direction = np.r_[np.ones(nlev), -np.ones(nlev - 1)]
         temps = np.sort(rng.uniform(15.0, 70.0, int(rng.integers(2, 5))))
         temps[-1] = max(temps[-1], temps[0] + 8.0)
-        hold = int(rng.integers(5, 41))
+        hold = int(rng.integers(5, 26))
         F = np.repeat(np.tile(cycle, temps.size), hold)
         d = np.repeat(np.tile(direction, temps.size), hold)
         T = np.repeat(temps, cycle.size * hold) + rng.normal(0.0, 0.05, F.size)
