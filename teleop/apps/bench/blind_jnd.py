@@ -77,7 +77,8 @@ def run(args) -> int:
                                "participant_params": dataclasses.asdict(base),
                                "rig": SimRig(options).describe(), "scheduler": args.scheduler})
     if args.plot and points:
-        title = (f"{args.participants} simulated participants per point"
-                 + ("" if options.compensation else " (no compensation)"))
+        title = (f"teleop bench blind-jnd: blind stiffness ranking against the JND, simulated robot\n"
+                 f"plant {options.plant}, sensor {options.sensor}, {args.participants} simulated participants per "
+                 f"point, seed {args.seed}" + ("" if options.compensation else " (no compensation)"))
         save_figure(jnd_curves_figure([("", points)], title), args.plot)
     return 1 if summary["tasks"]["failed"] else 0

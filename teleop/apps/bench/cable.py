@@ -49,6 +49,7 @@ from teleop.core.estimation.turn import TurnCompensation, TurnCompensator, fit_t
 from teleop.core.geometry import Geometry
 from teleop.core.physics import motor2tip, motor2tip_transitions
 from teleop.core.sensors import FsrBranchLag, FsrConverter, default_fsr_calibration
+from teleop.io.figures import legend_outside
 from teleop.io.outputs import check_output, save_figure, write_json
 
 EXPERIMENTS = ("fig9", "fig10b", "fig11", "fig13")
@@ -436,8 +437,22 @@ def table(name: str, res: dict) -> str:
     return "\n".join(lines)
 
 
-def figure(name: str, res: dict):
-    """The figure laid out like the seed's."""
+FIGURE_TITLES = {"fig9": "seed 000 Fig 9: proximal (strain gauge) vs distal (FSR at B) force, hanging weight",
+                 "fig10b": "seed 000 Fig 10b: FSR swing before and after capstan compensation",
+                 "fig11": "seed 000 Fig 11: FSR-modelled tip tension vs F/T ground truth (spring load)",
+                 "fig13": "seed 000 Fig 13: no-load back and forth, tip tension estimate minus pretension"}
+
+
+def figure_title(name: str, res: dict, noise_seed: int | None = None) -> str:
+    """What the figure is: the experiment, the bench, the plant (the cable's model) and the sensor."""
+    plant = res.get("plant", "matched")
+    cable = "distributed tendon-sheath cable" if plant == "distributed" else "capstan segments"
+    return (f"{FIGURE_TITLES[name]}\nsimulated single-cable bench, plant {plant} ({cable}), sensor FSR at B"
+            + ("" if noise_seed is None else f", noise seed {noise_seed}"))
+
+
+def figure(name: str, res: dict, noise_seed: int | None = None):
+    """The figure laid out like the seed's, titled by `figure_title`."""
     import matplotlib  # heavy: loaded only to draw
 
     matplotlib.use("Agg")
@@ -459,7 +474,6 @@ def figure(name: str, res: dict):
             ax.set_title(f"({tag}) theta = {deg} deg, pretension {c['pretension_N']} N", fontsize=9)
             ax.set_xlabel("time [s]")
             ax.set_ylabel("cable tension [N]")
-            ax.legend(fontsize=6, loc="center right", framealpha=0.9)
         ax = axes[2]
         degs = [int(d) for d in res["cases"]]
         ax.plot(degs, [res["cases"][str(d)]["proximal_change_N"] for d in degs], "o-", color="tab:orange",
@@ -473,7 +487,8 @@ def figure(name: str, res: dict):
         ax.set_xlabel("bend angle theta of C-D [deg]")
         ax.set_ylabel("force change over a back-and-forth [N]")
         ax.set_title("(c) change vs bend (1.96 N at 0 deg, 2.94 N otherwise)", fontsize=9)
-        ax.legend(fontsize=7)
+        legend_outside(axes[0], "below", ncol=2)
+        legend_outside(ax, "below", ncol=2)
     elif name == "fig10b":
         fig, ax = plt.subplots(figsize=(7, 4.5))
         cs = list(res["cases"].values())
@@ -483,9 +498,8 @@ def figure(name: str, res: dict):
         ax.plot(w, [c["tension_B_change_N"] for c in cs], ":", color="grey", label="true tension at B")
         ax.set_xlabel("hanging weight [N]")
         ax.set_ylabel("swing over a back-and-forth [N]")
-        ax.set_title(f"FSR swing before and after capstan compensation, simulated bench\n(seed 000 Fig 10b protocol, "
-                     f"theta = {res['theta_CD_deg']:g} deg, 3 back-and-forths per weight)", fontsize=9)
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        ax.set_title(f"theta = {res['theta_CD_deg']:g} deg, 3 back-and-forths per weight", fontsize=9)
+        legend_outside(ax, "right")
     elif name == "fig11":
         fig, axes = plt.subplots(1, 2, figsize=(14, 4.5))
         for ax, m, tag in ((axes[0], "b", "sine"), (axes[1], "c", "sum of two sines")):
@@ -498,27 +512,30 @@ def figure(name: str, res: dict):
             ax.set_title(f"({m}) motor moves as a {tag}", fontsize=9)
             ax.set_xlabel("time [s]")
             ax.set_ylabel("tension [N]")
-            ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
+        legend_outside(axes[0], "below", ncol=2)
+        legend_outside(axes[1], "below", ncol=2)
     else:
         Ws = list(res["pretensions"])
         fig, axes = plt.subplots(len(Ws) + 1, 1, figsize=(11, 3 * len(Ws) + 2), sharex=True,
                                  gridspec_kw={"height_ratios": [3] * len(Ws) + [1]})
         s = res["series"]
         for ax, W in zip(axes, Ws):
-            for key, color, label in (("non_compensated", "tab:blue", "without compensation"),
-                                      ("single", "tab:red", "single compensation (capstan)"),
-                                      ("double", "tab:green", "double compensation (capstan + turn polynomials)"),
-                                      ("flat_transitions", "tab:purple", "flat transitions (project)")):
-                ax.plot(s["t"], s[W][key], color=color, lw=0.8, label=label)
+            # single drawn wide and pale under double: where the turn polynomials change nothing both show
+            for key, color, lw, alpha, label in (
+                    ("non_compensated", "tab:blue", 0.8, 1.0, "without compensation"),
+                    ("single", "tab:red", 2.4, 0.45, "single compensation (capstan)"),
+                    ("double", "tab:green", 0.8, 1.0, "double compensation (capstan + turn polynomials)"),
+                    ("flat_transitions", "tab:purple", 0.8, 1.0, "flat transitions (project)")):
+                ax.plot(s["t"], s[W][key], color=color, lw=lw, alpha=alpha, label=label)
             ax.axhline(0, color="k", lw=0.5)
-            ax.set_ylabel("sensed external force [N]")
-            ax.set_title(f"no-load back and forth, pretension {W} N (seed 000 Fig 13 protocol on one cable); "
-                         f"the truth is 0", fontsize=9)
-            ax.legend(fontsize=7, loc="upper right", ncol=2)
+            ax.set_ylabel("tip tension estimate\n- pretension [N]")
+            ax.set_title(f"pretension {W} N; the truth is 0 (no load)", fontsize=9)
+            legend_outside(ax, "right")
         axx = axes[-1]
         axx.plot(s["t"], np.asarray(s["x"]) * 1e3, "k", lw=0.8)
         axx.set_xlabel("time [s]")
         axx.set_ylabel("cable haul-in [mm]")
+    fig.suptitle(figure_title(name, res, noise_seed), fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -541,5 +558,5 @@ def run(args) -> int:
     if args.json:
         write_json(args.json, {"experiment": args.experiment, "seed": args.seed, **_jsonable(res)})
     if args.plot:
-        save_figure(figure(args.experiment, res), args.plot)
+        save_figure(figure(args.experiment, res, args.seed), args.plot)
     return 0

@@ -57,6 +57,7 @@ from teleop.core.errors import InputError
 from teleop.core.kinematics import rotation_zyx
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 from teleop.io.model_io import load_model
+from teleop.io.figures import legend_outside
 from teleop.io.outputs import save_figure, write_json
 from teleop.io.recording import TOPIC_ROBOT, TOPIC_SETPOINT, read_session
 from teleop.loop import LoopParams, State, Teleop
@@ -265,9 +266,11 @@ def figure(out: dict, runs: dict):
     ax.set_xlabel("time [s]")
     ax.set_ylabel("tip tracking error |commanded - actual| [mm]")
     r = out["ratio_rms"]
-    ax.set_title(f"backlash feed-forward: plain / compensated {r:.2f}x (rms, seed {out['seed']})" if r else
-                 "backlash feed-forward")
-    ax.legend(loc="upper right", fontsize=8)
+    st = out["stylus"]
+    ax.set_title(f"teleop bench feedforward: tip error with cable play, simulated robot, plant {out.get('plant', 'matched')}"
+                 f"\nstylus {st['axis']} {st['amp_mm']:g} mm every {st['period_s']:g} s, seed {out['seed']}"
+                 + (f": plain / compensated {r:.2f}x (rms)" if r else ""), fontsize=9)
+    legend_outside(ax, "below", ncol=2)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     return fig

@@ -340,11 +340,20 @@ def table(summary: dict) -> str:
     return "\n".join(out).rstrip()
 
 
+def rig_words(rigs: list) -> str:
+    """'plant P, sensor S' of the rigs (dicts of rig_dict), each value or the values the grid spans."""
+    def values(key, default):
+        return "/".join(dict.fromkeys(str(r.get(key, default)) for r in rigs))
+    return f"plant {values('plant', 'matched')}, sensor {values('sensor', 'fsr')}"
+
+
 def write_outputs(summary: dict, out_dir: Path) -> list:
     """curves.png: correct-ranking share against JND per grid point, 95 % Wilson intervals."""
     curves = [(point_label(pt["params"]), pt["curve"]) for pt in summary["points"] if pt["curve"]]
     if not curves:
         return []
     n = summary["participants"]
-    fig = jnd_curves_figure(curves, f"{n} simulated participants per grid point (seed {summary['seed']})")
+    fig = jnd_curves_figure(curves, f"teleop campaign (blind-jnd): blind stiffness ranking against the JND, "
+                                    f"simulated robot\n{rig_words([pt['rig'] for pt in summary['points']])}, "
+                                    f"{n} simulated participants per grid point (seed {summary['seed']})")
     return [save_figure(fig, Path(out_dir) / "curves.png")]

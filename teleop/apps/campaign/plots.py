@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 
+from teleop.io.figures import legend_outside
+
 CURVES_PER_AXES = 6
 
 
@@ -27,7 +29,7 @@ def jnd_curves_figure(curves: list, title: str):
     panels = math.ceil(len(curves) / CURVES_PER_AXES)
     cols = min(panels, 2)
     rows = math.ceil(panels / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(7 * cols, 4.5 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(9.5 * cols, 4.5 * rows), squeeze=False)
     for i, ax in enumerate(axes.flat):
         group = curves[i * CURVES_PER_AXES:(i + 1) * CURVES_PER_AXES]
         if not group:
@@ -51,8 +53,8 @@ def jnd_curves_figure(curves: list, title: str):
         ax.set_xlabel("participants' stiffness JND [%]")
         ax.set_ylabel("share ranking all four correctly [-]" if len(curves) > 1 else "share / tau [-]")
         ax.set_ylim(-0.02, 1.02)
-        ax.legend(fontsize=7, loc="best")
-    fig.suptitle(title)
+        legend_outside(ax, "right")
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return fig
 

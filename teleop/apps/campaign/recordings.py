@@ -238,6 +238,7 @@ def write_outputs(summary: dict, out_dir: Path) -> list:
         m = np.array([[np.nan if v is None else v for v in row] for row in summary["improvement"]], dtype=float)
         names = _short_names([r["recording"] for r in summary["recordings"]])
         fig = findings_heatmap(names, summary["columns"], m,
-                               f"{len(names)} recordings: held-out improvement of each identified effect")
+                               f"teleop campaign (diagnose): {len(names)} recordings, held-out improvement "
+                               f"of each identified effect")
         paths.append(save_figure(fig, out_dir / "findings.png"))
     return paths

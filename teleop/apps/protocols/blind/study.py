@@ -17,6 +17,7 @@ from teleop.apps.protocols.blind.probe import Poke, PokeRequest
 from teleop.apps.protocols.blind.protocol import Compare, next_step, presentation
 from teleop.apps.protocols.blind.stats import SEED_TABLE3, kendall_tau, kendall_w, mean_std
 from teleop.core.errors import InputError
+from teleop.io.figures import legend_outside
 from teleop.io.outputs import save_figure
 
 _LAYOUT = 100  # random stream of the coordinator (layout and presentation), apart from the participant's
@@ -283,18 +284,18 @@ class StudyResult:
         import matplotlib.pyplot as plt  # heavy: loaded only to draw
 
         R = self.ratings()
-        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 5.5))
         labels = [a.label for a in self.areas]
         ax1.boxplot([R[:, i] for i in range(R.shape[1])])
         ax1.set_xticks(range(1, len(labels) + 1), labels)
         ax1.plot([], [], color="C1", label="simulated participants: median, quartiles, range")  # the boxes
         ax1.plot(range(1, len(labels) + 1), [row["mean"] for row in SEED_TABLE3], "r*", ms=10,
                  label="seed 000 Table 3 mean")
-        ax1.set_ylabel("rating (1 soft - 10 hard)")
-        ax1.set_ylim(0, 13)  # room above the 1-10 scale for the legend
+        ax1.set_ylabel("rating (1 soft - 10 hard) [-]")
+        ax1.set_ylim(0, 11)
         ax1.set_yticks(range(0, 11, 2))
         ax1.set_title(f"{len(self.records)} participants, correct ranking {self.correct_ranking_rate:.0%}")
-        ax1.legend(loc="upper right", fontsize=8)
+        legend_outside(ax1, "below")
         ax1.tick_params(axis="x", labelrotation=15)
         rendered = self.rendered_stiffness()
         pts = [(a.stiffness, rendered[a.name], a.label) for a in self.areas if rendered[a.name]]
@@ -311,8 +312,20 @@ class StudyResult:
             if self.expected:
                 ax2.loglog([a.stiffness for a in self.areas], [self.expected[a.name] for a in self.areas], "s:",
                            color="grey", label="transparent chain (robot compliance in series)")
-            ax2.legend(loc="upper left", fontsize=8)
+            legend_outside(ax2, "below")
         ax2.set_xlabel("pad stiffness [N/m]")
         ax2.set_ylabel("rendered on the stylus dF/dx [N/m]")
         ax2.set_title("transparency of the chain")
+        fig.suptitle(self.figure_title(), fontsize=10)
+        fig.tight_layout()
         save_figure(fig, path)
+
+    def figure_title(self) -> str:
+        """What the study figure is: the test, who rated (simulated or real participants) and, for the
+        simulated robot, its plant and sensor."""
+        c = self.config
+        if c.get("operator") == "human":
+            return f"teleop blind-test: blind stiffness ranking (seed 000 Table 3), human participants, seed {c.get('seed')}"
+        rig = c.get("rig", {})
+        return (f"teleop blind-test: blind stiffness ranking (seed 000 Table 3), simulated participants and robot\n"
+                f"plant {rig.get('plant', 'matched')}, sensor {rig.get('sensor', 'fsr')}, seed {c.get('seed')}")
