@@ -211,6 +211,15 @@ const browser = await puppeteer.launch({
   args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
     "--disable-component-update", "--disable-sync", "--enable-unsafe-swiftshader"],
   defaultViewport: { width: 1600, height: 1000 },
+  handleSIGTERM: false,
+});
+// stopped from outside (the test's clean-up): the browser, in its own process group, goes too
+process.once("SIGTERM", () => {
+  browser.process()?.kill("SIGKILL");
+  setTimeout(() => {
+    rmSync(profile, { recursive: true, force: true });
+    process.exit(143);
+  }, 500);
 });
 const consoleErrors = [];
 try {

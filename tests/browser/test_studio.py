@@ -144,11 +144,15 @@ def test_studio_shows_the_live_session_and_its_recording(tmp_path):
             rep = json.loads(line)
             stages[rep["stage"]] = rep
         assert driver.returncode == 0, err
-    finally:
+    finally:  # SIGTERM first: puppeteer closes the browser it launched (in its own process group) on it
         for p in (proc, driver):
             if p is not None and p.poll() is None:
-                p.kill()
-                p.wait(30)
+                p.send_signal(signal.SIGTERM)
+                try:
+                    p.wait(20)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait(10)
         (tmp_path / "studio-report.json").write_text(json.dumps(stages, indent=1))  # what was seen, if a step failed
     live, fault, recording = stages["live"], stages["fault"], stages.get("recording")
     session = json.loads((tmp_path / "session.json").read_text())
