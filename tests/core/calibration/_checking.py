@@ -18,15 +18,23 @@ The data below vary what the generator holds fixed, each run drawn from its own 
   releasing line's and the pulling line's ends of a 3-10 N distal swing from 1-4 N; 2-6 cycles of
   400-3000 samples; distal noise 0.005-0.15 N white or AR(1) (rho 0.5-0.97), proximal noise 0-0.02 N.
 
-Each function returns (inputs, truth) per run; the truth is what a 95 % interval (1.96 standard errors) of
-the fit's reported value should hold.
+Each *_runs function returns (inputs, truth) per run; the truth is what a 95 % interval (1.96 standard
+errors) of the fit's reported value should hold. `coverage(kind, n_runs)` fits them and gives the fraction
+of intervals that hold, per quantity; `python -m tests.core.calibration._checking [N] [SEED]` prints it for
+the three kinds.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from teleop.core.calibration.fbg import FbgData, loading_state
+import sys
+
+from numpy.polynomial import polynomial as P
+
+from teleop.core.calibration.fbg import FbgData, fit_fbg, loading_state
+from teleop.core.calibration.fsr import fit_fsr
+from teleop.core.calibration.one_sensor import fit_one_sensor
 from teleop.core.sensors import LOADING, UNLOADING, FsrCalibrationData
 
 
@@ -155,3 +163,42 @@ def one_sensor_runs(n_runs: int, seed: int = 0):
         Fp_meas = Fp + rng.normal(0.0, rng.uniform(0.0, 0.02), n)
         out.append(((Fp_meas, Fd_meas), {"Kp": Kp, "Kr": Kr, "bp": bp, "br": br}))
     return out
+
+
+Z95 = 1.959964  # the normal distribution's 97.5 % point
+
+
+def coverage(kind: str, n_runs: int = 100, seed: int = 0) -> dict:
+    """Fraction of 95 % intervals (value +- 1.96 reported standard errors) that hold the truth, per quantity,
+    over n_runs checking calibrations of `kind` (fsr: the curve at 1/4, 1/2, 3/4 of the top tension on
+    both branches, through the coefficients' covariance, pooled as "curve")."""
+    hold = {}
+    if kind == "one-sensor":
+        for (Fp, Fd), truth in one_sensor_runs(n_runs, seed):
+            fit = fit_one_sensor(Fp, Fd)
+            for k, v in truth.items():
+                hold.setdefault(k, []).append(abs(getattr(fit.model, k) - v) <= Z95 * fit.stderr[k] + 1e-12)
+    elif kind == "fbg":
+        for data, truth in fbg_runs(n_runs, seed):
+            fit = fit_fbg(data)
+            for k, v in truth.items():
+                hold.setdefault(k, []).append(abs(fit.values[k] - v) <= Z95 * fit.stderr[k])
+    elif kind == "fsr":
+        for data, truth in fsr_runs(n_runs, seed):
+            fit = fit_fsr(data)
+            t = np.array([0.25, 0.5, 0.75]) * float(np.max(data.tension))
+            V = P.polyvander(t, 5)
+            for b, name in ((LOADING, "loading"), (UNLOADING, "unloading")):
+                c = np.asarray(fit.cal.loading if b == LOADING else fit.cal.unloading)
+                se = np.sqrt(np.einsum("ij,jk,ik->i", V, fit.cov[name], V))
+                hold.setdefault("curve", []).extend(np.abs(V @ c - truth(t, b)) <= Z95 * se)
+    else:
+        raise ValueError(f"kind must be fsr, fbg or one-sensor, got {kind!r}")
+    return {k: float(np.mean(v)) for k, v in hold.items()}
+
+
+if __name__ == "__main__":
+    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 100
+    first = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+    for name in ("fsr", "fbg", "one-sensor"):
+        print(name, {k: round(v, 3) for k, v in coverage(name, runs, first).items()})
