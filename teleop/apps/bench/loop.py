@@ -131,11 +131,13 @@ def plot_histogram(out: dict, path: str) -> None:
     late = out["late_threshold_us"]
     ax.axvline(h["nominal_us"] + late, color="tab:red", ls="--", lw=0.8, label=f"+{late:g} us (half a period)")
     ax.set_xlabel("tick-to-tick period [us]")
-    ax.set_ylabel("ticks")
-    ax.set_title(verdict_line(out["budget"]).split(":")[0] + ": " +
+    ax.set_ylabel("ticks [count]")
+    rec = "recording on" if out.get("recording", {}).get("on") else "recording off"
+    ax.set_title(f"teleop bench loop: tick-to-tick period of the {out['rate_hz']:g} Hz loop, {rec}\n" +
+                 verdict_line(out["budget"]).split(":")[0] + ": " +
                  ("PASS" if out["budget"]["pass"] else "FAIL") +
                  ("" if out["budget"]["conclusive"] else " (not conclusive)"), fontsize=8)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside: off the bars
     save_figure(fig, path)
 
 
