@@ -8,7 +8,8 @@ calibration from a recording and write the calibration file (TOML, docs/formats.
 - one-sensor: Kp, Kr and the transition widths (seed 001 eq 7) of one instrumented cable (interchange CSV
   with motor_force and tip_force, or any layout through --map, e.g. mrdlab).
 
-Prints the fitted values with their standard errors; the plot (fit and residual) goes to --plot, by
+Prints the fitted values with their standard errors (each fit keeps the terms the data ask for and reports
+errors that hold with coloured noise and unconditional on that choice: teleop.core.calibration); the plot (fit and residual) goes to --plot, by
 default beside --out with the suffix .png.
 
 No measured FSR or FBG calibration recording exists in the project: those two fits have run on protocols
@@ -20,6 +21,8 @@ instrument runs (`--map mrdlab`), whose spindle and jaw torques are not one pull
 from __future__ import annotations
 
 from pathlib import Path
+
+import numpy as np
 
 from teleop import __version__
 from teleop.apps.argtypes import input_file, output_file, positive_float
@@ -76,12 +79,15 @@ def run(args) -> int:
         fig = plot_fsr_fit(fit)
         for _, name in BRANCHES:
             coefs = summary[name]["coef_S"]
-            a, roots = eq2_roots(coefs)
+            kept = np.trim_zeros(np.asarray(coefs), "b")   # up to the highest power kept
+            a, roots = eq2_roots(kept)
             lines.append(f"{name}: G(t) = sum c_k t^k, c_k [uS/N^k] = " + ", ".join(
                 _fmt(c * 1e6, e * 1e6) for c, e in zip(coefs, summary[name]["stderr_S"])))
-            lines.append(f"  eq 2 form: a = {a * 1e6:.4g} uS/N^5, roots [N] = "
+            lines.append(f"  eq 2 form: a = {a * 1e6:.4g} uS/N^{kept.size - 1}, roots [N] = "
                          + ", ".join(f"{complex(r_).real:.3g}{complex(r_).imag:+.3g}j" if abs(complex(r_).imag) > 1e-9
                                      else f"{complex(r_).real:.3g}" for r_ in roots))
+            lines.append(f"  powers of t kept (AIC): {', '.join(map(str, summary[name]['powers']))}; "
+                         f"the others 0")
             lines.append(f"  residual RMS {summary[name]['rms_residual_uS']:.3f} uS = "
                          f"{summary[name]['rms_residual_N']:.4f} N over {summary[name]['rows']} rows")
         source = fit.data.source
@@ -120,7 +126,8 @@ def run(args) -> int:
         e = fit.stderr
         lines += [f"Kp = {_fmt(m.Kp, e['Kp'])}, Kr = {_fmt(m.Kr, e['Kr'])}   "
                   f"(seed 001 Fig 5: Kp 0.609 / 0.588, Kr 1.558 / 1.626)",
-                  f"bp = {_fmt(m.bp, e['bp'], unit)}, br = {_fmt(m.br, e['br'], unit)}",
+                  f"bp = {_fmt(m.bp, e['bp'], unit)}, br = {_fmt(m.br, e['br'], unit)}   (kept: "
+                  f"{', '.join(fit.free)} by AIC; an intercept not kept is 0)",
                   f"distal prediction RMSE {fit.rmse:.4g} {unit} over {Fp.size} samples "
                   f"(distal range {float(Fd.max() - Fd.min()):.4g} {unit})"]
         if m.Kp < 0 or m.Kr < 0:
