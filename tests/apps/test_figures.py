@@ -16,6 +16,7 @@ from matplotlib.ticker import LogFormatter, ScalarFormatter
 
 from scenes.pads import SCAN_COLS, SCAN_ROWS, letter_mask
 from teleop.apps.bench import cable, feedforward
+from teleop.apps.campaign.blind import point_label_units
 from teleop.apps.campaign.plots import findings_heatmap, jnd_curves_figure
 from teleop.apps.protocols.palpation import PalpationResult
 from teleop.apps.protocols.palpation_plots import plot_result
@@ -207,3 +208,8 @@ def test_calibration_plots():
 def test_diagnose_draws_positions_in_mm():
     assert shown_unit("m") == ("mm", 1e3)
     assert shown_unit("N") == ("N", 1.0)
+
+
+def test_campaign_grid_labels_carry_units():
+    from_grid = point_label_units({"force_scale": 0.1, "kalman_bandwidth": 80.0, "sensor": "fbg"})
+    assert from_grid == "force_scale 0.1 [-], kalman_bandwidth 80 [Hz], sensor fbg"

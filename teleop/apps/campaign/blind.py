@@ -340,6 +340,20 @@ def table(summary: dict) -> str:
     return "\n".join(out).rstrip()
 
 
+# units of the grid's numeric axes as the figure shows them (RigOptions and ParticipantParams fields, SI;
+# "-": dimensionless); a key not listed is shown as it is
+GRID_UNITS = {"force_scale": "-", "motion_scale": "-", "gap": "m", "robot_substeps": "-", "settle": "s", "hold": "s",
+              "release_speed": "m/s", "rest": "s", "tip_stiffness": "N/m", "kalman_bandwidth": "Hz", "jnd": "-",
+              "depth": "m", "speed": "m/s", "person_spread": "-", "poke_spread": "-", "memory_noise": "-",
+              "force_threshold": "N", "force": "N", "max_repeats": "-", "max_aborts": "-", "spacing": "-"}
+
+
+def point_label_units(params: dict) -> str:
+    """'force_scale 0.1 [-], kalman_bandwidth 80 [Hz]': the grid point with each value's unit (figures)."""
+    return ", ".join(f"{k} {v:g} [{GRID_UNITS[k]}]" if k in GRID_UNITS and isinstance(v, (int, float))
+                     and not isinstance(v, bool) else f"{k} {v}" for k, v in params.items()) or "default"
+
+
 def rig_words(rigs: list) -> str:
     """'plant P, sensor S' of the rigs (dicts of rig_dict), each value or the values the grid spans."""
     def values(key, default):
@@ -349,7 +363,7 @@ def rig_words(rigs: list) -> str:
 
 def write_outputs(summary: dict, out_dir: Path) -> list:
     """curves.png: correct-ranking share against JND per grid point, 95 % Wilson intervals."""
-    curves = [(point_label(pt["params"]), pt["curve"]) for pt in summary["points"] if pt["curve"]]
+    curves = [(point_label_units(pt["params"]), pt["curve"]) for pt in summary["points"] if pt["curve"]]
     if not curves:
         return []
     n = summary["participants"]
