@@ -21,14 +21,16 @@ sensitivities kT1, kT2 [pm/degC] and their ratio r = kT2 / kT1 (eq 3), the hyste
 (sec. 3.1: 4.798 %): the MAXIMUM loading - unloading gap over the full-scale output S (F_hi - F_lo) [%], that
 gap in pm and as a force, / S [N], and the force where it is largest; the RMSE of dl2 [pm], that of the
 compensated shift dl2 - r dl1 [pm] and the force error it means, / S [N] (seed: 12.59 pm, 0.37 N). Standard
-errors per equation from the block-robust sandwich (teleop.core.fit_statistics.sandwich_covariance over
-contiguous blocks of the residuals' correlation length: a grating's noise that wanders within a hold and
-across holds, a load cell's error shared by a hold's samples, a loop shape the terms miss, are counted as
-the correlated errors they are, where s^2 (X^T X)^-1 would count every sample as independent); r's by the
+errors per equation from the AR(1)-prewhitened block sandwich (teleop.core.fit_statistics.
+sandwich_covariance(..., "auto"): a grating's noise that wanders within a hold and across holds, a load
+cell's error shared by a hold's samples, a loop shape the terms miss, are counted as the correlated errors
+they are, where s^2 (X^T X)^-1 would count every sample as independent); r's by the
 delta method, the maximum gap's through the gradient of 2 h at its maximum (the envelope theorem: the
 place of the maximum moves to first order without changing it). The loop's terms are chosen by the BIC
 on the effective size m / L (teleop.core.fit_statistics.bic), L the fullest loop's residual correlation
-length.
+length; the errors of dl2's coefficients and of the gap are unconditional on that choice (averaged over
+the 3-6 term fits with weights exp(-delta BIC / 2), each fit's variance plus its estimate's squared
+distance from the kept one's: teleop.core.fit_statistics.model_averaged_covariance).
 
 The loading state s is the catalogue's sensor-hysteresis switch (teleop.core.physics.hysteresis_offset with
 h = 1) applied to the reference force, its half-width five times the force noise (so noise does not flip
@@ -43,7 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from teleop.core.errors import InputError
-from teleop.core.fit_statistics import bic, correlation_length, sandwich_covariance
+from teleop.core.fit_statistics import bic, correlation_length, model_averaged_covariance, sandwich_covariance
 from teleop.core.physics import hysteresis_offset
 from teleop.core.sensors import FbgParams
 
@@ -121,6 +123,16 @@ def _ols(X: np.ndarray, y: np.ndarray, block: int | None = None) -> tuple[np.nda
     return beta, sandwich_covariance(X, r, "auto" if block is None else block), r
 
 
+def _largest_gap(a: np.ndarray, cov_a: np.ndarray) -> tuple[float, float, int]:
+    """(gap [pm], its standard error [pm], index into _U_GRID of where it is): the largest |loading -
+    unloading| gap 2 |h(u)| of the loop with coefficients a (terms,) and their covariance (module docstring)."""
+    shapes = loop_basis(_U_GRID, a.size)
+    gaps = 2.0 * shapes @ a
+    i = int(np.argmax(np.abs(gaps)))
+    g = 2.0 * shapes[i]
+    return float(abs(gaps[i])), float(np.sqrt(max(float(g @ cov_a @ g), 0.0))), i
+
+
 def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
     """Sensitivity, hysteresis and temperature ratio of one dual-FBG sensor (module docstring)."""
     F, T = data.force, data.temperature
@@ -139,13 +151,32 @@ def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
     base = [F, T - Tm, one]
     b2, cov2, r2 = _ols(np.column_stack(base), data.dl2)
     terms = 0
+    gap_pm, se_gap, F_at = 0.0, 0.0, float("nan")
     if has_h:  # the loop's shape: the number of terms the data ask for (BIC), HYSTERESIS_TERMS
         lo, hi = HYSTERESIS_TERMS
         fits = {m: _ols(np.column_stack(base + list((data.s[:, None] * loop_basis(u, m)).T)), data.dl2)
                 for m in range(lo, hi + 1)}
         block = correlation_length(fits[hi][2])   # the fullest loop's residuals: the effective size m / L
-        terms = min(fits, key=lambda m: bic(fits[m][2], len(base) + m, block))
-        b2, cov2, r2 = fits[terms]
+        crit = {m: bic(fits[m][2], len(base) + m, block) for m in fits}
+        terms = min(crit, key=crit.get)
+        b2, _, r2 = fits[terms]
+        # errors unconditional on the number of terms (teleop.core.fit_statistics.model_averaged_covariance,
+        # weights exp(-delta BIC / 2)): the coefficients padded to the most terms, the gap averaged alike
+        p = len(base) + hi
+        est, covs, gaps = {}, {}, {}
+        for m, (bm, cm, _) in fits.items():
+            est[m] = np.zeros(p)
+            est[m][:bm.size] = bm
+            covs[m] = np.zeros((p, p))
+            covs[m][:bm.size, :bm.size] = cm
+            gaps[m] = _largest_gap(bm[len(base):], cm[len(base):, len(base):])
+        cov2 = model_averaged_covariance(est, covs, crit, terms)
+        best = min(crit.values())
+        w = {m: float(np.exp(-(c - best) / 2.0)) for m, c in crit.items()}
+        gap_pm, _, i_at = gaps[terms]
+        se_gap = float(np.sqrt(sum(w[m] * (gaps[m][1] ** 2 + (gaps[m][0] - gap_pm) ** 2) for m in fits)
+                               / sum(w.values())))
+        F_at = F_lo + float(_U_GRID[i_at]) * (F_hi - F_lo)
     S, kT2, kT1 = float(b2[0]), float(b2[1]), float(b1[0])
     se_S, se_kT2, se_kT1 = (float(np.sqrt(max(c, 0.0))) for c in (cov2[0, 0], cov2[1, 1], cov1[0, 0]))
     if abs(kT1) < 1e-12 or S <= 0:
@@ -153,16 +184,6 @@ def fit_fbg(data: FbgData, min_temperature_span_C: float = 2.0) -> FbgFit:
                          f"(kT1 = {kT1:.3g} pm/degC, S = {S:.3g} pm/N)")
     r = kT2 / kT1
     se_r = abs(r) * float(np.hypot(se_kT2 / kT2 if kT2 else 0.0, se_kT1 / kT1))
-    gap_pm, se_gap, F_at = 0.0, 0.0, float("nan")
-    if terms:  # the largest |loading - unloading| gap 2 |h(u)| on the loop, and its standard error
-        a, cov_a = b2[3:], cov2[3:, 3:]
-        shapes = loop_basis(_U_GRID, terms)
-        gaps = 2.0 * shapes @ a
-        i = int(np.argmax(np.abs(gaps)))
-        gap_pm = float(abs(gaps[i]))
-        g = 2.0 * shapes[i]
-        se_gap = float(np.sqrt(max(float(g @ cov_a @ g), 0.0)))
-        F_at = F_lo + float(_U_GRID[i]) * (F_hi - F_lo)
     span = F_hi - F_lo
     rmse = float(np.sqrt(np.mean(r2 ** 2)))
     # the temperature-compensated shift dl2 - r dl1 (eq 3) carries both gratings' errors
