@@ -88,6 +88,6 @@ def findings_heatmap(recordings: list, columns: list, matrix: np.ndarray, title:
     cb.ax.yaxis.set_major_locator(FixedLocator(ticks))
     cb.ax.yaxis.set_minor_locator(NullLocator())
     cb.ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"x{v:g}"))
-    ax.set_title(title)
+    ax.set_title(title, fontsize=10)
     fig.tight_layout()
     return fig

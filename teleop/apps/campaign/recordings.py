@@ -35,6 +35,7 @@ from teleop.apps.campaign.task_progress import TaskProgress
 from teleop.core.config import check_keys, get_number
 from teleop.core.errors import InputError
 from teleop.diagnosis.diagnose import HOLDOUT, baseline_effects, diagnose
+from teleop.diagnosis.plot import ATTRIBUTION
 from teleop.io.outputs import atomic_write, save_figure
 from teleop.io.recording_io import MAX_INPUT_MB, builtin_map, read_recording
 
@@ -239,6 +240,7 @@ def write_outputs(summary: dict, out_dir: Path) -> list:
         names = _short_names([r["recording"] for r in summary["recordings"]])
         fig = findings_heatmap(names, summary["columns"], m,
                                f"teleop campaign (diagnose): {len(names)} recordings, held-out improvement "
-                               f"of each identified effect")
+                               f"of each identified effect" + (f"\n{ATTRIBUTION}" if any(
+                                   "mrdlab" in r["recording"].lower() for r in summary["recordings"]) else ""))
         paths.append(save_figure(fig, out_dir / "findings.png"))
     return paths
