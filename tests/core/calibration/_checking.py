@@ -34,8 +34,8 @@ from numpy.polynomial import polynomial as P
 
 from teleop.core.calibration.fbg import FbgData, fit_fbg, loading_state
 from teleop.core.calibration.fsr import fit_fsr
-from teleop.core.calibration.one_sensor import fit_one_sensor
-from teleop.core.sensors import LOADING, UNLOADING, FsrCalibrationData
+from teleop.core.calibration.one_sensor import fit_one_sensor, transition_width
+from teleop.core.sensors import LOADING, UNLOADING, FsrCalibrationData, ProximalDistalModel
 
 
 def _ar1(rng, n: int, rho: float, sigma: float) -> np.ndarray:
@@ -171,13 +171,18 @@ Z95 = 1.959964  # the normal distribution's 97.5 % point
 def coverage(kind: str, n_runs: int = 100, seed: int = 0) -> dict:
     """Fraction of 95 % intervals (value +- 1.96 reported standard errors) that hold the truth, per quantity,
     over n_runs checking calibrations of `kind` (fsr: the curve at 1/4, 1/2, 3/4 of the top tension on
-    both branches, through the coefficients' covariance, pooled as "curve")."""
+    both branches, through the coefficients' covariance, pooled as "curve"; one-sensor also the transition
+    widths at the top and bottom turns, pooled as "transition_width")."""
     hold = {}
     if kind == "one-sensor":
         for (Fp, Fd), truth in one_sensor_runs(n_runs, seed):
             fit = fit_one_sensor(Fp, Fd)
             for k, v in truth.items():
                 hold.setdefault(k, []).append(abs(getattr(fit.model, k) - v) <= Z95 * fit.stderr[k] + 1e-12)
+            true_model = ProximalDistalModel(truth["Kp"], truth["Kr"], truth["bp"], truth["br"])
+            for w in fit.widths.values():
+                hold.setdefault("transition_width", []).append(
+                    abs(w["width"] - float(transition_width(true_model, w["distal"]))) <= Z95 * w["stderr"])
     elif kind == "fbg":
         for data, truth in fbg_runs(n_runs, seed):
             fit = fit_fbg(data)

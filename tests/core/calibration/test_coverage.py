@@ -14,7 +14,7 @@ from tests.core.calibration._checking import _play, coverage
 
 
 @pytest.mark.parametrize("kind, quantities", [
-    ("one-sensor", ("Kp", "Kr", "bp", "br")),
+    ("one-sensor", ("Kp", "Kr", "bp", "br", "transition_width")),
     ("fbg", ("S_pm_N", "kT1_pm_C", "kT2_pm_C", "r", "hysteresis_N")),
     ("fsr", ("curve",)),
 ])
