@@ -267,7 +267,8 @@ def figure(out: dict, runs: dict):
     ax.set_ylabel("tip tracking error |commanded - actual| [mm]")
     r = out["ratio_rms"]
     st = out["stylus"]
-    ax.set_title(f"teleop bench feedforward: tip error with cable play, simulated robot, plant {out.get('plant', 'matched')}"
+    ax.set_title(f"teleop bench feedforward: tip error with cable play, simulated robot, "
+                 f"plant {out.get('plant', 'matched')}"
                  f"\nstylus {st['axis']} {st['amp_mm']:g} mm every {st['period_s']:g} s, seed {out['seed']}"
                  + (f": plain / compensated {r:.2f}x (rms)" if r else ""), fontsize=9)
     legend_outside(ax, "below", ncol=2)

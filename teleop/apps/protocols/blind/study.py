@@ -325,7 +325,8 @@ class StudyResult:
         simulated robot, its plant and sensor."""
         c = self.config
         if c.get("operator") == "human":
-            return f"teleop blind-test: blind stiffness ranking (seed 000 Table 3), human participants, seed {c.get('seed')}"
+            return (f"teleop blind-test: blind stiffness ranking (seed 000 Table 3), human participants, "
+                    f"seed {c.get('seed')}")
         rig = c.get("rig", {})
         return (f"teleop blind-test: blind stiffness ranking (seed 000 Table 3), simulated participants and robot\n"
                 f"plant {rig.get('plant', 'matched')}, sensor {rig.get('sensor', 'fsr')}, seed {c.get('seed')}")
