@@ -93,10 +93,13 @@ def score(case: Case, doc: dict) -> dict:
                 errs[p] = abs(hit[0]["params"][p]["value"] - true) / abs(true)
         out["param_errors"] = errs
         out["params_ok"] = bool(errs) and max(errs.values()) <= PARAM_TOL
-        ch = case.channel
-        before = doc["baseline"]["rmse"][ch]
-        after = doc["channels"][ch]["rmse_model"]
-        out["improvement"] = before / max(after, 1e-300)
+        # the channel it was found on (a play under a spring shows on the tip position where that is
+        # recorded, else on the tip force), else the one it acts on where the diagnosis fits it
+        ch = hit[0]["channel"] if hit else case.channel
+        if ch in doc["baseline"]["rmse"]:
+            out["improvement"] = doc["baseline"]["rmse"][ch] / max(doc["channels"][ch]["rmse_model"], 1e-300)
+        else:
+            out["improvement"] = 1.0
         out["improved_2x"] = out["improvement"] >= 2.0
     return out
 

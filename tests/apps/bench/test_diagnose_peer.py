@@ -9,8 +9,8 @@ import pytest
 from teleop.apps.bench.diagnose import _band, grouped, peer_summary
 from teleop.apps.bench.diagnose_distributed import distributed_plan, sensor_effects, simulate_case
 from teleop.apps.cli import main
-from teleop.diagnosis.generator import GenConfig, make_case
-from teleop.diagnosis.scoring import peer_rows, true_noise
+from teleop.diagnosis.generator import Case, GenConfig, make_case
+from teleop.diagnosis.scoring import peer_rows, score, true_noise
 
 DOC = {"peer": {
     "tip_pos": {"arx_rmse": 2e-5, "baseline_rmse": 3e-5, "model_rmse": 1e-5, "sindy_static_rmse": 2e-5,
@@ -96,3 +96,18 @@ def test_a_missing_recording_is_refused_before_any_work(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "absent.csv" in err[0]
     assert not (tmp_path / "r.json").exists()
+
+
+def test_score_takes_the_channel_the_effect_was_found_on():
+    """A play under a spring acts on the tip force, but shows on the tip position where that is recorded;
+    a channel the diagnosis does not fit scores no improvement (never a KeyError)."""
+    case = Case(0, "backlash", "tip_force", {"width": 1e-3}, "rig", "sine", "")
+    found = {"findings": [{"effect": "backlash", "channel": "tip_pos", "params": {"width": {"value": 1.1e-3}},
+                           "rmse_after": 1e-5, "alternatives": []}], "unexplained": [],
+             "baseline": {"rmse": {"tip_pos": 4e-5}}, "channels": {"tip_pos": {"rmse_model": 1e-5}}}
+    row = score(case, found)
+    assert row["correct"] and row["improvement"] == pytest.approx(4.0) and row["params_ok"]
+    none = {"findings": [], "unexplained": [], "baseline": {"rmse": {"tip_pos": 4e-5}},
+            "channels": {"tip_pos": {"rmse_model": 4e-5}}}
+    row = score(case, none)
+    assert not row["correct"] and row["improvement"] == 1.0 and not row["improved_2x"]
