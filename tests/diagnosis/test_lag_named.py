@@ -69,9 +69,9 @@ def test_a_lag_beside_another_effect_both_named(tmp_path, pair, seed):
                 assert f["params"][p]["value"] == pytest.approx(true, rel=0.2), (name, p)
 
 
-def test_a_catheter_whose_only_structure_is_a_45_ms_lag(tmp_path):
-    # a tendon-driven catheter: tendon haul-in [mm] -> tip bending angle [deg], 1 kHz, 40 s, the tip following
-    # the tendon through a 45 ms first-order lag, 0.05 deg of angle noise
+def _catheter(tmp_path) -> dict:
+    """A tendon-driven catheter: tendon haul-in [mm] -> tip bending angle [deg], 1 kHz, 40 s, the tip following
+    the tendon through a 45 ms first-order lag, 0.05 deg of angle noise; its diagnosis."""
     rng = np.random.default_rng(45)
     t = np.arange(40000) / 1000.0
     x = 2e-3 * np.sin(2 * np.pi * 0.3 * t) + 1e-3 * np.sin(2 * np.pi * 0.77 * t + 1.0) + \
@@ -81,7 +81,11 @@ def test_a_catheter_whose_only_structure_is_a_45_ms_lag(tmp_path):
                              {"motor_pos": x + rng.normal(0, 1e-6, t.size),
                               "tip_pos": np.deg2rad(angle + rng.normal(0, 0.05, t.size))},
                              {"motor_pos": "m", "tip_pos": "rad"}, {"source": "catheter"})
-    doc = diagnose(read_interchange(path)).as_dict()
+    return diagnose(read_interchange(path)).as_dict()
+
+
+def test_a_catheter_whose_only_structure_is_a_45_ms_lag(tmp_path):
+    doc = _catheter(tmp_path)
     assert [f["effect"] for f in doc["findings"]] == ["first_order_lag"], doc["findings"]
     f = doc["findings"][0]
     assert f["params"]["tau"]["value"] == pytest.approx(0.045, rel=0.05) and f["params"]["tau"]["unit"] == "s"
@@ -105,3 +109,23 @@ def test_an_effect_free_recording_names_no_lag(tmp_path):
     _, doc = _rig(tmp_path, 5, ("none",))
     assert not [f for f in doc["findings"] if f["channel"] == "tip_pos" or f["effect"].endswith(("delay", "lag"))]
     assert doc["channels"]["tip_pos"]["rmse_model"] < 1.2 * TIP_NOISE_M
+
+
+if __name__ == "__main__":   # python -m tests.diagnosis.test_lag_named: the held-out figures of each case
+    import tempfile
+    from pathlib import Path
+
+    tmp = Path(tempfile.mkdtemp())
+    cases = [(n, _rig(tmp, s, (n,))) for n, s in (("transport_delay", 1), ("first_order_lag", 2))]
+    cases += [("+".join(p), _rig(tmp, s, p)) for p, s in ((("first_order_lag", "coulomb_friction"), 3),
+                                                          (("transport_delay", "backlash"), 4))]
+    cases += [("late tip-force sensor", _rig(tmp, 12, ("sensor_delay",), SPRING_NO_TIP, "spring", drive=False)),
+              ("effect-free", _rig(tmp, 5, ("none",))), ("catheter", (None, _catheter(tmp)))]
+    for label, (rig, doc) in cases:
+        print(f"{label}: truth {rig.effects if rig else {'first_order_lag': {'tau': 0.045}}}")
+        for f in doc["findings"]:
+            ps = ", ".join(f"{k} = {v['value']:.4g}" for k, v in f["params"].items() if not k.endswith("_input"))
+            ch = doc["channels"][f["channel"]]
+            print(f"  {f['effect']} on {f['channel']} ({ps}): held-out RMSE {f['rmse_before']:.3g} -> "
+                  f"{f['rmse_after']:.3g}, x{f['improvement']:.2f}; channel final {ch['rmse_model']:.3g}")
+        print(f"  unexplained: {[u['correlate'] for u in doc['unexplained']]}")
