@@ -8,7 +8,7 @@ encoders, the sampling rate) and the drive (scenes.cable_rig.trajectory, reachin
 zone); the plant's sheath is that cable over that bend (the route bend spread over the first 80 % of its
 length, mu_s = 1.2 mu, 10 um of pre-sliding travel), its tip on a preloaded spring or an external force of
 its own. The motor and tip sides of the cable are recorded (motor and tip position, motor force at the
-sheath's entrance, tip force, the bend), every third case with a catalogue sensor effect on the motor force
+sheath's entrance, tip force, the bend, the sensors' temperature), every third case with a catalogue sensor effect on the motor force
 sensor (its own draw, Rules.draw). A distributed plant has no single catalogue effect: the case reports what
 the diagnosis names, the sheath's friction coefficient its baseline capstan fits against the plant's, the
 play it fits on the position link against the dead zone of Kaneko's closed form at the mean tip tension
@@ -84,9 +84,9 @@ def simulate_case(case: dict, seed: int, duration_s: float = 20.0, noise: float 
     xm, fm, ft, xt = run.x_motor[:, 0], run.f_motor[:, 0], run.f_tip[:, 0], run.x_tip[:, 0]
     truth = {}
     reading = fm.copy()
+    temp = 24 + rng.uniform(2, 10) * np.sin(2 * np.pi * t / rng.uniform(15, 40) + rng.uniform(0, 6.3))   # degC
     if case["effect"] != "none":
         eff = get_effect(case["effect"])
-        temp = 24 + 5 * np.sin(2 * np.pi * t / 30.0)
         p = eff.rules.draw(rng, Scale(travel=A, load=L0, force_span=float(np.ptp(fm)), temp_span=float(np.ptp(temp)),
                                       v_fast=float(np.percentile(np.abs(np.gradient(xm, t)), 99))))
         use = {"t": t, "x": xm, "force": fm, "temperature": temp, "theta": np.full(t.shape, s["bend_rad"])}
@@ -101,8 +101,9 @@ def simulate_case(case: dict, seed: int, duration_s: float = 20.0, noise: float 
     chans = {"motor_pos": encoder(xm, sx["motor"]), "tip_pos": encoder(xt, sx["tip"]),
              "motor_force": reading + rng.normal(0, sf["motor_force"], t.size),
              "tip_force": ft + rng.normal(0, sf["tip_force"], t.size),
-             "bend_angle": np.full(t.shape, s["bend_rad"])}
-    units = {"motor_pos": "m", "tip_pos": "m", "motor_force": "N", "tip_force": "N", "bend_angle": "rad"}
+             "bend_angle": np.full(t.shape, s["bend_rad"]), "temperature": temp + rng.normal(0, 0.02, t.size)}
+    units = {"motor_pos": "m", "tip_pos": "m", "motor_force": "N", "tip_force": "N", "bend_angle": "rad",
+             "temperature": "C"}
     meta = {"source": f"scenes.tendon_sheath (distributed plant), bench diagnose case {case['index']}",
             "load": "spring" if case["load"] == "spring" else "external"}
     setup = {**s, "fs_hz": fs, "spring_N_per_m": ks, "mean_tip_N": float(np.mean(ft)),

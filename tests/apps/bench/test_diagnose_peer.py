@@ -68,6 +68,8 @@ def test_distributed_case_is_reproducible_and_records_its_noise():
     a, b = simulate_case(plan[2], 4, duration_s=2.0), simulate_case(plan[2], 4, duration_s=2.0)
     assert a["csv"] == b["csv"]
     assert set(a["truth"]) == {plan[2]["effect"]}
+    header = [line for line in a["csv"].splitlines() if line.startswith("t_s")][0].split(",")
+    assert {"motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "temperature_C"} <= set(header)
     assert a["setup"]["dead_zone_range_m"][0] <= a["setup"]["dead_zone_range_m"][1]   # grows with the tension
     assert {"motor_force", "tip_force", "motor_pos", "tip_pos"} <= set(a["noise"])
 
