@@ -10,7 +10,10 @@ the residual's effective sample count, residuals being autocorrelated) improves;
 held-out RMSE is within PARSIMONY of the best, the one with the fewest parameters wins. Effects are added
 greedily while they pay. An effect whose own contribution is best located where no catalogue effect acts
 (FOREIGN: periodic in position) is not named; when no single effect pays, pairs of the PAIR_TOP best are
-fitted jointly (`_pair`); a pure delay that fits better than any effect names nothing (`delay_fit`).
+fitted jointly (`_pair`); a pure delay that fits better than any effect names nothing (`delay_fit`). A
+chain whose held-out RMSE is within ACCEPT of its residual's white noise (locate.noise_level) takes no
+addition, and pairs are tried only above ACCEPT^2 of it: nothing fits below the noise, so none could pay.
+Fits run on the fit part decimated, with the samples about each of the drive's reversals (`fit_samples`).
 An added effect's general form (ParamSpec.shape) is tried once it is named (`general_form`); the baseline's
 own, in place of the additions once they are exhausted (`_general_baseline`: the capstan's pretension).
 The fit part is scored with Huber's loss (`robust_rms`) for the information criterion; held-out scores are
@@ -32,7 +35,7 @@ from teleop.core.fit_statistics import parameter_covariance, residual_variance
 from teleop.core.physics.links import (LinkData, LinkModel, effect_signals, fast_replace, is_contact_law,
                                       predict)
 from teleop.diagnosis.links import fit_baseline
-from teleop.diagnosis.locate import locate, periodic_features, r2, travel_phase
+from teleop.diagnosis.locate import locate, noise_level, periodic_features, r2, travel_phase
 from teleop.core.physics import REGISTRY, get_effect
 from teleop.core.physics.base import LinkRecord
 
@@ -65,8 +68,8 @@ def fixed_params(d: LinkData, name: str, general: bool = False, direction: float
 
 
 def fit_samples(d: LinkData, fit_idx: slice, dt: float) -> slice | np.ndarray:
-    """The samples a fit runs on: the fit part decimated (FIT_SAMPLES, MIN_FIT_RATE_DT), and every sample
-    within one stride of the drive's reversals (a slice where that adds nothing). A decimated step across a
+    """The samples a fit runs on: the fit part decimated (FIT_SAMPLES, MIN_FIT_RATE_DT), and the two samples
+    about each of the drive's reversals (a slice where that adds nothing). A decimated step across a
     reversal would hide where the direction turned, which a friction's switch and a stick's travel since the
     turn depend on to the sample, and the parameters fitted on it would be those of a later switch."""
     start, stop = fit_idx.start or 0, fit_idx.stop
@@ -77,10 +80,11 @@ def fit_samples(d: LinkData, fit_idx: slice, dt: float) -> slice | np.ndarray:
     rev = rev[(rev >= start) & (rev < stop)]
     if rev.size == 0:
         return slice(start, stop, stride)
+    if 2 * rev.size > MAX_REVERSAL_SAMPLES:   # a tremor's hundreds of turns: the widest apart
+        rev = np.sort(rev[np.argsort(-np.diff(np.r_[start, rev]), kind="stable")[: MAX_REVERSAL_SAMPLES // 2]])
     keep = np.zeros(stop - start, dtype=bool)
     keep[::stride] = True
-    reach = max(1, min(stride, (MAX_REVERSAL_SAMPLES // (2 * rev.size))))   # a tremor's hundreds of turns
-    for off in range(-reach, reach + 1):
+    for off in (-1, 0):   # the last sample before the turn and the first after: no step spans it
         k = rev - start + off
         keep[k[(k >= 0) & (k < keep.size)]] = True
     return np.flatnonzero(keep) + start
@@ -95,7 +99,7 @@ def sample_weights(idx: np.ndarray) -> np.ndarray:
     return 0.5 * (np.r_[gaps[0], gaps] + np.r_[gaps, gaps[-1]])
 
 
-MAX_REVERSAL_SAMPLES = 2 * FIT_SAMPLES   # at most about this many samples added around reversals
+MAX_REVERSAL_SAMPLES = FIT_SAMPLES // 2   # at most this many samples added about reversals
 
 
 @dataclass(frozen=True)
@@ -468,6 +472,11 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
     steps = list(steps)
     delay = ()
     for round_ in range(first_round, MAX_EFFECTS):
+        # a held-out RMSE within ACCEPT of the residual's white noise: no addition can pay (none fits below
+        # the noise), and fitting them all only gives chance a turn
+        floor = noise_level(d.y - predict(d, current.model))
+        if current.rmse_hold < ACCEPT * floor:
+            break
         cands = []
         for name in pool:
             if name in current.names:
@@ -524,7 +533,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
         pays = _pays(pick, current)
         if pays and foreign(d, current, pick, fit_idx, hold_idx):
             break
-        if not pays and round_ == 0 and len(cands) >= 2:
+        if not pays and round_ == 0 and len(cands) >= 2 and current.rmse_hold >= ACCEPT ** 2 * floor:
             pair = _pair(d, current, cands, fit_idx, hold_idx, seed)
             if pair:
                 steps.extend(pair)

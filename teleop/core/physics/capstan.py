@@ -114,15 +114,12 @@ K_INSTANT = 1e12
 
 def stick_stiffness(k: float) -> float:
     """The kernel's stick stiffness [N/m] for the parameter k [N/m]: k itself below K_INSTANT / 10, then
-    k / (1 - top / TOP), top = log10(10 k / K_INSTANT), infinite from top = TOP on (continuous and
-    increasing): the last per cent of the decade is the switch, where a fit's start on the bound lands."""
+    k / (1 - top), top = log10(10 k / K_INSTANT), infinite at K_INSTANT (continuous and increasing, so
+    that a fit approaching the bound is not left a decade of a slower switch short of it)."""
     top = math.log10(10.0 * k / K_INSTANT)
     if top <= 0.0:
         return k
-    return k / (1.0 - top / TOP) if top < TOP else math.inf
-
-
-TOP = 0.99
+    return k / (1.0 - top) if top < 1.0 else math.inf
 KERNEL = Kernel(capstan_rate_step, capstan_rate_run, state=(math.nan, math.nan, 0.0, 0.0), pack=_pack)
 
 
@@ -238,10 +235,9 @@ def _baseline_starts(rec, index, gain, offset, direction) -> list:
     for g_s, c_s, mu_theta, pre in starts:
         band = 2.0 * float(np.mean(np.abs(g_s * rec.u + pre))) * math.sinh(max(mu_theta, 0.02))
         p0 = {"mu": min(mu_theta / th, 1.4), "theta": PARAMS[1].default, "preload": float(pre)}
-        # the instant switch (first: where the fit part has no turn a sample decides, it is the limit the
-        # data allows) and a stick crossing the band over 5 % of the travel
-        for k in ((K_INSTANT,) if len(starts) == 1 else ()) + (max(band / (0.05 * span), 1.0),):
-            out.append((direction, float(g_s), float(c_s), {**p0, "k": k}))
+        # a stick crossing the band over 5 % of the travel (an instant switch is k's upper bound, reached
+        # from there where the data asks for it)
+        out.append((direction, float(g_s), float(c_s), {**p0, "k": max(band / (0.05 * span), 1.0)}))
     return out
 
 
