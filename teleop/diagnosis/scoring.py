@@ -19,6 +19,9 @@ PARAM_TOL = 0.2
 
 #: a channel's quantisation step in the rig's CSV [m] (positions written to 1 um)
 QUANTUM_M = 1e-6
+#: held-out RMSE [SI] at or below which a fit is exact to round-off (a tip encoder reading the motor's exact
+#: travel): physics and peer tie there, whatever their ratio
+ROUND_OFF = 1e-12
 
 
 def run_case(case: Case, workdir: str | Path | None = None, sindy: bool = False) -> dict:
@@ -56,7 +59,8 @@ def rig_context(columns, load: str, setup: dict) -> dict:
 def peer_rows(doc: dict, noise: dict | None = None) -> list[dict]:
     """Per channel the diagnosis fits (doc["peer"]): the physics model's held-out RMSE beside the ARX peer's
     and the PySINDy peer's static, free-run and better fit (None where --sindy was not asked or the fit
-    failed), "ratio" = model / PySINDy's better fit and "worse" = ratio > 1.0; with `noise` ({channel: the
+    failed), "ratio" = model / PySINDy's better fit and "worse" = ratio > 1.0 (not where the physics' fit is
+    exact to round-off, ROUND_OFF); with `noise` ({channel: the
     true noise}), "noise" and "model_over_noise"."""
     out = []
     for ch, p in doc["peer"].items():
@@ -65,7 +69,7 @@ def peer_rows(doc: dict, noise: dict | None = None) -> list[dict]:
         row = {"channel": ch, "model_rmse": p["model_rmse"], "baseline_rmse": p.get("baseline_rmse"),
                "arx_rmse": p["arx_rmse"], "sindy_static_rmse": p.get("sindy_static_rmse"),
                "sindy_free_run_rmse": p.get("sindy_free_run_rmse"), "sindy_rmse": best, "ratio": ratio,
-               "worse": ratio is not None and ratio > 1.0}
+               "worse": ratio is not None and ratio > 1.0 and p["model_rmse"] > ROUND_OFF}
         if noise and ch in noise and noise[ch] > 0:
             row["noise"] = noise[ch]
             row["model_over_noise"] = p["model_rmse"] / noise[ch]

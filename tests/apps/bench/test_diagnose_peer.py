@@ -26,6 +26,10 @@ def test_peer_rows_cover_every_channel_with_ratio_and_noise():
     assert rows["motor_force"]["ratio"] == pytest.approx(1.2) and rows["motor_force"]["worse"]
     assert rows["motor_force"]["model_over_noise"] == pytest.approx(2.4)
     assert "model_over_noise" not in rows["tip_pos"]
+    # both exact to round-off: a tie, whatever the ratio
+    exact = {"peer": {"tip_pos": {"arx_rmse": 1e-6, "model_rmse": 9e-18, "sindy_static_rmse": 7e-18,
+                                  "sindy_free_run_rmse": None, "sindy_rmse": 7e-18}}}
+    assert peer_rows(exact)[0]["ratio"] > 1.0 and not peer_rows(exact)[0]["worse"]
     # without the peer: no ratio, never "worse"
     plain = peer_rows({"peer": {"tip_pos": {"arx_rmse": 1.0, "model_rmse": 2.0}}})
     assert plain[0]["ratio"] is None and plain[0]["worse"] is False
