@@ -26,13 +26,16 @@ def _strokes(seed: int, fs: float = 500.0, seconds: float = 20.0):
     return t, x, 2.0 + multisine(rng, t, 1.5, 2, 0.05, 0.3)
 
 
-def _stepped(spring: dict | None, x: np.ndarray, load: np.ndarray) -> np.ndarray:
-    """Motor force [N]: the sheath's capstan, then the spring beside it, sample by sample."""
+def _stepped(spring: dict | None, x: np.ndarray, load: np.ndarray, fs: float = 500.0) -> np.ndarray:
+    """Motor force [N]: the sheath's capstan, then the spring beside it, sample by sample (the capstan reads
+    the drive's time and rate too: the array form's central difference, as Signals derives it)."""
     cap = get_effect("capstan_friction").make_step(SHEATH)
     spr = get_effect("parallel_spring").make_step(spring) if spring else None
+    t = np.arange(x.size) / fs
+    v = np.gradient(x, t)
     out = np.empty(x.size)
     for i, (a, b) in enumerate(zip(x, load)):
-        f = cap.step(x=float(a), load=float(b))
+        f = cap.step(t=float(t[i]), x=float(a), v=float(v[i]), load=float(b))
         out[i] = spr.step(x=float(a), load=f) if spr else f
     return out
 
