@@ -13,7 +13,8 @@ Each step has its array form beside it, `<name>_run(s, U, p, out)`: the step alo
 (left at the last sample's) into out (n,), nothing else (numba inlines the step into the loop; a loop over a
 step passed as a first-class function would be cached once for all, but its indirect call per sample made
 the diagnosis's fits several times slower). An effect whose vectorised closed form is several times faster
-than such a loop keeps the closed form as its one home instead (cable_compliance: physics.compliance).
+than such a loop keeps the closed form as its one home instead (cable_compliance: physics.compliance), and
+the sheath's capstan_friction runs the sheath's own law (kernels.sheath.capstan_rate_step).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import math
 from teleop.core.kernels.friction import clamp, coulomb_force, dahl_step, play_mix_start, play_mix_step, \
     stribeck_force, viscous_force
 from teleop.core.kernels.jit import njit
-from teleop.core.kernels.sheath import F, MU, N_CONST, STICK_K, X, forward_step
+from teleop.core.kernels.sheath import F
 
 
 # ------------------------------------------------------------------ position links
@@ -66,25 +67,6 @@ def backlash_run(s, U, p, out):
 
 
 # ------------------------------------------------------------------ force links
-@njit
-def capstan_friction_step(s, u, p):
-    """u = (x, load, theta); p = the sheath's constants (kernels.sheath, MU and STICK_K read) then preload;
-    s = the sheath's state of one cable (N_STATE,). Motor force [N] of the sheath's forward law on the tension
-    load + preload, read from the preload."""
-    P = p[N_CONST]
-    f = forward_step(s[X], s[F], u[0], u[1] + P, p[MU] * u[2], p[STICK_K])
-    s[F], s[X] = f, u[0]
-    return f - P
-
-
-@njit
-def capstan_friction_run(s, U, p, out):
-    """out (n,): capstan_friction_step along U (n, k) from the state s."""
-    for i in range(U.shape[0]):
-        out[i] = capstan_friction_step(s, U[i], p)
-    return out
-
-
 @njit
 def parallel_spring_step(s, u, p):
     """u = (x, load); p = (k, g, x_ref): load + dx (k + g dx / 2), dx = x - x_ref; no state."""
