@@ -75,7 +75,15 @@ def run_rig_case(case: dict, seed: int, fs_hz: float | None = 500.0, duration_s:
         path = Path(tmp) / f"rig_{case['index']:04d}.csv"
         rig.write(path)
         doc = diagnose(read_interchange(path), sindy=sindy).as_dict()
-    truth = {e: v for e, v in rig.effects.items() if e in REGISTRY and observable(e, cols, case["load"])}
+    truth = {}
+    for e, v in rig.effects.items():
+        if not observable(e, cols, case["load"]):
+            continue
+        if e in REGISTRY:
+            truth[e] = v
+        elif "catalogue" in v:  # rig physics the catalogue names otherwise (a late sensor: transport_delay)
+            name, params = v["catalogue"]
+            truth[name] = {"channel": v["channel"], "params": params}
     findings = doc["findings"]
     named = [f["effect"] for f in findings]
     if not truth:
