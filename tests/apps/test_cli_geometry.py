@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from scenes.pads import blind_test_pad
+from teleop.apps.bench.sim import _make_robot
 from teleop.apps.campaign.blind import point_tasks
 from teleop.apps.campaign.spec import load_campaign
 from teleop.apps.cli import build_parser, main
@@ -59,7 +60,8 @@ def test_bench_blind_jnd_takes_the_rig_geometry(lab):
                                   ["session", "--seconds", "0.1", "--no-realtime", "--robot-inline"],
                                   ["bench", "blind-jnd", "--participants", "1"],
                                   ["bench", "loop", "--seconds", "0.1", "--no-realtime"],
-                                  ["bench", "feedforward", "--seconds", "2"]])
+                                  ["bench", "feedforward", "--seconds", "2"],
+                                  ["bench", "sim", "--seconds", "0.2"]])
 def test_a_bad_geometry_is_one_line_naming_file_and_key_exit_2_nothing_written(tmp_path, capsys, argv):
     bad = tmp_path / "lab.toml"
     bad.write_text(LAB.replace("mu = 0.07", "mu = -0.07"))
@@ -145,3 +147,16 @@ def test_bench_feedforward_runs_its_sessions_on_the_geometry(tmp_path, lab, caps
     d = json.loads(out.read_text())
     assert d["geometry_file"] == str(lab)
     assert d["v_max_step_mm"] == pytest.approx(15.0 * 2e-3)  # the loop's command step: the file's v_max x period
+
+
+def test_bench_sim_runs_its_robot_kinematics_and_estimator_on_the_geometry(tmp_path, lab, capsys):
+    with _make_robot("z60", 1, 1, geometry=load_geometry(lab)) as robot:
+        assert robot.geom.mu == 0.07 and robot.geom.B[0].tolist() == [0.025, 0.0, 0.0]
+    runs = {}
+    for name, extra in (("seed", []), ("lab", ["--geometry", str(lab)])):
+        out = tmp_path / f"{name}.json"
+        assert main(["bench", "sim", "--seconds", "0.3", "--no-batch", "--json", str(out), *extra]) == 0
+        runs[name] = json.loads(out.read_text())
+    capsys.readouterr()
+    assert runs["lab"]["geometry_file"] == str(lab) and "geometry_file" not in runs["seed"]
+    assert runs["lab"]["trajectory"]["sha256"] != runs["seed"]["trajectory"]["sha256"]

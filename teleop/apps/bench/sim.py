@@ -63,8 +63,9 @@ import numpy as np
 
 from devices.simulated import OperatorParams, Script, SimulatedStylus
 from scenes.sim_robot import PLANTS
-from teleop.apps.argtypes import input_file
+from teleop.apps.argtypes import add_geometry_option, geometry_of, input_file
 from teleop.core.errors import InputError
+from teleop.core.geometry import Geometry
 from teleop.core.kernels.tap import sim_log_row
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 from teleop.io.outputs import write_json
@@ -103,6 +104,7 @@ def register(subparsers) -> None:
                         "~3 us a tick: the factor then includes them (the loop's own stages are always timed)")
     p.add_argument("--no-stages", action="store_true", help=argparse.SUPPRESS)  # the default; kept so older command lines parse
     p.add_argument("--json", metavar="F", help="write the result JSON here")
+    add_geometry_option(p)
     p.set_defaults(func=run)
 
 
@@ -149,14 +151,15 @@ def _meter_world(world, meter: CallTimer, solver: CallTimer) -> bool:
     return True
 
 
-def _make_robot(pad: str, seed: int, substeps: int, plant: str = "matched", cable_params: str | None = None):
+def _make_robot(pad: str, seed: int, substeps: int, plant: str = "matched", cable_params: str | None = None,
+                geometry: Geometry | None = None):
     url = f"sim://robot?pad={pad}&seed={seed}&substeps={substeps}"
     if plant != "matched":
         url += f"&plant={plant}"
     if cable_params is not None:
         url += f"&cable_params={cable_params}"
     try:
-        return open_device(url)
+        return open_device(url, geometry=geometry)
     except InputError as exc:
         raise InputError(f"--pad/--substeps/--plant/--cable-params: {exc}") from None
 
@@ -185,21 +188,22 @@ def _factor(simulated: float, spent: float) -> float:
 
 def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: int = 1, depth: float = 0.030,
               period: float = 2.0, batch: bool = True, stages: bool = True, plant: str = "matched",
-              cable_params: str | None = None, vs_matched: bool = False) -> dict:
+              cable_params: str | None = None, vs_matched: bool = False, geometry: Geometry | None = None) -> dict:
     """Run the unpaced simulation for `seconds` of simulated time [s]; the result dict (module docstring).
 
     depth: stylus poke depth [m]; period: poke period [s]; plant, cable_params: the robot's plant
     (scenes.sim_robot.PLANTS; the JSON's "plant" when not matched); vs_matched: with a plant other than matched,
-    time the matched plant's loop path right after (JSON "vs_matched")."""
+    time the matched plant's loop path right after (JSON "vs_matched"); geometry: the robot's (None: the seed
+    robot), for the simulated robot, the kinematics and the estimator."""
     n = int(round(seconds * RATE_HZ))
     robot_seed, stylus_seed = _seeds(seed)
-    robot = _make_robot(pad, robot_seed, substeps, plant, cable_params)
+    robot = _make_robot(pad, robot_seed, substeps, plant, cable_params, geometry)
     clock_t = [0.0]
     stylus = SimulatedStylus(Script(kind="pokes", amplitude=depth, period=period), OperatorParams(),
                              seed=stylus_seed, clock=lambda: clock_t[0])
     params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=None if substeps == 1 else RATE_HZ / substeps,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
-    estimator = default_estimator(frame_period(params, None))
+    estimator = default_estimator(frame_period(params, None), geometry=geometry)
     kin, phys, solver, rd = CallTimer(), CallTimer(), CallTimer(), CallTimer()
     solver_timed = False
     n_read = -(-n // params.robot_every)
@@ -217,7 +221,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
             robot.command_lengths = kin.wrap(robot.command_lengths)
             robot.read = rd.wrap(robot.read)
             solver_timed = _meter_world(robot.world, phys, solver)
-        tp = Teleop(stylus, robot, params, estimator=estimator)
+        tp = Teleop(stylus, robot, params, geom=geometry, estimator=estimator)
         tp.start(0.0)
         log_row, no_L, no_counts = sim_log_row, np.zeros(6), np.zeros(6, dtype=np.int64)
         ka, pa, sa, ra = kin.acc, phys.acc, solver.acc, rd.acc  # the robot's timers [ns]: acc[0]
@@ -287,21 +291,22 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     if plant != "matched":
         out["plant"] = plant
         if vs_matched:
-            m = bench_sim(seconds, seed, pad, substeps, depth, period, batch=False, stages=stages)
+            m = bench_sim(seconds, seed, pad, substeps, depth, period, batch=False, stages=stages, geometry=geometry)
             out["vs_matched"] = {"realtime_factor": m["realtime_factor"],
                                  "realtime_factor_cpu": m["realtime_factor_cpu"],
                                  "wall_s": m["wall_s"], "cpu_s": m["cpu_s"],
                                  "ratio": round(m["wall_s"] / max(wall, 1e-9), 4),
                                  "ratio_cpu": round(m["cpu_s"] / max(cpu, 1e-9), 4)}
     if batch:
-        out["batch"] = bench_batch(L_log[:j], counts_log[:j], pad, robot_seed, substeps, plant, cable_params)
+        out["batch"] = bench_batch(L_log[:j], counts_log[:j], pad, robot_seed, substeps, plant, cable_params,
+                                   geometry)
     return out
 
 
 def bench_batch(lengths: np.ndarray, counts: np.ndarray, pad: str, robot_seed: int, substeps: int,
-                plant: str = "matched", cable_params: str | None = None) -> dict:
+                plant: str = "matched", cable_params: str | None = None, geometry: Geometry | None = None) -> dict:
     """The same commanded lengths (n, 6) [m] through a fresh SimRobot.run (the palpation path), timed."""
-    robot = _make_robot(pad, robot_seed, substeps, plant, cable_params)
+    robot = _make_robot(pad, robot_seed, substeps, plant, cable_params, geometry)
     phys, solver = CallTimer(), CallTimer()
     with robot:
         _meter_world(robot.world, phys, solver)
@@ -382,9 +387,12 @@ def format_table(out: dict) -> str:
 
 def run(args) -> int:
     _check(args)
+    geometry = geometry_of(args)  # a bad file: one line before any run
     out = bench_sim(args.seconds, args.seed, args.pad, args.substeps, args.depth_mm * 1e-3, args.period_s,
                     batch=not args.no_batch, stages=args.stages and not args.no_stages, plant=args.plant,
-                    cable_params=args.cable_params, vs_matched=args.vs_matched)
+                    cable_params=args.cable_params, vs_matched=args.vs_matched, geometry=geometry)
+    if args.geometry:
+        out["geometry_file"] = args.geometry
     print(format_table(out))
     if hasattr(os, "getloadavg"):  # context for the numbers: other processes sharing the cores
         print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cpus", file=sys.stderr)
