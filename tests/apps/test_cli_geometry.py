@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from scenes.pads import blind_test_pad
+from teleop.apps.bench.session_diagnosis import bench_session_diagnosis
 from teleop.apps.bench.sim import _make_robot
 from teleop.apps.campaign.blind import point_tasks
 from teleop.apps.campaign.spec import load_campaign
@@ -61,7 +62,8 @@ def test_bench_blind_jnd_takes_the_rig_geometry(lab):
                                   ["bench", "blind-jnd", "--participants", "1"],
                                   ["bench", "loop", "--seconds", "0.1", "--no-realtime"],
                                   ["bench", "feedforward", "--seconds", "2"],
-                                  ["bench", "sim", "--seconds", "0.2"]])
+                                  ["bench", "sim", "--seconds", "0.2"],
+                                  ["bench", "session-diagnose", "--seconds", "2"]])
 def test_a_bad_geometry_is_one_line_naming_file_and_key_exit_2_nothing_written(tmp_path, capsys, argv):
     bad = tmp_path / "lab.toml"
     bad.write_text(LAB.replace("mu = 0.07", "mu = -0.07"))
@@ -160,3 +162,11 @@ def test_bench_sim_runs_its_robot_kinematics_and_estimator_on_the_geometry(tmp_p
     capsys.readouterr()
     assert runs["lab"]["geometry_file"] == str(lab) and "geometry_file" not in runs["seed"]
     assert runs["lab"]["trajectory"]["sha256"] != runs["seed"]["trajectory"]["sha256"]
+
+
+def test_bench_session_diagnose_records_and_replays_on_the_geometry(tmp_path, lab):
+    out = bench_session_diagnosis([("coulomb_friction", {"Fc": 0.3})], 2.0, 1, 1, tmp_path, subsets=False,
+                                  geometry_file=str(lab))
+    conf = read_session(str(tmp_path / "session.mcap")).metadata["session"]["configuration"]
+    assert conf["geometry"]["mu"] == 0.07 and conf["geometry_file"] == str(lab)
+    assert out["geometry_file"] == str(lab)

@@ -37,7 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from scenes.sim_robot import SimRobotParams
+from teleop.apps.argtypes import add_geometry_option, geometry_of
 from teleop.core.errors import InputError
+from teleop.core.geometry import Geometry, load_geometry
 from teleop.core.physics import get_effect
 from teleop.core.physics.links import Link, LinkModel
 from teleop.diagnosis.diagnose import diagnose
@@ -63,6 +65,7 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--cable", type=int, default=1, help="cable exported and diagnosed, 1..6 (default 1)")
     p.add_argument("--json", metavar="F")
+    add_geometry_option(p)
     p.add_argument("--out", metavar="DIR", help="keep the session, the exported CSV and both models in DIR "
                                                 "(default: a temporary directory, removed)")
     p.set_defaults(func=run)
@@ -108,10 +111,11 @@ def _recorded(path: Path, cable: int) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(L, dtype=float), np.asarray(T, dtype=float)
 
 
-def replay(url: str, lengths: np.ndarray, cable: int) -> np.ndarray:
-    """FSR-side tension of `cable` (n,) [N] of the robot at `url` commanded `lengths` (n, 6), read once each."""
+def replay(url: str, lengths: np.ndarray, cable: int, geometry: Geometry | None = None) -> np.ndarray:
+    """FSR-side tension of `cable` (n,) [N] of the robot at `url` (on `geometry`, None: the seed robot's)
+    commanded `lengths` (n, 6), read once each."""
     out = np.empty(len(lengths))
-    with open_device(url) as robot:
+    with open_device(url, geometry=geometry) as robot:
         for k, L in enumerate(lengths):
             robot.command_lengths(L)
             out[k] = robot.read().extras["t_fsr"][cable - 1]
@@ -119,10 +123,13 @@ def replay(url: str, lengths: np.ndarray, cable: int) -> np.ndarray:
 
 
 def bench_session_diagnosis(effects: list, seconds: float, seed: int, cable: int, work: Path,
-                            subsets: bool = True) -> dict:
-    """The round trip for `effects` [(name, params)] switched on together (see the module docstring)."""
+                            subsets: bool = True, geometry_file: str | None = None) -> dict:
+    """The round trip for `effects` [(name, params)] switched on together (see the module docstring), on the
+    robot of `geometry_file` (None: the seed robot)."""
+    geometry = load_geometry(geometry_file) if geometry_file else None
+    on_geometry = ("--geometry", str(geometry_file)) if geometry_file else ()
     # the robot's own capstan, as the model's baseline (baseline effects are not added again: the robot has it)
-    sheath = SimRobotParams().sheath
+    sheath = (SimRobotParams(geometry=geometry) if geometry is not None else SimRobotParams()).sheath
     force = Link("force", "motor_force", "tip_force", "motor_pos")
     capstan = ("capstan_friction", {"mu": float(sheath.mu), "theta": float(sheath.theta0), "k": float(sheath.stick_k)})
     names = [name for name, _ in effects]
@@ -134,7 +141,7 @@ def bench_session_diagnosis(effects: list, seconds: float, seed: int, cable: int
     print(f"session-diagnose: recording a {seconds:g} s session with {' + '.join(names)} switched on ...",
           flush=True)
     _teleop("session", "--haptic", SCRIPT.format(seed=seed), "--robot", f"{robot}&model={model_a}",
-            "--seconds", str(seconds), "--robot-inline", "--sim-clock", "--record", str(mcap))
+            "--seconds", str(seconds), "--robot-inline", "--sim-clock", "--record", str(mcap), *on_geometry)
     _teleop("export", str(mcap), "--csv", str(csv), "--cable", str(cable), "--truth")
     print("session-diagnose: diagnosing the exported cable ...", flush=True)
     rec = read_interchange(csv)
@@ -164,12 +171,13 @@ def bench_session_diagnosis(effects: list, seconds: float, seed: int, cable: int
     rmse = {}
     for name, url in (("as_recorded", f"{robot}&model={model_a}"), ("plain", robot),
                       ("identified", f"{robot}&model={model_b}")):
-        rmse[name] = float(np.sqrt(np.mean((recorded - replay(url, lengths, cable)) ** 2)))
+        rmse[name] = float(np.sqrt(np.mean((recorded - replay(url, lengths, cable, geometry)) ** 2)))
     shrink = rmse["plain"] / max(rmse["identified"], 1e-12)
     return {"effects": [{"effect": n, "params": dict(p)} for n, p in effects], "seconds": seconds, "seed": seed,
             "cable": cable, "found": found, "recovered": recovered, "elsewhere": elsewhere, "subsets": per_subset,
             "replay_rmse_N": rmse, "shrink": shrink,
-            "pass": all(s["named"] for s in per_subset) and shrink >= 2.0}
+            "pass": all(s["named"] for s in per_subset) and shrink >= 2.0,
+            **({"geometry_file": str(geometry_file)} if geometry_file else {})}
 
 
 def _subset(label: str, dropped: tuple, found: list, switched_on: list) -> dict:
@@ -186,15 +194,17 @@ def run(args) -> int:
     effects = [parse_effect(text) for text in (args.effect or ["coulomb_friction:Fc=0.3"])]
     if len({name for name, _ in effects}) != len(effects):
         raise InputError("--effect: each effect at most once")
+    geometry_of(args)  # a bad --geometry: one line before the session
     if args.out:
         work = Path(args.out).absolute()  # the child commands' arguments never start with '-'
         if work.exists() and not work.is_dir():
             raise InputError(f"--out {args.out}: exists and is not a directory")
         work.mkdir(parents=True, exist_ok=True)
-        out = bench_session_diagnosis(effects, args.seconds, args.seed, args.cable, work)
+        out = bench_session_diagnosis(effects, args.seconds, args.seed, args.cable, work, geometry_file=args.geometry)
     else:
         with tempfile.TemporaryDirectory(prefix="session-diagnose-") as tmp:
-            out = bench_session_diagnosis(effects, args.seconds, args.seed, args.cable, Path(tmp))
+            out = bench_session_diagnosis(effects, args.seconds, args.seed, args.cable, Path(tmp),
+                                          geometry_file=args.geometry)
     found = ", ".join(f"{f['effect']} x{f['improvement']:.2f}" for f in out["found"]) or "none"
     r = out["replay_rmse_N"]
     switched = " + ".join(f"{e['effect']} {e['params']}" for e in out["effects"])
