@@ -12,6 +12,7 @@ import pytest
 from scenes.pads import blind_test_pad
 from teleop.apps.bench.session_diagnosis import bench_session_diagnosis
 from teleop.apps.bench.sim import _make_robot
+from teleop.apps.bench.tick import make_ticks
 from teleop.apps.campaign.blind import point_tasks
 from teleop.apps.campaign.spec import load_campaign
 from teleop.apps.cli import build_parser, main
@@ -62,7 +63,7 @@ def test_bench_blind_jnd_takes_the_rig_geometry(lab):
                                   ["bench", "blind-jnd", "--participants", "1"],
                                   ["bench", "loop", "--seconds", "0.1", "--no-realtime"],
                                   ["bench", "feedforward", "--seconds", "2"],
-                                  ["bench", "sim", "--seconds", "0.2"],
+                                  ["bench", "sim", "--seconds", "0.2"], ["bench", "tick", "--ticks", "1000"],
                                   ["bench", "session-diagnose", "--seconds", "2"]])
 def test_a_bad_geometry_is_one_line_naming_file_and_key_exit_2_nothing_written(tmp_path, capsys, argv):
     bad = tmp_path / "lab.toml"
@@ -170,3 +171,9 @@ def test_bench_session_diagnose_records_and_replays_on_the_geometry(tmp_path, la
     conf = read_session(str(tmp_path / "session.mcap")).metadata["session"]["configuration"]
     assert conf["geometry"]["mu"] == 0.07 and conf["geometry_file"] == str(lab)
     assert out["geometry_file"] == str(lab)
+
+
+def test_bench_tick_times_the_tick_on_the_geometry(lab):
+    fast, ref = make_ticks(geometry=load_geometry(lab))
+    for geom in (fast.estimator.geom, ref.geom):  # the estimate's structure matrix and capstan law
+        assert geom.mu == 0.07 and geom.B[0].tolist() == [0.025, 0.0, 0.0]

@@ -30,13 +30,14 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from teleop.apps.argtypes import add_geometry_option, geometry_of
 from teleop.core.errors import InputError
 from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
 from teleop.core.estimation.kalman import FilterpyWrenchKalman, KalmanNoise, wrench_kalman_params
 from teleop.core.estimation.reading import ReadingEstimator
 from teleop.core.estimation.tick import LoopTick
 from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation, TurnCompensator
-from teleop.core.geometry import default_geometry
+from teleop.core.geometry import Geometry, default_geometry
 from teleop.core.kernels import sheath as SH
 from teleop.core.kinematics import pose2lengths
 from teleop.core.mapping import MappingParams, limit_lengths, stylus2target
@@ -52,6 +53,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("tick", help="time one full loop tick, devices excluded "
                                            "(project vs plain numpy/scipy/filterpy)")
     p.add_argument("--json", metavar="F", help="write the tick JSON here (keys: docs/formats.md)")
+    add_geometry_option(p)
     p.add_argument("--ticks", type=int, default=20000, help="timed ticks of each kind (>= 1000; default 20000)")
     p.add_argument("--estimator", default="dynamic", help="estimator name (default: dynamic)")
     p.add_argument("--seed", type=int, default=0, help="seed of the tension noise")
@@ -213,11 +215,11 @@ def _stats(ns: np.ndarray) -> dict:
             "max": round(float(us.max()), 3)}
 
 
-def make_ticks(estimator: str = "dynamic", dt: float = 1e-3):
+def make_ticks(estimator: str = "dynamic", dt: float = 1e-3, geometry: Geometry | None = None):
     """(LoopTick, ReferenceLoopTick) with the loop's default mapping and FSR calibration, realistic friction
     states (viscous, Dahl) and a turn fit so every stage does its work, renderers enabled (ramping in at once,
-    as in the loop) and the mapping engaged at the stylus origin."""
-    geom, mapping, cal = default_geometry(), MappingParams(), default_fsr_calibration()
+    as in the loop) and the mapping engaged at the stylus origin; on `geometry` (None: the seed robot)."""
+    geom, mapping, cal = geometry or default_geometry(), MappingParams(), default_fsr_calibration()
     dyn = DynamicParams(b=5.0, dahl_sigma=2e4, dahl_Fc=0.05, v_smooth=0.005)
     poly = tuple((0.05, -0.1, 0.05, 0.0, 0.0) for _ in range(6))
     turn = TurnCompensation((AxisTurnFit(axis=2, duration=0.3, forward=poly, backward=poly),))
@@ -235,14 +237,15 @@ def make_ticks(estimator: str = "dynamic", dt: float = 1e-3):
 
 
 def bench_tick(ticks: int = 20000, estimator: str = "dynamic", seed: int = 0, warmup: int = 1000,
-               clock: str = "wall") -> dict:
-    """Interleaved timing of the project and reference full ticks; the JSON object of docs/formats.md.
+               clock: str = "wall", geometry: Geometry | None = None) -> dict:
+    """Interleaved timing of the project and reference full ticks; the JSON object of docs/formats.md
+    (geometry: the robot's, None: the seed robot).
 
     clock: "wall" (time.perf_counter_ns) or "cpu" (time.thread_time_ns: CPU time of this thread, so a tick
     preempted by another process is not charged for the wait).
     """
     dt = 1e-3
-    fast, ref = make_ticks(estimator, dt)
+    fast, ref = make_ticks(estimator, dt, geometry)
     n = warmup + ticks
     p_s, v_s, counts = _trajectory(n, dt, seed)
     t_fast = np.empty(n, dtype=np.int64)
@@ -273,14 +276,17 @@ def run(args) -> int:
         raise InputError(f"--ticks: expected an integer >= 1000, got {args.ticks}")
     if args.estimator not in ESTIMATOR_NAMES:
         raise InputError(f"--estimator: expected one of {', '.join(ESTIMATOR_NAMES)}, got '{args.estimator}'")
+    geometry = geometry_of(args)
     if args.realtime:
         print(f"scheduling: {set_realtime(args.realtime)}", file=sys.stderr)
         try:
-            result = bench_tick(args.ticks, args.estimator, args.seed, clock=args.clock)
+            result = bench_tick(args.ticks, args.estimator, args.seed, clock=args.clock, geometry=geometry)
         finally:
             set_normal()
     else:
-        result = bench_tick(args.ticks, args.estimator, args.seed, clock=args.clock)
+        result = bench_tick(args.ticks, args.estimator, args.seed, clock=args.clock, geometry=geometry)
+    if args.geometry:
+        result["geometry_file"] = args.geometry
     if hasattr(os, "getloadavg"):  # context for the numbers: other processes sharing the cores
         print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cpus", file=sys.stderr)
     if args.json:
