@@ -25,13 +25,13 @@ import re
 import shutil
 import signal
 import subprocess
-import sys
 from collections import Counter
 from pathlib import Path
 
 import pytest
 
 from teleop.io.recording import read_session
+from tests.loop.live._client import start_session
 from teleop.loop.live.channels import EE_COLOR, EE_FAULT_COLOR
 
 HERE = Path(__file__).resolve().parent
@@ -85,18 +85,6 @@ def robot_process(session_pid: int, port: int, recording: Path) -> int:
     return found[0]
 
 
-def start_session(tmp_path: Path) -> tuple[subprocess.Popen, int]:
-    proc = subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "session", "--live", "0", "--no-realtime",
-                             "--seconds", str(SESSION_S), "--stale-ms", str(STALE_MS),
-                             "--record", str(tmp_path / "session.mcap"), "--json", str(tmp_path / "session.json")],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    for line in proc.stdout:
-        m = re.match(r"live view: ws://127\.0\.0\.1:(\d+)", line)
-        if m:
-            return proc, int(m.group(1))
-    raise AssertionError(f"no live view line; stderr: {proc.stderr.read()}")
-
-
 def shown_count(topic: str, text: str) -> int | None:
     """The message count Studio's topic list shows for `topic` (lines: topic, schema, count, rate)."""
     m = re.search(rf"^{re.escape(topic)}\n[^\n]*\n([\d,]+)\n", text, re.M)
@@ -125,7 +113,8 @@ def test_studio_shows_the_live_session_and_its_recording(tmp_path):
         raise AssertionError(f"studio.mjs ended before stage {stage}: {driver.stderr.read()}")
 
     try:
-        proc, port = start_session(tmp_path)
+        proc, port = start_session(tmp_path, SESSION_S, "--no-realtime", "--stale-ms", str(STALE_MS),
+                                   "--record", str(tmp_path / "session.mcap"))
         robot = robot_process(proc.pid, port, mcap)
         until("ready")
         assert stages["ready"]["host_error"] is None, stages["ready"]

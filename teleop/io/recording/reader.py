@@ -133,16 +133,20 @@ class Session:
         return np.array([m[name] for m in self.messages(topic)], dtype=float)
 
 
-def read_session(path) -> Session:
-    """Read a recording; never raises on damage (see Session.damage), only on a file that is not MCAP."""
+def recording_bytes(path) -> bytes:
+    """The bytes of recording `path`; InputError naming it when it is missing or a directory."""
     p = Path(path)
     try:
-        data = p.read_bytes()
+        return p.read_bytes()
     except FileNotFoundError:
         raise InputError(f"{p}: file not found") from None
     except IsADirectoryError:
         raise InputError(f"{p}: is a directory, expected an .mcap recording") from None
-    return parse_session(data, str(p))
+
+
+def read_session(path) -> Session:
+    """Read a recording; never raises on damage (see Session.damage), only on a file that is not MCAP."""
+    return parse_session(recording_bytes(path), str(path))
 
 
 def parse_session(data: bytes, name: str = "<bytes>") -> Session:

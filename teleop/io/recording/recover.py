@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import io
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 from mcap.records import Attachment, Channel, Chunk, DataEnd, Header, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
@@ -21,7 +20,7 @@ from mcap.writer import CompressionType, IndexType, Writer
 from teleop.core.errors import InputError
 from teleop.io.outputs import atomic_write
 from teleop.io.recording.layout import metadata_record
-from teleop.io.recording.reader import MAGIC, _check_chunk, _Damage, _StrictBytes
+from teleop.io.recording.reader import MAGIC, _check_chunk, _Damage, _StrictBytes, recording_bytes
 
 RECOVERED = "recovered"  # name of the metadata record a recovered file carries
 
@@ -126,13 +125,7 @@ def _write(out, header: Header, records: list, rep: Recovery) -> None:
 
 def recover_file(src, dst) -> Recovery:
     """Recover recording `src` into `dst` (written whole or not at all); InputError on a file that is not MCAP."""
-    src = Path(src)
-    try:
-        data = src.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{src}: file not found") from None
-    except IsADirectoryError:
-        raise InputError(f"{src}: is a directory, expected an .mcap recording") from None
+    data = recording_bytes(src)
     buf = io.BytesIO()
     rep = recover_bytes(data, buf, str(src))  # before anything is created: a bad input leaves no trace
     atomic_write(dst, lambda tmp: tmp.write_bytes(buf.getvalue()))
