@@ -133,6 +133,46 @@ def pulley_elongation(F_motor, T_tip, chain: PulleyChain) -> np.ndarray:
     return chain.spans @ seg / chain.EA
 
 
+def tangent(c1, rho1: float, c2, rho2: float) -> tuple[np.ndarray, np.ndarray]:
+    """(p1, p2): where the free cable leaves circle 1 (centre c1 [m], signed radius rho1 [m]) and meets
+    circle 2, travelling from 1 to 2. A positive radius puts the centre left of the travel (the cable turns
+    counter-clockwise round it), a negative one right, zero is a point. Raises ValueError when no such
+    tangent exists (circles too close)."""
+    c1, c2 = np.asarray(c1, dtype=float), np.asarray(c2, dtype=float)
+    D = c2 - c1
+    d = float(np.hypot(*D))
+    a = (rho1 - rho2) / d if d > 0 else math.inf
+    if not abs(a) < 1.0:
+        raise ValueError(f"pulley layout: no free cable between centres {c1} and {c2} (radii {rho1}, {rho2})")
+    Dh = D / d
+    Dp = np.array([-Dh[1], Dh[0]])
+    n = a * Dh - math.sqrt(1.0 - a * a) * Dp        # right-hand normal of the travel
+    return c1 + rho1 * n, c2 + rho2 * n
+
+
+def chain_from_layout(points, mu, EI: float = 0.0, EA: float = math.inf) -> PulleyChain:
+    """The chain from the pulleys' places (seed 002: the spatial location of the pulleys sets each wrap
+    angle and span). points: (p + 2) rows (x [m], y [m], rho [m]) from the tip anchor to the motor exit,
+    rho the signed radius (`tangent`; 0 for the two end points); mu: (p,) friction coefficients [-] or one.
+    Each pulley's wrap theta_i is the turn of the cable's direction round it; its span d_i the free cable
+    to the next place. The arcs on the pulleys are not counted in the spans. Planar layout only: the
+    out-of-plane deviation angle between pulleys (seed 002 alpha_i) is not modelled."""
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 3 or pts[0, 2] != 0 or pts[-1, 2] != 0:
+        raise ValueError("pulley layout: expected (p + 2) rows of (x, y, rho), rho 0 at both ends, p >= 1")
+    mus = np.broadcast_to(np.asarray(mu, dtype=float), (pts.shape[0] - 2,))
+    legs = [tangent(pts[j, :2], pts[j, 2], pts[j + 1, :2], pts[j + 1, 2]) for j in range(pts.shape[0] - 1)]
+    spans = [float(np.hypot(*(b - a))) for a, b in legs]
+    pulleys = []
+    for i in range(1, pts.shape[0] - 1):
+        u_in = legs[i - 1][1] - legs[i - 1][0]
+        u_out = legs[i][1] - legs[i][0]
+        turn = math.atan2(u_in[0] * u_out[1] - u_in[1] * u_out[0], float(np.dot(u_in, u_out)))
+        theta = (math.copysign(1.0, pts[i, 2]) * turn) % (2 * math.pi)
+        pulleys.append(Pulley(theta=theta, R=abs(float(pts[i, 2])), mu=float(mus[i - 1]), d=spans[i]))
+    return PulleyChain(tuple(pulleys), EI=EI, EA=EA, d_tip=spans[0])
+
+
 def lumped_chain(p: Mapping[str, float]) -> PulleyChain:
     """The catalogue effects' one-pulley chain: wrap, mu, bend (= EI / R^2 with R = 1 m)."""
     return PulleyChain((Pulley(theta=p["wrap"], R=1.0, mu=p["mu"]),), EI=p["bend"])
