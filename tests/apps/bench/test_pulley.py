@@ -9,9 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from teleop.apps.bench.pulley import displacement_transmission, instrument, tension_transmission
+from teleop.apps.bench.pulley import compute, displacement_transmission, figure, instrument, tension_transmission
 from teleop.apps.cli import main
 from teleop.core.physics.pulley import Pulley, PulleyChain, chain_from_layout
+from tests.apps.test_figures import check_figure
 
 
 def chain(mus, thetas, EI=0.0, EA=2e3, R=0.002, d=0.1):
@@ -92,3 +93,7 @@ def test_bad_output_is_one_line_exit_2(tmp_path, capsys):
     assert main(["bench", "pulley", "--plot", str(tmp_path / "p.txt")]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
     assert not (tmp_path / "p.txt").exists()
+
+
+def test_figure_keeps_the_house_rules():
+    check_figure(figure(compute(0)), "seed 002", "tension transmission", "displacement transmission")
