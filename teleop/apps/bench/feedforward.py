@@ -33,6 +33,19 @@ JSON: {"seed", "seconds", "settle_s", "backlash_mm", "compensation": {"source", 
 "p95", "max"}, "readings", "final_state", "fault_reason", "max_command_step_mm"}}, "v_max_step_mm",
 "ratio_rms" (plain / compensated), "pass" (ratio_rms >= 2 and no session faulted)}; "plant" when not matched.
 
+`--plant distributed --single-cable`: offline, one distributed tendon-sheath cable (scenes.tendon_sheath, default
+parameters, a constant tip force equal to its pretension, 1 kHz), no robot and no operator. Calibration: one run
+of the motor on a 3 mm sine (period 4 s, two cycles) at CAL_LOAD_N gives the lost motion w (motor minus tip
+stroke, second cycle) and the motor force pulling and releasing. Compensators, both from that one run:
+  plain   the backlash inverse of width w (teleop.core.control.feedforward.backlash_inverse);
+  pulley  seed 002's model-based compensation (pulley_precompensate) on a chain of CHAIN_PULLEYS equal pulleys
+          sharing the sheath's total bend (theta0 + theta1) over its length, mu from the force ratio
+          (F_pull / F_rel = exp(2 mu Theta)), EA from w: its play width and offset follow the load.
+Test: the wanted tip a 2 mm sine (period 2 s, 6 s) at each tip load of TEST_LOADS_N; tip error RMS after 1 s
+[mm] with the motor on the wanted tip (none), plain and pulley. The plant is deterministic (--seed unused
+there). JSON: {"mode": "single_cable", "plant", "calibration": {"load_N", "lost_motion_mm", "F_pull_N",
+"F_rel_N", "mu", "EA_N"}, "loads_N", "tip_error_rms_mm": {"none", "plain", "pulley"} (per load)}.
+
 With --recordings the same error is read from recorded `teleop session --record` files instead (simulated
 robot: its `x_tip` beside the loop's `/teleop/setpoint`, one value per robot frame after --settle-s; paced
 sessions, the robot in its own process) and nothing is simulated: JSON {"settle_s", "recordings": {path:
@@ -50,15 +63,16 @@ import numpy as np
 from devices.simulated import OperatorParams, Script, SimulatedStylus
 from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
 from scenes.sim_robot import SimRobot, SimRobotParams
-from scenes.tendon_sheath import TendonSheathParams
+from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams
 from teleop.apps.argtypes import add_geometry_option, geometry_of, input_file
-from teleop.core.control.feedforward import model_backlash_width
+from teleop.core.control.feedforward import backlash_inverse, model_backlash_width, pulley_precompensate
 from teleop.core.errors import InputError
 from teleop.core.kinematics import rotation_zyx
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 from teleop.io.model_io import load_model
 from teleop.io.figures import legend_outside
-from teleop.io.outputs import save_figure, write_json
+from teleop.core.physics.pulley import Pulley, PulleyChain, pulley_band, pulley_elongation
+from teleop.io.outputs import check_output, save_figure, write_json
 from teleop.io.recording import TOPIC_ROBOT, TOPIC_SETPOINT, read_session
 from teleop.loop import LoopParams, State, Teleop
 from teleop.loop.replay import geometry_from
@@ -89,6 +103,10 @@ def register(subparsers) -> None:
     p.add_argument("--plant", default="matched", choices=("matched", "distributed"),
                    help="matched (default) or distributed: the robot's tensions from the distributed tendon-sheath "
                         "cable (scenes/tendon_sheath.py); the play stays the robot's play operator")
+    p.add_argument("--single-cable", action="store_true",
+                   help="with --plant distributed: one distributed tendon-sheath cable offline, no compensation vs "
+                        "the plain backlash inverse vs seed 002's pulley-model compensation, both calibrated on one "
+                        "run of the cable (module docstring)")
     p.add_argument("--recordings", nargs="+", metavar="MCAP", type=input_file,
                    help="measure recorded sessions of the simulated robot instead (e.g. without, then with "
                         "--compensation); the ratio is first / second")
@@ -297,6 +315,8 @@ def _check(args) -> None:
 
 def run(args) -> int:
     _check(args)
+    if args.single_cable:
+        return run_single_cable(args)
     geometry = geometry_of(args)  # a bad file is one line before any session
     if args.recordings:
         out = bench_recordings(args.recordings, args.settle_s)
@@ -325,4 +345,115 @@ def run(args) -> int:
         write_json(args.json, out)
     if args.plot:
         save_figure(figure(out, runs), args.plot)
+    return 0
+
+
+# ---- --single-cable: seed 002's pulley-model compensation vs the plain inverse, offline ------------------------
+
+CAL_LOAD_N = 2.0
+TEST_LOADS_N = (1.0, 2.0, 4.0, 8.0)
+CHAIN_PULLEYS = 10
+CABLE_HZ = 1000.0
+
+
+def _cable(params: TendonSheathParams, load_N: float) -> TendonSheath:
+    return TendonSheath(params, SheathLoad("force"), pretension=load_N, tick=1.0 / CABLE_HZ)
+
+
+def calibrate_single_cable(params: TendonSheathParams, load_N: float = CAL_LOAD_N) -> dict:
+    """One calibration run (module docstring): lost motion w [m], motor force pulling / releasing [N], and the
+    pulley chain fitted to them (mu [-], EA [N])."""
+    n = int(4.0 * CABLE_HZ)
+    x = 3e-3 * np.sin(2 * np.pi * np.arange(2 * n) / n)
+    r = _cable(params, load_N).run(x, tip_input=load_N)
+    xm, xt, fm = r.x_motor[:, 0], r.x_tip[:, 0], r.f_motor[:, 0]
+    w = float(np.ptp(xm[n:]) - np.ptp(xt[n:]))
+    v = np.gradient(xm)
+    second = np.arange(xm.size) >= n
+    F_pull = float(np.median(fm[second & (v > 0.5 * v.max())]))
+    F_rel = float(np.median(fm[second & (v < 0.5 * v.min())]))
+    theta = params.theta0 + params.theta1
+    mu = math.log(F_pull / F_rel) / (2.0 * theta)
+    span = params.length / (CHAIN_PULLEYS + 1)
+    unit = PulleyChain(tuple(Pulley(theta / CHAIN_PULLEYS, 1.0, mu, span) for _ in range(CHAIN_PULLEYS)), EA=1.0,
+                       d_tip=span)
+    lo, hi = pulley_band([load_N], unit)
+    EA = float(pulley_elongation(hi, [load_N], unit)[0] - pulley_elongation(lo, [load_N], unit)[0]) / w
+    return {"load_N": load_N, "w": w, "F_pull_N": F_pull, "F_rel_N": F_rel, "mu": mu, "EA_N": EA,
+            "chain": PulleyChain(unit.pulleys, EA=EA, d_tip=span)}
+
+
+def bench_single_cable(params: TendonSheathParams = TendonSheathParams()) -> tuple[dict, dict]:
+    """(JSON-ready result, one trace per compensator at the largest load for the figure)."""
+    cal = calibrate_single_cable(params)
+    chain = cal["chain"]
+    t = np.arange(int(6.0 * CABLE_HZ)) / CABLE_HZ
+    y_d = 2e-3 * np.sin(2 * np.pi * t / 2.0)
+    after = t >= 1.0
+    rms = {"none": [], "plain": [], "pulley": []}
+    traces = {}
+    for load in TEST_LOADS_N:
+        # the plant's travel starts at the uniform stretch of its pretension: the model's absolute elongation
+        # is taken from there
+        cmds = {"none": y_d, "plain": backlash_inverse(y_d, cal["w"]),
+                "pulley": pulley_precompensate(y_d, load, chain) - load * float(np.sum(chain.spans)) / chain.EA}
+        for name, x in cmds.items():
+            e = _cable(params, load).run(x, tip_input=load).x_tip[:, 0] - y_d
+            rms[name].append(float(np.sqrt(np.mean(e[after] ** 2))) * 1e3)
+            if load == TEST_LOADS_N[-1]:
+                traces[name] = e * 1e3
+    traces["t"] = t
+    out = {"mode": "single_cable", "plant": "distributed",
+           "calibration": {"load_N": cal["load_N"], "lost_motion_mm": cal["w"] * 1e3, "F_pull_N": cal["F_pull_N"],
+                           "F_rel_N": cal["F_rel_N"], "mu": cal["mu"], "EA_N": cal["EA_N"],
+                           "chain_pulleys": CHAIN_PULLEYS},
+           "loads_N": list(TEST_LOADS_N), "tip_error_rms_mm": rms}
+    return out, traces
+
+
+def single_cable_figure(out: dict, traces: dict):
+    import matplotlib  # heavy: loaded only to draw
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # heavy: loaded only to draw
+
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.6))
+    labels = {"none": "no compensation", "plain": "plain backlash inverse",
+              "pulley": "seed 002 pulley-model compensation"}
+    for i, (name, label) in enumerate(labels.items()):
+        a1.plot(out["loads_N"], out["tip_error_rms_mm"][name], "o-", color=f"C{i}", label=label)
+        a2.plot(traces["t"], traces[name], color=f"C{i}", lw=1.0, label=label)
+    a1.set_yscale("log")
+    a1.set_xlabel("tip load [N]")
+    a1.set_ylabel("tip error RMS after 1 s [mm]")
+    a1.set_title(f"tip tracking error (calibrated at {out['calibration']['load_N']:g} N)")
+    legend_outside(a1, "below")
+    a2.set_xlabel("time [s]")
+    a2.set_ylabel("tip error [mm]")
+    a2.set_title(f"tip error at {out['loads_N'][-1]:g} N")
+    legend_outside(a2, "below")
+    fig.suptitle("teleop bench feedforward --single-cable: plant distributed (one tendon-sheath cable, 2 mm sine)")
+    fig.tight_layout()
+    return fig
+
+
+def run_single_cable(args) -> int:
+    if args.plant != "distributed":
+        raise InputError("--single-cable: runs on the distributed tendon-sheath cable; expected --plant distributed")
+    if args.recordings or args.compensation:
+        raise InputError("--single-cable: calibrates its own compensators; drop --recordings and --compensation")
+    for flag, path in (("--json", args.json), ("--plot", args.plot)):
+        if path:
+            check_output(path, flag)
+    out, traces = bench_single_cable()
+    print(f"one distributed tendon-sheath cable, calibrated at {out['calibration']['load_N']:g} N: lost motion "
+          f"{out['calibration']['lost_motion_mm']:.4f} mm, pulley chain mu {out['calibration']['mu']:.4f}, "
+          f"EA {out['calibration']['EA_N']:.0f} N")
+    print("tip load [N]   tip error RMS [mm]: none    plain    pulley")
+    r = out["tip_error_rms_mm"]
+    for i, load in enumerate(out["loads_N"]):
+        print(f"{load:>12g}   {r['none'][i]:>22.4f} {r['plain'][i]:>8.4f} {r['pulley'][i]:>9.4f}")
+    if args.json:
+        write_json(args.json, out)
+    if args.plot:
+        save_figure(single_cable_figure(out, traces), args.plot)
     return 0

@@ -32,6 +32,7 @@ import numpy as np
 from teleop.core.errors import InputError
 from teleop.core.kernels import friction as KF
 from teleop.core.physics.links import LinkModel
+from teleop.core.physics.pulley import PulleyChain, pulley_band, pulley_elongation
 
 
 def backlash_inverse(y_d: np.ndarray, width: float, max_step: float | None = None) -> np.ndarray:
@@ -53,6 +54,19 @@ def precompensate(model: LinkModel, tip_target: np.ndarray, max_step: float | No
             width = float(p["width"])
     z = backlash_inverse(tip_target, width, None if max_step is None else abs(model.gain) * max_step)
     return (z - model.offset) / model.gain
+
+
+def pulley_precompensate(tip_target: np.ndarray, T_tip: float, chain: PulleyChain,
+                         max_step: float | None = None) -> np.ndarray:
+    """Seed 002's model-based position compensation: motor command (n,) [m] making a pulley chain's tip
+    (teleop.core.physics.pulley: tip = x - elongation) follow tip_target (n,) [m] under the tip tension
+    T_tip [N]. Sliding, the tip trails the motor by the pulling elongation e_hi one way and by the releasing
+    one e_lo the other, so the chain is a play of width e_hi - e_lo centred on their mean: x = backlash_inverse(tip_target
+    + (e_hi + e_lo) / 2, e_hi - e_lo). Unlike the plain inverse its width and offset follow the load and the
+    chain (friction, bending rigidity, spans, EA). The elongation is absolute (zero for a slack cable)."""
+    lo, hi = pulley_band([T_tip], chain)
+    e_lo, e_hi = pulley_elongation(lo, [T_tip], chain)[0], pulley_elongation(hi, [T_tip], chain)[0]
+    return backlash_inverse(np.asarray(tip_target, dtype=float) + 0.5 * (e_hi + e_lo), e_hi - e_lo, max_step)
 
 
 #: rate [m/s] at which the command drives on the full side of the play: about ten times the rate noise of
