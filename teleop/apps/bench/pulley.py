@@ -148,10 +148,12 @@ def table(res: dict) -> str:
         lines.append(f"{i:>6}  {p['theta_deg']:>11.1f}  {p['R_m'] * 1e3:>6.2f}  {p['span_m'] * 1e3:>17.1f}  {c:.3f}")
     lines.append(f"at T_tip = {T0:g} N, stroke {STROKE_M * 1e3:g} mm:      with bending EI   capstan only (EI=0)")
     b, c = res["models"]["bending"], res["models"]["capstan"]
-    lines.append(f"  tension ratio T_tip/F_m pulling      {b['tension_ratio_pulling']:>12.3f}   {c['tension_ratio_pulling']:>10.3f}")
-    lines.append(f"  tension ratio F_m/T_tip releasing    {b['tension_ratio_releasing']:>12.3f}   {c['tension_ratio_releasing']:>10.3f}")
-    lines.append(f"  lost motion at reversal [mm]         {b['lost_motion_m'] * 1e3:>12.4f}   {c['lost_motion_m'] * 1e3:>10.4f}")
-    lines.append(f"  displacement ratio tip/motor stroke  {b['displacement_ratio']:>12.4f}   {c['displacement_ratio']:>10.4f}")
+    rows = (("tension ratio T_tip/F_m pulling", "tension_ratio_pulling", 1.0, ".3f"),
+            ("tension ratio F_m/T_tip releasing", "tension_ratio_releasing", 1.0, ".3f"),
+            ("lost motion at reversal [mm]", "lost_motion_m", 1e3, ".4f"),
+            ("displacement ratio tip/motor stroke", "displacement_ratio", 1.0, ".4f"))
+    for label, key, scale, fmt in rows:
+        lines.append(f"  {label:<36} {b[key] * scale:>12{fmt}}   {c[key] * scale:>10{fmt}}")
     s = res["spread"]
     lines.append(f"spread over {s['draws']} draws (mu x U(0.5,1.5), EI x U(0.5,2), seed {s['seed']}): tension ratio "
                  f"{s['tension_ratio_5_95'][0]:.3f}-{s['tension_ratio_5_95'][1]:.3f}, lost motion "
@@ -168,7 +170,8 @@ def figure(res: dict):
     for name, (s_pull, s_rel) in (("bending", ("-", "-")), ("capstan", ((0, (6, 4)), (3, (6, 4))))):
         m = res["models"][name]
         label = "with bending rigidity" if name == "bending" else "capstan only (EI = 0)"
-        a1.plot(res["T_sweep_N"], m["sweep_pulling"], color="C0", ls=s_pull, label=f"pulling (T_tip / F_motor), {label}")
+        a1.plot(res["T_sweep_N"], m["sweep_pulling"], color="C0", ls=s_pull,
+                label=f"pulling (T_tip / F_motor), {label}")
         a1.plot(res["T_sweep_N"], m["sweep_releasing"], color="C1", ls=s_rel,
                 label=f"releasing (F_motor / T_tip), {label}")
         a2.plot(m["loop"]["x"] * 1e3, m["loop"]["tip"] * 1e3, color="C2" if name == "bending" else "C3",

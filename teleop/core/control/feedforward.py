@@ -61,9 +61,10 @@ def pulley_precompensate(tip_target: np.ndarray, T_tip: float, chain: PulleyChai
     """Seed 002's model-based position compensation: motor command (n,) [m] making a pulley chain's tip
     (teleop.core.physics.pulley: tip = x - elongation) follow tip_target (n,) [m] under the tip tension
     T_tip [N]. Sliding, the tip trails the motor by the pulling elongation e_hi one way and by the releasing
-    one e_lo the other, so the chain is a play of width e_hi - e_lo centred on their mean: x = backlash_inverse(tip_target
-    + (e_hi + e_lo) / 2, e_hi - e_lo). Unlike the plain inverse its width and offset follow the load and the
-    chain (friction, bending rigidity, spans, EA). The elongation is absolute (zero for a slack cable)."""
+    one e_lo the other, so the chain is a play of width e_hi - e_lo centred on their mean:
+    x = backlash_inverse(tip_target + (e_hi + e_lo) / 2, e_hi - e_lo). Unlike the plain inverse its width and
+    offset follow the load and the chain (friction, bending rigidity, spans, EA). The elongation is absolute
+    (zero for a slack cable)."""
     lo, hi = pulley_band([T_tip], chain)
     e_lo, e_hi = pulley_elongation(lo, [T_tip], chain)[0], pulley_elongation(hi, [T_tip], chain)[0]
     return backlash_inverse(np.asarray(tip_target, dtype=float) + 0.5 * (e_hi + e_lo), e_hi - e_lo, max_step)
