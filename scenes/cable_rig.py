@@ -40,8 +40,8 @@ RIG_LINKS = ("position", "force", "sensor")
 #: the interchange column that records each physics channel the rig's effects may read beside their own
 CHANNEL_COLUMNS = {"temperature": "temperature_C", "theta": "bend_angle_deg"}
 #: physics the rig writes itself: a spring that stiffens (cubic) and a pulley eccentricity (motor force
-#: periodic in motor position), both outside the catalogue, and a late tip force sensor, which the catalogue
-#: knows as transport_delay (its truth says so under "catalogue")
+#: periodic in motor position), both outside the catalogue, and a late tip force sensor, a pure delay the
+#: catalogue knows under its own name (Rules.also_known_as)
 OUTSIDE = ("stiffening_spring", "eccentric_pulley", "sensor_delay")
 #: the interchange columns the bench can write (t_s always)
 COLUMNS = ("motor_pos_mm", "tip_pos_mm", "motor_force_N", "tip_force_N", "bend_angle_deg", "temperature_C")
@@ -384,9 +384,8 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         truth[name] = {"channel": sensor_channel, "params": p}
     if "sensor_delay" in effects:
         tau = rng.uniform(0.05, 0.15)
-        # the catalogue's name for it: a pure delay of the tip force (transport_delay, Rules.reading)
-        truth["sensor_delay"] = {"channel": "tip_force", "params": {"tau": tau},
-                                 "catalogue": ("transport_delay", {"delay": tau})}
+        # a pure delay of the tip force, which the catalogue knows (an effect's Rules.also_known_as)
+        truth["sensor_delay"] = {"channel": "tip_force", "params": {"delay": tau}}
         readings["tip_force"] = np.interp(t - tau, t, readings["tip_force"])
     sf = {"motor_force": 0.004 * L0 * noise, "tip_force": 0.004 * L0 * noise}
     sx = {"motor": 2e-6 * noise, "tip": 5e-6 * noise}

@@ -70,16 +70,25 @@ def find_links(rec: Recording) -> list[Link]:
 
 
 def smooth(x: np.ndarray, width: int) -> np.ndarray:
-    """Zero-phase centred moving average of odd `width` samples; within half a width of either end the
-    window shrinks symmetrically (the last sample is its own average): a one-sided window there would lag a
-    sloping signal by a quarter of its width."""
+    """Zero-phase local-line smoothing over odd `width` samples: each sample's value on the least-squares
+    line through the samples within half a width of it. Inside the record that is the centred moving
+    average; within half a width of either end the window is the one-sided part the record holds, whose
+    line neither lags a sloping signal (a one-sided mean lags it by a quarter of the width) nor keeps the
+    end sample's own noise (a window shrunk to the end sample does: a stateful effect starts from it)."""
     if width <= 1:
         return x
     n = x.shape[0]
-    j = np.arange(n)
-    h = np.minimum(np.minimum(width // 2, j), n - 1 - j)
+    half = width // 2
     cs = np.concatenate(([0.0], np.cumsum(x)))
-    return (cs[j + h + 1] - cs[j - h]) / (2 * h + 1)
+    j = np.arange(n)
+    a, b = np.maximum(j - half, 0), np.minimum(j + half, n - 1)
+    out = (cs[b + 1] - cs[a]) / (b - a + 1)
+    for i in np.r_[np.arange(min(half, n)), np.arange(max(n - half, half), n)]:
+        k = np.arange(a[i], b[i] + 1, dtype=float)
+        if k.size > 1:
+            kc = k - k.mean()
+            out[i] = out[i] + float(np.dot(kc, x[a[i]:b[i] + 1]) / np.dot(kc, kc)) * (i - k.mean())
+    return out
 
 
 def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_input: bool = False) -> LinkData:

@@ -100,7 +100,7 @@ def test_a_late_tip_force_sensor_is_a_delay_not_friction(tmp_path):
     rig, doc = _rig(tmp_path, 12, ("sensor_delay",), SPRING_NO_TIP, "spring", drive=False)
     assert [(f["effect"], f["channel"]) for f in doc["findings"]] == [("transport_delay", "tip_force")], doc
     delay = doc["findings"][0]["params"]["delay"]["value"]
-    assert delay == pytest.approx(rig.effects["sensor_delay"]["params"]["tau"], rel=0.05)
+    assert delay == pytest.approx(rig.effects["sensor_delay"]["params"]["delay"], rel=0.05)
     assert doc["unexplained"] == []
 
 

@@ -79,11 +79,10 @@ def run_rig_case(case: dict, seed: int, fs_hz: float | None = 500.0, duration_s:
     for e, v in rig.effects.items():
         if not observable(e, cols, case["load"]):
             continue
-        if e in REGISTRY:
-            truth[e] = v
-        elif "catalogue" in v:  # rig physics the catalogue names otherwise (a late sensor: transport_delay)
-            name, params = v["catalogue"]
-            truth[name] = {"channel": v["channel"], "params": params}
+        # rig physics the catalogue knows under its own name (Rules.also_known_as: a late sensor)
+        name = e if e in REGISTRY else next((n for n, x in REGISTRY.items() if e in x.rules.also_known_as), None)
+        if name is not None:
+            truth[name] = v
     findings = doc["findings"]
     named = [f["effect"] for f in findings]
     if not truth:

@@ -354,7 +354,10 @@ class Rules:
     the link's gain).
     reading: its contribution to a link's output may be the output sensor's own (a late reading: a lag):
     found there, a later link that reads the channel as its input is offered the channel without it, as
-    it is a sensor effect's (kept where that link's baseline fits better with it)."""
+    it is a sensor effect's (kept where that link's baseline fits better with it).
+    also_known_as: names a generator gives this physics when it writes it itself, outside the catalogue (the
+    single-cable rig's late tip-force sensor, "sensor_delay", is a transport_delay): a bench scores a finding
+    of this effect as the right answer for them (the generator's truth carries this effect's parameters)."""
 
     channel: str = ""
     primary: tuple[str, ...] = ()
@@ -373,6 +376,7 @@ class Rules:
     raw_input: bool = False
     input_units: tuple[str, ...] = ()
     reading: bool = False
+    also_known_as: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

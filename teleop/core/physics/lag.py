@@ -98,6 +98,7 @@ TRANSPORT_DELAY = register(Effect(
     inputs=("t", "x"), output="x",
     guess=_delay_guess, kernel=DELAY,
     rules=Rules(channel="tip_pos", primary=("delay",), alike=("first_order_lag",), reading=True,
+                also_known_as=("sensor_delay",),
                 draw=lambda rng, s: {"delay": min(rng.uniform(0.05, 0.15) * _drive_time(s), 0.8 * MAX_DELAY_S)}),
 ))
 
