@@ -2,7 +2,7 @@
 and the tap that fills them before the session's RowTap (teleop.loop.tap) fills the rest and pushes the row.
 
 Used by teleop.loop.session for an estimator of the FBG sensor kinds
-(teleop.core.estimation.sensor_reading.FbgReadingEstimator: `kind`, `cable`, `fbg`, `proximal`, `at_rest`,
+(teleop.core.estimation.sensor_reading.FbgReadingEstimator: `kind`, `cable`, `tensions`, `proximal`, `at_rest`,
 `rest_ratio`).
 """
 
@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from teleop.core.sensors import fbg_tensions
 from teleop.io.recording import Layout
 from teleop.io.recording.sensors import GATE, TOPIC_FBG, fbg_signals
 
@@ -58,7 +57,7 @@ class FbgTap:
             dl = np.asarray(fbg, dtype=float)[:, self.cables]
             r[sl["fbg_dl1_pm"]] = dl[0]
             r[sl["fbg_dl2_pm"]] = dl[1]
-            r[sl["fbg_force"]] = fbg_tensions(dl, self.est.fbg)  # seed 001 eq 3
+            r[sl["fbg_force"]] = self.est.tensions[self.cables]  # the estimate's seed 001 eq 3, not again
             if self.one:
                 r[sl["proximal"]] = self.est.proximal
                 r[sl["rest"]] = float(self.est.at_rest)

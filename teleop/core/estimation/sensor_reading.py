@@ -89,6 +89,11 @@ class FbgReadingEstimator:
             self.fsr.reset()
         self.tick.reset()
 
+    @property
+    def tensions(self) -> np.ndarray:
+        """The last reading's tip-side tensions (n,) [N] (this estimator's buffer; on an FBG cable its eq 3)."""
+        return self._t
+
     def tensions_into(self, fsr_counts, fbg_pm) -> np.ndarray:
         """Tip-side tensions [N] (this estimator's (n,) buffer) of one reading: FSR counts (n,) and Bragg
         shifts (2, n) [pm]; updates the eq 7 state."""
