@@ -22,7 +22,8 @@ def run(args) -> int:
     if rep.damage:
         print(f"teleop: warning: {args.file}: {rep.damage}; replaying the intact prefix", file=sys.stderr)
     print(f"replayed {rep.ticks} ticks: {rep.force_mismatches} force, {rep.command_mismatches} command, "
-          f"{rep.state_mismatches} state mismatches (max |dF| {rep.max_force_diff:.3g} N, "
+          f"{rep.state_mismatches} state, {rep.estimate_mismatches} estimate mismatches "
+          f"(max |dF| {rep.max_force_diff:.3g} N, max |dW| {rep.max_wrench_diff:.3g} N, "
           f"max |dL| {rep.max_length_diff:.3g} m) -> {'reproduced' if rep.reproduced else 'DIFFERS'}")
     if args.json:
         write_json(args.json, {**asdict(rep), "reproduced": rep.reproduced})
