@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from teleop.apps.cli import main
+from teleop.core.errors import InputError
 from teleop.core.sensors import FbgParams
 from teleop.io.recording import read_session
 from teleop.io.recording.sensors import TOPIC_FBG
@@ -63,3 +64,15 @@ def test_replay_feeds_the_recorded_fbg_shifts(recorded):
         m["fbg_dl2_pm"] = dl2 + FbgParams().S_pm_N
     rep = replay_session(str(rec), session=s)
     assert not rep.reproduced and rep.estimate_mismatches > 0 and rep.max_wrench_diff > 0.01
+
+
+def test_unreplayable_fbg_recordings_say_why(recorded):
+    kind, rec = recorded
+    s = read_session(rec)
+    s.records = [r for r in s.records if r[0] != TOPIC_FBG]  # an FBG session whose shifts were not recorded
+    with pytest.raises(InputError, match=f"no {TOPIC_FBG} messages"):
+        replay_session(str(rec), session=s)
+    s = read_session(rec)
+    del s.metadata["session"]["calibration"]["fbg"]
+    with pytest.raises(InputError, match="FBG estimator settings not understood"):
+        replay_session(str(rec), session=s)
