@@ -4,6 +4,13 @@ Rates are on the rows' session time (teleop.io.recording.pacing.Pacer: the first
 deadline, the deadlines 1/rate apart), so they hold whatever the loop rate. Plots (JSON with a JSON schema) at 100 Hz, the 3D scene
 (foxglove.FrameTransforms, foxglove.SceneUpdate) at 50 and 10 Hz, faults (foxglove.Log) when they happen,
 per-second timing and the live view's own counters at 1 Hz.
+
+Sessions of the FBG sensor kinds (`sim://robot?sensor=fbg|one`, whose row layout carries the recording's FBG
+channel, teleop.io.recording.sensors) add one plot channel, TOPIC_FBG_LIVE at RATE_FBG: the fields of
+/sensors/fbg, paced over the rows that carry a new FBG reading (its gate). Its per-FBG fields (`fbg_cable`,
+`fbg_dl1_pm`, `fbg_dl2_pm`, `fbg_force`) are lists even for one instrumented cable (the recording writes a
+number there), so one layout's paths (`fbg_force[0]`) serve both kinds. `plots(layout)` and `rates(layout)`
+are a layout's channels; PLOTS and RATES those of every session.
 """
 
 from __future__ import annotations
@@ -19,6 +26,8 @@ from foxglove.messages import (ArrowPrimitive, Color, CubePrimitive, CylinderPri
 
 from teleop.io.recording.foxglove import STATE_NAMES, WORLD, frame_transforms, stamp
 from teleop.io.recording.layout import Layout
+from teleop.io.recording.pacing import Pacer
+from teleop.io.recording.sensors import GATE as FBG_GATE, TOPIC_FBG
 
 # topic: (rate [Hz] on session time, row fields) for the JSON plot channels
 PLOTS = {
@@ -35,6 +44,47 @@ TOPIC_FAULTS = "/live/faults"
 TOPIC_TIMING, TOPIC_STATS = "/live/timing", "/live/stats"
 RATES = {**{k: v[0] for k, v in PLOTS.items()}, TOPIC_TF: RATE_TF, TOPIC_SCENE: RATE_SCENE, TOPIC_TIMING: 1.0,
          TOPIC_STATS: 1.0}
+# the FBG sensors (module docstring): the plots' rate, on the rows with a new FBG reading
+TOPIC_FBG_LIVE, RATE_FBG = "/live/fbg", 100.0
+FBG_PER_SENSOR = ("fbg_cable", "fbg_dl1_pm", "fbg_dl2_pm", "fbg_force")  # one entry per FBG: always a list
+
+
+def plots(layout: Layout) -> dict:
+    """{topic: (rate [Hz], row fields)} of the plot channels for a session's row `layout`: PLOTS, and
+    TOPIC_FBG_LIVE (the recording's FBG fields but its gate) when the layout carries the FBG channel."""
+    fbg = tuple(s.name for s in layout.signals if s.topic == TOPIC_FBG and s.name != FBG_GATE)
+    return {**PLOTS, TOPIC_FBG_LIVE: (RATE_FBG, fbg)} if fbg else dict(PLOTS)
+
+
+def rates(layout: Layout) -> dict:
+    """{topic: rate [Hz]} of the paced channels for `layout` (RATES, and TOPIC_FBG_LIVE with an FBG channel)."""
+    p = plots(layout)
+    return {**RATES, TOPIC_FBG_LIVE: p[TOPIC_FBG_LIVE][0]} if TOPIC_FBG_LIVE in p else dict(RATES)
+
+
+def gate_columns(layout: Layout) -> dict:
+    """{topic: row column} for the paced channels published only on rows where that column is nonzero."""
+    sl = layout.slices()
+    return {TOPIC_FBG_LIVE: sl[(TOPIC_FBG, FBG_GATE)][0]} if (TOPIC_FBG, FBG_GATE) in sl else {}
+
+
+class Schedule:
+    """Which paced channels of `layout` (rates(layout) but the per-second timing, sent when a second is
+    complete) a row publishes: each channel's Pacer on the rows' session time; a gated channel
+    (gate_columns) counts only the rows that carry its data."""
+
+    def __init__(self, layout: Layout):
+        self.pacers = {topic: Pacer(rate) for topic, rate in rates(layout).items() if topic != TOPIC_TIMING}
+        self.gates = gate_columns(layout)
+
+    def due(self, row, t: float) -> list:
+        """The topics due at the row `row` of session time `t` [s] (their pacers move on)."""
+        out = []
+        for topic, pacer in self.pacers.items():
+            g = self.gates.get(topic)
+            if (g is None or row[g]) and pacer.due(t):
+                out.append(topic)
+        return out
 
 # the 3D scene (RGBA): a colour nothing else in the scene has for the end effector, red while in FAULT
 EE_COLOR, EE_FAULT_COLOR = (0.9, 0.1, 0.8, 1.0), (0.9, 0.1, 0.1, 1.0)
@@ -73,9 +123,10 @@ def plot_schema(layout: Layout, topic: str) -> bytes:
     if "position_steps" in widths:
         widths["measured_lengths"] = widths["position_steps"]   # derived from the steps (RowMessages.plot)
     props = {"tick": {"type": "integer"}, "t": {"type": "number", "description": "session time [s]"}}
-    for name in PLOTS[topic][1]:
+    for name in plots(layout)[topic][1]:
         if name in widths:
-            props[name] = {"type": "number"} if widths[name] == 1 else {"type": "array", "items": {"type": "number"}}
+            listed = widths[name] > 1 or (topic == TOPIC_FBG_LIVE and name in FBG_PER_SENSOR)
+            props[name] = {"type": "array", "items": {"type": "number"}} if listed else {"type": "number"}
     if topic == "/live/loop":
         props["state_name"] = {"type": "string"}
     return json.dumps({"type": "object", "properties": props}).encode()
@@ -113,7 +164,8 @@ class RowMessages:
 
     def __init__(self, layout: Layout, geometry: dict | None = None, pads: list | None = None):
         self.cols = layout.columns()
-        self.plots = {topic: [n for n in names if n in self.cols] for topic, (_, names) in PLOTS.items()}
+        self.plots = {topic: [n for n in names if n in self.cols] for topic, (_, names) in plots(layout).items()}
+        self.listed = {(TOPIC_FBG_LIVE, n) for n in FBG_PER_SENSOR}  # lists whatever their width
         # the lengths the motors measure: home lengths minus the steps hauled in (needs both from the session)
         self.L_home = (geometry or {}).get("L_home")
         self.steps_per_m = (geometry or {}).get("steps_per_m")
@@ -132,7 +184,7 @@ class RowMessages:
                 msg[name] = [float(L - n / self.steps_per_m) for L, n in zip(self.L_home, steps)]
                 continue
             v = row[c[name]].tolist()
-            msg[name] = v[0] if len(v) == 1 else v
+            msg[name] = v[0] if len(v) == 1 and (topic, name) not in self.listed else v
         if topic == "/live/loop":
             s = int(msg["state"])
             msg["state_name"] = STATE_NAMES[s] if 0 <= s < len(STATE_NAMES) else str(s)

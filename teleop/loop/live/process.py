@@ -20,7 +20,6 @@ from teleop.io.recording.foxglove import fault_log
 from teleop.loop.live import channels as lc
 from teleop.loop.live.server import ChannelInfo, FoxgloveServer
 from teleop.io.recording.layout import Layout
-from teleop.io.recording.pacing import Pacer
 from teleop.io.recording.recorder import drain_pipe, time_sharing
 from teleop.io.recording.ring import HEAD, T0_NS, Cursor, Ring
 from teleop.io.recording.stats import SecondStats, timing_schema
@@ -38,7 +37,7 @@ def _channel_list(layout: Layout) -> list:
     def add(topic, encoding, name, schema, schema_encoding):
         out.append(ChannelInfo(len(out) + 1, topic, encoding, name, schema, schema_encoding))
 
-    for topic in lc.PLOTS:
+    for topic in lc.plots(layout):
         add(topic, "json", topic.strip("/").replace("/", "."), lc.plot_schema(layout, topic), "jsonschema")
     for topic, cls in ((lc.TOPIC_TF, FrameTransforms), (lc.TOPIC_SCENE, SceneUpdate), (lc.TOPIC_FAULTS, Log)):
         sc = cls.get_schema()
@@ -66,7 +65,8 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
     stats = SecondStats(layout)
     cursor = Cursor(ring, start=int(ring.ctrl[HEAD]))
     t_col = layout.slices()[("/loop", "t")][0]
-    pacers = {topic: Pacer(rate) for topic, rate in lc.RATES.items() if topic != lc.TOPIC_TIMING}
+    schedule = lc.Schedule(layout)
+    plot_topics = set(lc.plots(layout))
     published = 0
 
     def subscribed(topic):
@@ -87,10 +87,10 @@ async def _serve(layout: Layout, ring: Ring, conn, host: str, port: int, st, sce
             s = stats.add(row)
             if s is not None and subscribed(lc.TOPIC_TIMING):
                 send(lc.TOPIC_TIMING, t_ns, json.dumps(s).encode())
-            for topic, pacer in pacers.items():
-                if not pacer.due(t) or not subscribed(topic):
+            for topic in schedule.due(row, t):
+                if not subscribed(topic):
                     continue
-                if topic in lc.PLOTS:
+                if topic in plot_topics:
                     send(topic, t_ns, msgs.plot(topic, row))
                 elif topic == lc.TOPIC_TF:
                     send(topic, t_ns, msgs.transforms(row, t_ns))
