@@ -30,8 +30,10 @@ In the simulation the FSR at B sees only the B-D sheath, so the A-B bend cannot 
 `--plant distributed`: the one cable is the distributed tendon-sheath cable (scenes.tendon_sheath, its
 parameters from `--cable-params` TOML or its defaults: route bend A-B, FSR at B, scaffold bend B-C, the
 bend theta at the tip) in place of the two capstan segments; the proximal gauge reads the tension at the
-sheath's entrance, the FSR the element at B (its physics and converter as above), the load is the hanging
-weight (a force) or the spring. Nothing is fitted: mu_AB and mu_BD are the cable's one mu_c.
+sheath's entrance, the FSR the tension at B (`tension_at_b`), the load is the hanging weight (a force) or
+the spring. Nothing is fitted: mu_AB and mu_BD are the cable's one mu_c. The FSR there is the sensor alone
+(scenes.fsr_sensor.FsrSensor: the Interlink datasheet's 10 % hysteresis as a Preisach operator, not the
+calibration's branch gap, which also holds the calibration rig's friction), read through the same converter.
 """
 
 from __future__ import annotations
@@ -42,7 +44,8 @@ from dataclasses import asdict
 import numpy as np
 
 from scenes.cable_rig import simulate
-from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams
+from scenes.fsr_sensor import FsrSensor, FsrSensorParams
+from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams, tension_at_b
 from teleop.apps.argtypes import input_file
 from teleop.core.errors import InputError
 from teleop.core.estimation.turn import TurnCompensation, TurnCompensator, fit_turn_compensation
@@ -142,36 +145,21 @@ def distributed(seed: int, x: np.ndarray, theta: float, load: dict, cable: Tendo
     return proximal, tension_at_b(run.tensions[:, 0, :], cable, theta1), run.f_tip[:, 0]
 
 
-def tension_at_b(T: np.ndarray, cable: TendonSheathParams, theta1=None) -> np.ndarray:
-    """(m,) tension [N] at B, the scaffold bend's start s_B, from the element tensions T (m, N) [N].
-
-    B sits on node j (s_B = j l, rounded down). The node's friction comes from the bends of its two half
-    elements, the route's (element j-1, proximal of B) and the scaffold's (element j, distal of B), so the
-    tension at B lies between T_{j-1} and T_j: T_j (T_{j-1} / T_j)^w with w = b_j / (b_{j-1} + b_j), the
-    capstan split of the node's friction by bend (element j's tension alone would have lost half of element
-    j's scaffold bend, 1/6 of theta0 at N = 20). With no bend on either side: T_j."""
-    j = min(int(cable.scaffold_span[0] / cable.element_length), cable.n_elements - 1)
-    if j == 0:
-        return T[:, 0]
-    w_scaffold, w_route, _ = cable.bend_weights
-    th1 = cable.theta1 if theta1 is None else float(theta1)
-    b = cable.theta0 * w_scaffold + th1 * w_route                    # (N,) bend of each element [rad]
-    if b[j - 1] + b[j] <= 0:
-        return T[:, j]
-    w = b[j] / (b[j - 1] + b[j])
-    lo, hi = np.maximum(T[:, j], 1e-12), np.maximum(T[:, j - 1], 1e-12)
-    return np.where(T[:, j] > 0, lo * (hi / lo) ** w, 0.0)
-
-
-def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0) -> np.ndarray:
-    """(n,) tension [N] the distal FSR reports for true tension T (n,) [N]: its branch lag, conductance and
-    ADC (teleop.core.sensors), then the loop's converter."""
+def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0, alone: bool = False) -> np.ndarray:
+    """(n,) tension [N] the distal FSR reports for true tension T (n,) [N], through the loop's converter
+    (FsrConverter: the calibration's branch by the reading's direction). The sensor: `alone` False, the
+    matched robot's (teleop.core.sensors.FsrBranchLag: the calibration's whole branch gap as its play,
+    conductance, ADC); True, the FSR alone (scenes.fsr_sensor.FsrSensor: the datasheet's own hysteresis,
+    used with the distributed cable)."""
     cal = default_fsr_calibration()
-    lag = FsrBranchLag(cal, n=1)
-    u = lag.run(np.asarray(T, dtype=float)[:, None])[:, 0]
-    rng = np.random.default_rng(seed)
-    counts = np.clip(np.rint(cal.conductance2counts(lag.conductance(u)) + rng.normal(0, noise_counts, u.size)),
-                     0, cal.adc_max)
+    if alone:
+        counts = FsrSensor(1, seed, FsrSensorParams(noise_counts=noise_counts), cal).run(np.asarray(T, dtype=float))
+    else:
+        lag = FsrBranchLag(cal, n=1)
+        u = lag.run(np.asarray(T, dtype=float)[:, None])[:, 0]
+        rng = np.random.default_rng(seed)
+        counts = np.clip(np.rint(cal.conductance2counts(lag.conductance(u)) + rng.normal(0, noise_counts, u.size)),
+                         0, cal.adc_max)
     conv = FsrConverter(cal, n=1)
     return np.array([conv.update(c[None])[0] for c in counts])
 
@@ -241,7 +229,7 @@ def fig9(seed: int = 0, cable: TendonSheathParams | None = None) -> dict:
         else:
             proximal, T_B, _ = distributed(seed + 200 + k, x, math.radians(deg), {"tip_force": np.full(x.size, W)},
                                            cable, noise=1.0)
-        distal = fsr_reading(T_B, seed + 100 + k)
+        distal = fsr_reading(T_B, seed + 100 + k, alone=cable is not None)
         d, p, b = _levels(distal, x), _levels(proximal, x), _levels(T_B, x)
         case = {"pretension_N": W, "distal_N": list(d), "proximal_N": list(p), "distal_change_N": d[0] - d[1],
                 "proximal_change_N": p[0] - p[1], "tension_B_N": list(b), "tension_B_change_N": b[0] - b[1]}
@@ -268,7 +256,7 @@ def fig10b(seed: int = 0, cable: TendonSheathParams | None = None, weights_N=Non
             T_B, _ = sheath(seed + k, x, THETA0 + theta, mu_bd(), {"tip_force": np.full(x.size, W)})
         else:
             _, T_B, _ = distributed(seed + k, x, theta, {"tip_force": np.full(x.size, W)}, cable)
-        F = fsr_reading(T_B, seed + 100 + k)
+        F = fsr_reading(T_B, seed + 100 + k, alone=cable is not None)
         comp = single_compensation(F, x, mu_bd(), THETA0 + theta)
         (f_hi, f_lo), (c_hi, c_lo), (b_hi, b_lo) = _levels(F, x), _levels(comp, x), _levels(T_B, x)
         out["cases"][f"{W:g}"] = {"weight_N": W, "fsr_change_N": f_hi - f_lo, "compensated_change_N": c_hi - c_lo,
@@ -309,7 +297,8 @@ def fig11(seed: int = 0, theta_deg: float = 0.0, cable: TendonSheathParams | Non
             else:  # one cable: A-B's bend may change what reaches B
                 proximal, T_B, truth = distributed(seed + 10 + k, x, math.radians(theta_deg), load, cable,
                                                    theta1=math.radians(ab))
-            F = fsr_reading(T_B, seed + 100 + k)          # the FSR at B: the same tension whatever A-B does
+            # the FSR at B: the same tension whatever A-B does
+            F = fsr_reading(T_B, seed + 100 + k, alone=cable is not None)
             single = single_compensation(F, x, mu_bd(), theta)
             flat = motor2tip_transitions(F, mu_bd(), theta)
             key = f"{name}_{ab}"
@@ -346,7 +335,7 @@ def _no_load(seed: int, x: np.ndarray, W: float, cable: TendonSheathParams | Non
             T_B, _ = sheath(seed + r, x, THETA0, mu_bd(), {"tip_force": np.full(x.size, W)})
         else:  # the same cable twice: the runs differ in the FSR's noise
             _, T_B, _ = distributed(seed + r, x, 0.0, {"tip_force": np.full(x.size, W)}, cable)
-        F = fsr_reading(T_B, seed + 100 + r)
+        F = fsr_reading(T_B, seed + 100 + r, alone=cable is not None)
         runs.append((F, single_compensation(F, x, mu_bd(), THETA0), T_B))
     poses = np.zeros((x.size, 6))
     poses[:, 2] = x

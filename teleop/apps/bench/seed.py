@@ -55,8 +55,8 @@ def register(subparsers) -> None:
     p.add_argument("--plant", default="distributed", choices=PLANTS,
                    help="the cables: distributed (the distributed tendon-sheath cable, default) or matched")
     p.add_argument("--cable-params", type=input_file, default=None, metavar="TOML",
-                   help="with --plant distributed: the cable's [tendon_sheath] table (docs/formats.md); the blind "
-                        "study's rig takes the defaults")
+                   help="with --plant distributed: the cable's [tendon_sheath] table (docs/formats.md), for every "
+                        "figure including the blind study's rig")
     p.add_argument("--seed", type=int, default=1, help="seed of the noise, the palpation and the study (default 1)")
     p.add_argument("--only", default=None, metavar="LIST",
                    help=f"comma-separated figures to run (default all: {','.join(FIGURES)})")
@@ -175,8 +175,8 @@ def fig16(result, seed_pair) -> dict:
     return _palpation_summary(result, *seed_pair)
 
 
-def table3(seed: int, plant: str, participants: int) -> dict:
-    with SimRig(RigOptions(plant=plant)) as rig:
+def table3(seed: int, plant: str, participants: int, cable_params=None) -> dict:
+    with SimRig(RigOptions(plant=plant, cable_params=cable_params)) as rig:
         study = run_simulated_study(rig, participants, seed, ParticipantParams(), rating="anchored")
     ms = study.mean_std()
     rows, checks = {}, {}
@@ -215,7 +215,7 @@ def run_figures(figures, seed: int, plant: str, cable_params=None, quick: bool =
         elif name == "fig16xy":
             out[name] = fig16(palpation_run("xy", seed, plant, cable_params, quick), SEED_XY)
         elif name == "table3":
-            out[name] = table3(seed, plant, participants)
+            out[name] = table3(seed, plant, participants, cable_params)
         out[name]["command"] = command(name, seed, plant, cable_params)
         out[name]["wall_s"] = time.perf_counter() - t0
         progress(f"{name}: done in {out[name]['wall_s']:.0f} s")
@@ -232,7 +232,8 @@ def command(name: str, seed: int, plant: str, cable_params=None) -> str:
             "  (fig13: the no-load z run, palpation.run_test(no_load=True))" if name == "fig13" else "")
     if name in ("fig16z", "fig16xy"):
         return f"teleop palpate --test {name[5:]} --plant {plant} --seed {seed}{extra}"
-    return f"teleop bench seed --only table3 --plant {plant} --seed {seed}  (blind study, rating rule anchored)"
+    return (f"teleop bench seed --only table3 --plant {plant} --seed {seed}{extra}  (blind study, rating rule "
+            f"anchored)")
 
 
 # ---- output ----------------------------------------------------------------------------------------------

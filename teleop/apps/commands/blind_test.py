@@ -16,7 +16,9 @@ import numpy as np
 
 from scenes.pads import blind_area_centres
 from scenes.sim_robot import PLANTS
-from teleop.apps.argtypes import add_geometry_option, geometry_of, jnd_fraction, positive_float, positive_int
+from scenes.tendon_sheath import TendonSheathParams
+from teleop.apps.argtypes import (add_geometry_option, geometry_of, input_file, jnd_fraction, positive_float,
+                                  positive_int)
 from teleop.apps.commands.session import add_live_arguments
 from teleop.apps.protocols.blind.human import Coordinator, run_human_study
 from teleop.apps.protocols.blind.participants import RATING_RULES, ParticipantParams
@@ -55,6 +57,8 @@ def add_rig_options(p) -> None:
     p.add_argument("--plant", default="matched", choices=PLANTS,
                    help="the simulated robot's plant: matched (default), rich (effects no estimator models, drawn "
                         "per robot) or distributed (the distributed tendon-sheath cable, scenes/tendon_sheath.py)")
+    p.add_argument("--cable-params", type=input_file, default=None, metavar="TOML",
+                   help="with --plant distributed: the cable's [tendon_sheath] table (docs/formats.md)")
     p.add_argument("--press-force", type=float, default=None, metavar="N",
                    help="participants press until the stylus force reaches about N newtons, capped by the "
                         "depth (default 0.2 N; 0: push by depth only)")
@@ -119,6 +123,12 @@ def rig_options(args):
         kw["robot_substeps"] = args.robot_substeps
     kw["sensor"] = getattr(args, "sensor", "fsr")
     kw["plant"] = getattr(args, "plant", "matched")
+    cable_params = getattr(args, "cable_params", None)
+    if cable_params is not None:
+        if kw["plant"] != "distributed":
+            raise InputError("--cable-params: the cable's parameters belong to --plant distributed")
+        TendonSheathParams.from_toml(cable_params)  # a bad file or key is one line now, before any station reads it
+        kw["cable_params"] = cable_params
     if getattr(args, "geometry", None):
         geometry_of(args)  # a bad file or key is one line now, before any station reads it
         kw["geometry"] = args.geometry

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from scenes.tendon_sheath import TendonSheathParams
 from teleop.apps.bench import cable
 from teleop.apps.cli import main
 
@@ -59,3 +60,16 @@ def test_cli_json_and_plot(tmp_path, capsys):
     assert png.stat().st_size > 20_000
     assert main(["bench", "cable", "--experiment", "fig12"]) == 2
     assert "--experiment" in capsys.readouterr().err
+
+
+def test_distributed_fsr_alone_passes_a_swing_smaller_than_the_calibration_gap():
+    # the distributed cable's FSR is the sensor alone (scenes.fsr_sensor): at 0 deg the tension at B swings
+    # less than the calibration's branch gap (0.72 N at 2 N), which the matched bench's FsrBranchLag holds
+    res = cable.fig9(seed=0, cable=TendonSheathParams())
+    c0 = res["cases"]["0"]
+    assert c0["tension_B_change_N"] < cable.FsrBranchLag(cable.default_fsr_calibration(), 1).gap(2.0)
+    assert c0["distal_change_N"] > 0.5 * c0["tension_B_change_N"]
+    # rising, the reading is on the loading branch, which the converter inverts: the FSR reads the tension at B
+    assert c0["distal_N"][0] == pytest.approx(c0["tension_B_N"][0], rel=0.03)
+    # falling, the converter's unloading branch takes off the calibration's gap, more than the sensor's own
+    assert c0["distal_N"][1] < c0["tension_B_N"][1]

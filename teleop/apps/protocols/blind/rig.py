@@ -112,6 +112,8 @@ class RigOptions:
         geometry: the robot's geometry TOML (teleop.core.geometry.load_geometry, `--geometry`; None: the seed
             robot), read by each station for its simulated robot and estimator. Listed in `rig_dict` only when
             given.
+        cable_params: with plant distributed, the cable's TOML ([tendon_sheath] table, docs/formats.md; None: its
+            defaults), read by each station's simulated robot. Listed in `rig_dict` only when given.
     """
 
     compensation: bool = True
@@ -130,10 +132,14 @@ class RigOptions:
     sensor: str = "fsr"
     plant: str = "matched"
     geometry: str | None = None
+    cable_params: str | None = None
 
     def __post_init__(self):
         if self.plant not in PLANTS:
             raise InputError(f"blind-test rig: plant must be one of {', '.join(PLANTS)}, got {self.plant!r}")
+        if self.cable_params is not None and self.plant != "distributed":
+            raise InputError(f"blind-test rig: cable_params ({self.cable_params}) belong to plant distributed, "
+                             f"got plant {self.plant!r}")
         for name in ("force_scale", "motion_scale", "gap", "release_speed"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -159,6 +165,8 @@ def rig_dict(options: RigOptions) -> dict:
         del d["plant"]
     if d["geometry"] is None:
         del d["geometry"]
+    if d["cable_params"] is None:
+        del d["cable_params"]
     return d
 
 
@@ -194,7 +202,7 @@ class Station:
         world = WorldParams(surface_z=home_tip_z + o.gap)
         robot_params = with_named_plant(SimRobotParams(world=world, substeps=int(o.robot_substeps), sensor=o.sensor,
                                                        geometry=geom),
-                                        o.plant, robot_seed)
+                                        o.plant, robot_seed, o.cable_params)
         if o.tip_stiffness is not None:
             robot_params = dataclasses.replace(robot_params, tip_stiffness=float(o.tip_stiffness))
         self.robot = SimRobot(pad, robot_params, seed=robot_seed)
