@@ -31,6 +31,7 @@ from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes import pads as pads_mod
 from scenes.pads import Pad, z_test_pad
 from scenes.pose_follow import PoseFollower
+from scenes.pulley_transmission import PulleyTransmission, PulleyTransmissionParams
 from scenes.rich_plant import PLANTS as RICH_PLANTS
 from scenes.rich_plant import RichPlant, RichPlantParams, plant_params, with_plant
 from scenes.sim_sensors import FBG_FROM_END_M, FbgArray, fbg_cables
@@ -93,6 +94,8 @@ class SimRobotParams:
             sheath's friction travels with the realized lengths); None: the matched plant.
         cable: the distributed tendon-sheath cable (scenes.tendon_sheath) in every cable in place of the lumped
             sheath (`DistributedCables`; URL `plant=distributed`); None: the lumped sheath.
+        pulley: seed 002's cable-pulley chain (scenes.pulley_transmission) in every cable in place of the lumped
+            sheath (URL `plant=pulley`); None: the lumped sheath.
         capstan_k: stick stiffness of the capstan transition at reversals [N/m] (default the seed robot's,
             Sheath.stick_k, where its source is given; the catalogue's stiffer default,
             sheath.STIFF_STICK_K, would reduce the seed's turn transitions to blips).
@@ -114,6 +117,7 @@ class SimRobotParams:
     ee_damping_ratio: float = 0.7
     plant: RichPlantParams | None = None
     cable: TendonSheathParams | None = None
+    pulley: PulleyTransmissionParams | None = None
     capstan_k: float = SH.Sheath.stick_k
     noise_counts: float = 1.0
     backlash: float = 0.0
@@ -129,6 +133,8 @@ class SimRobotParams:
         if self.tip_stiffness is not None and self.tip_stiffness <= 0:
             raise InputError("sim robot: tip_stiffness must be > 0 (or None for a rigid tip)")
         fbg_cables(self.sensor, len(g.B), self.fbg_cable)  # a known kind and cable (one-line InputError)
+        if self.pulley is not None and (self.cable is not None or self.plant is not None):
+            raise InputError("sim robot: the pulley chain (pulley) is a plant of its own; drop cable and plant")
         if self.cable is not None and self.plant is not None:
             raise InputError("sim robot: the distributed cable (cable) and the rich plant (plant) are two plants; "
                              "choose one")
@@ -322,6 +328,8 @@ class SimRobot(ContextDevice):
         self._rich = RichPlant(p.plant, n) if p.plant is not None else None
         self._cables = None if p.cable is None else DistributedCables(p.cable, n, p.pretension, p.dt, self.L_home,
                                                                       float(self.geom.theta0))
+        if p.pulley is not None:  # the same interface as DistributedCables
+            self._cables = PulleyTransmission(p.pulley, n, self.L_home, float(self.geom.mu))
         self.is_open = True
 
     def close(self) -> None:
@@ -595,22 +603,26 @@ class _AddedEffects:
 
 
 #: the simulated robot's plants: matched (its physics is the estimators' model), rich (scenes.rich_plant's effects
-#: on top), distributed (scenes.tendon_sheath's cable in place of the lumped sheath)
-PLANTS = RICH_PLANTS + ("distributed",)
+#: on top), distributed (scenes.tendon_sheath's cable in place of the lumped sheath), pulley (seed 002's chain there)
+PLANTS = RICH_PLANTS + ("distributed", "pulley")
 
 
 def with_named_plant(sim: SimRobotParams, plant: str, seed: int, cable_params=None) -> SimRobotParams:
     """`sim` with the plant named `plant` (PLANTS): matched; rich (drawn from `seed`, its play the robot's);
     distributed (TendonSheathParams from the [tendon_sheath] table of the TOML file `cable_params`, or its
-    defaults; docs/formats.md)."""
+    defaults; docs/formats.md); pulley (PulleyTransmissionParams from the [pulley_transmission] table of
+    `cable_params`, or its defaults)."""
     if plant not in PLANTS:
         raise InputError(f"unknown plant '{plant}' (expected one of: {', '.join(PLANTS)})")
+    if plant == "pulley":
+        pulley = PulleyTransmissionParams.from_toml(cable_params) if cable_params else PulleyTransmissionParams()
+        return replace(with_plant(sim, None), cable=None, pulley=pulley)
     if plant != "distributed":
         if cable_params is not None:
             raise InputError("cable parameters (cable_params) belong to the distributed plant")
-        return replace(with_plant(sim, plant_params(plant, seed)), cable=None)
+        return replace(with_plant(sim, plant_params(plant, seed)), cable=None, pulley=None)
     cable = TendonSheathParams() if cable_params is None else TendonSheathParams.from_toml(cable_params)
-    return replace(with_plant(sim, None), cable=cable)
+    return replace(with_plant(sim, None), cable=cable, pulley=None)
 
 
 def from_url(parsed, options: dict) -> SimRobot:
@@ -619,7 +631,8 @@ def from_url(parsed, options: dict) -> SimRobot:
     cable; `backlash_mm`: each cable's play width [mm] (SimRobotParams.backlash); `plant=rich`: effects the
     estimators do not model (scenes.rich_plant, drawn from `seed`; `matched`, the default: none);
     `plant=distributed`: the distributed tendon-sheath cable (DistributedCables), `cable_params=F.toml` its
-    parameters (docs/formats.md)."""
+    parameters (docs/formats.md); `plant=pulley`: seed 002's pulley chain (scenes.pulley_transmission),
+    `cable_params=F.toml` its [pulley_transmission] table."""
     known = {"pad", "seed", "substeps", "letter", "model", "backlash_mm", "sensor", "cable", "plant", "cable_params"}
     for k in options:
         if k not in known:

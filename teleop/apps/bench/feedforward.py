@@ -44,7 +44,18 @@ stroke, second cycle) and the motor force pulling and releasing. Compensators, b
 Test: the wanted tip a 2 mm sine (period 2 s, 6 s) at each tip load of TEST_LOADS_N; tip error RMS after 1 s
 [mm] with the motor on the wanted tip (none), plain and pulley. The plant is deterministic (--seed unused
 there). JSON: {"mode": "single_cable", "plant", "calibration": {"load_N", "lost_motion_mm", "F_pull_N",
-"F_rel_N", "mu", "EA_N"}, "loads_N", "tip_error_rms_mm": {"none", "plain", "pulley"} (per load)}.
+"F_rel_N", "mu", "EA_N", "chain_pulleys"}, "loads_N", "tip_error_rms_mm": {"none", "plain", "pulley"} (per load)}.
+
+`--plant pulley` (`--single-cable` implied): the same offline comparison on one cable over seed 002's pulley
+chain with bending rigidity (scenes.pulley_transmission, default parameters: the guide on the scaffold bend
+theta0 with the sheath's mu, then the instrument's pulleys; its tip travel is the motor's minus the cable's
+stretch, lost motion at reversals), calibrated at PULLEY_CAL_LOAD_N and tested at PULLEY_TEST_LOADS_N. The
+compensator is handed where the pulleys sit (wraps, radii, spans: the instrument's drawing), not the plant's
+friction, bending rigidity or EA: its chain has no bending rigidity, one mu from the run's force ratio and EA
+from its lost motion, so its play width grows with the load as the capstan's does while the plant's has the
+bending losses' load-independent part. (In the closed-loop sessions the tip error is the robot's play
+operator's, the cable's stretch is not fed back to the pose: the pulley plant is compared on one cable.)
+"calibration" adds "plant_EI_N_m2", the plant's bending rigidity, for the record (the fit does not read it).
 
 With --recordings the same error is read from recorded `teleop session --record` files instead (simulated
 robot: its `x_tip` beside the loop's `/teleop/setpoint`, one value per robot frame after --settle-s; paced
@@ -62,11 +73,13 @@ import numpy as np
 
 from devices.simulated import OperatorParams, Script, SimulatedStylus
 from devices.wrappers import BacklashCompensatedRobot, LoggedDevice
+from scenes.pulley_transmission import PulleyTransmission, PulleyTransmissionParams
 from scenes.sim_robot import SimRobot, SimRobotParams
 from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams
 from teleop.apps.argtypes import add_geometry_option, geometry_of, input_file
 from teleop.core.control.feedforward import backlash_inverse, model_backlash_width, pulley_precompensate
 from teleop.core.errors import InputError
+from teleop.core.kernels import sheath as SH
 from teleop.core.kinematics import rotation_zyx
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 from teleop.io.model_io import load_model
@@ -100,9 +113,11 @@ def register(subparsers) -> None:
                    help="stylus amplitude [mm] (x motion scale 0.25 at the robot; default 12)")
     p.add_argument("--period-s", type=float, default=2.0, help="stylus period [s] (default 2)")
     p.add_argument("--seed", type=int, default=0, help="seeds the operator's tremor and the ADC noise (default 0)")
-    p.add_argument("--plant", default="matched", choices=("matched", "distributed"),
+    p.add_argument("--plant", default="matched", choices=("matched", "distributed", "pulley"),
                    help="matched (default) or distributed: the robot's tensions from the distributed tendon-sheath "
-                        "cable (scenes/tendon_sheath.py); the play stays the robot's play operator")
+                        "cable (scenes/tendon_sheath.py); the play stays the robot's play operator; pulley: one "
+                        "cable over seed 002's pulley chain (scenes/pulley_transmission.py), offline as "
+                        "--single-cable")
     p.add_argument("--single-cable", action="store_true",
                    help="with --plant distributed: one distributed tendon-sheath cable offline, no compensation vs "
                         "the plain backlash inverse vs seed 002's pulley-model compensation, both calibrated on one "
@@ -315,7 +330,7 @@ def _check(args) -> None:
 
 def run(args) -> int:
     _check(args)
-    if args.single_cable:
+    if args.single_cable or args.plant == "pulley":  # the pulley plant: one cable (module docstring)
         return run_single_cable(args)
     geometry = geometry_of(args)  # a bad file is one line before any session
     if args.recordings:
@@ -354,61 +369,120 @@ CAL_LOAD_N = 2.0
 TEST_LOADS_N = (1.0, 2.0, 4.0, 8.0)
 CHAIN_PULLEYS = 10
 CABLE_HZ = 1000.0
+#: --plant pulley: the instrument's loads (teleop bench pulley's 10 N grasp among them; at 1 N its bending
+#: losses slacken the cable releasing)
+PULLEY_CAL_LOAD_N = 5.0
+PULLEY_TEST_LOADS_N = (2.5, 5.0, 10.0, 20.0)
 
 
 def _cable(params: TendonSheathParams, load_N: float) -> TendonSheath:
     return TendonSheath(params, SheathLoad("force"), pretension=load_N, tick=1.0 / CABLE_HZ)
 
 
-def calibrate_single_cable(params: TendonSheathParams, load_N: float = CAL_LOAD_N) -> dict:
-    """One calibration run (module docstring): lost motion w [m], motor force pulling / releasing [N], and the
-    pulley chain fitted to them (mu [-], EA [N])."""
+def _guide_wrap() -> float:
+    """The pulley cable's guide wrap [rad] off the robot: the sheath's scaffold bend theta0 (no pose bend)."""
+    return SH.Sheath().theta0
+
+
+def cable_runner(plant: str, params):
+    """run(x, load_N) -> (tip travel (n,) [m], motor force (n,) [N]) of one fresh cable of `plant`
+    (distributed: scenes.tendon_sheath with TendonSheathParams; pulley: scenes.pulley_transmission with
+    PulleyTransmissionParams, its guide on _guide_wrap and the sheath's mu) under a constant tip load, the
+    motor at x (n,) [m] (1 kHz)."""
+    if plant == "distributed":
+        def run(x, load):
+            r = _cable(params, load).run(x, tip_input=load)
+            return r.x_tip[:, 0], r.f_motor[:, 0]
+    else:
+        def run(x, load):
+            tr = PulleyTransmission(params, 1, 0.0, SH.Sheath().mu)
+            full = np.full((len(x), 1), 1.0)
+            r = tr.travel(-np.asarray(x, dtype=float)[:, None], load * full, _guide_wrap() * full)
+            return r.x_tip[:, 0], r.t_motor[:, 0]
+    return run
+
+
+def fit_chain(run, load_N: float, thetas, radii, spans) -> dict:
+    """One calibration run (module docstring) of run(x, load) (`cable_runner`) at load_N [N]: lost motion w [m],
+    motor force pulling / releasing [N], and the capstan chain (no bending rigidity) on the known wraps
+    thetas (p,) [rad], radii (p,) [m] and spans (p + 1,) [m] fitted to them: one mu [-] from F_pull / F_rel =
+    exp(2 mu sum theta), EA [N] from w."""
     n = int(4.0 * CABLE_HZ)
-    x = 3e-3 * np.sin(2 * np.pi * np.arange(2 * n) / n)
-    r = _cable(params, load_N).run(x, tip_input=load_N)
-    xm, xt, fm = r.x_motor[:, 0], r.x_tip[:, 0], r.f_motor[:, 0]
+    xm = 3e-3 * np.sin(2 * np.pi * np.arange(2 * n) / n)
+    xt, fm = run(xm, load_N)
     w = float(np.ptp(xm[n:]) - np.ptp(xt[n:]))
     v = np.gradient(xm)
     second = np.arange(xm.size) >= n
     F_pull = float(np.median(fm[second & (v > 0.5 * v.max())]))
     F_rel = float(np.median(fm[second & (v < 0.5 * v.min())]))
-    theta = params.theta0 + params.theta1
-    mu = math.log(F_pull / F_rel) / (2.0 * theta)
-    span = params.length / (CHAIN_PULLEYS + 1)
-    unit = PulleyChain(tuple(Pulley(theta / CHAIN_PULLEYS, 1.0, mu, span) for _ in range(CHAIN_PULLEYS)), EA=1.0,
-                       d_tip=span)
+    mu = math.log(F_pull / F_rel) / (2.0 * float(np.sum(thetas)))
+    unit = PulleyChain(tuple(Pulley(t, R, mu, d) for t, R, d in zip(thetas, radii, spans[1:])), EA=1.0,
+                       d_tip=spans[0])
     lo, hi = pulley_band([load_N], unit)
     EA = float(pulley_elongation(hi, [load_N], unit)[0] - pulley_elongation(lo, [load_N], unit)[0]) / w
     return {"load_N": load_N, "w": w, "F_pull_N": F_pull, "F_rel_N": F_rel, "mu": mu, "EA_N": EA,
-            "chain": PulleyChain(unit.pulleys, EA=EA, d_tip=span)}
+            "chain": PulleyChain(unit.pulleys, EA=EA, d_tip=spans[0])}
 
 
-def bench_single_cable(params: TendonSheathParams = TendonSheathParams()) -> tuple[dict, dict]:
-    """(JSON-ready result, one trace per compensator at the largest load for the figure)."""
-    cal = calibrate_single_cable(params)
+def calibrate_single_cable(params: TendonSheathParams, load_N: float = CAL_LOAD_N) -> dict:
+    """fit_chain on the distributed cable: CHAIN_PULLEYS equal pulleys sharing the sheath's bend over its length."""
+    theta = params.theta0 + params.theta1
+    span = params.length / (CHAIN_PULLEYS + 1)
+    return fit_chain(cable_runner("distributed", params), load_N, [theta / CHAIN_PULLEYS] * CHAIN_PULLEYS,
+                     [1.0] * CHAIN_PULLEYS, [span] * (CHAIN_PULLEYS + 1))
+
+
+def calibrate_pulley_cable(params: PulleyTransmissionParams, load_N: float = PULLEY_CAL_LOAD_N) -> dict:
+    """fit_chain on the pulley cable: the compensator knows where the pulleys sit (the guide's wrap, the
+    layout's wraps, radii and spans: the instrument's drawing), not its friction, bending rigidity or EA."""
+    layout = params.chain()
+    thetas = [_guide_wrap()] + [p.theta for p in layout.pulleys]
+    radii = [params.guide_R] + [p.R for p in layout.pulleys]
+    spans = [params.tip_span] + list(layout.spans)
+    return fit_chain(cable_runner("pulley", params), load_N, thetas, radii, spans)
+
+
+def bench_single_cable(params=None, plant: str = "distributed") -> tuple[dict, dict]:
+    """(JSON-ready result, one trace per compensator at the largest load for the figure) on one cable of
+    `plant` (distributed or pulley; params its TendonSheathParams or PulleyTransmissionParams, None: defaults)."""
+    if plant == "distributed":
+        params = TendonSheathParams() if params is None else params
+        cal, loads = calibrate_single_cable(params), TEST_LOADS_N
+    else:
+        params = PulleyTransmissionParams() if params is None else params
+        cal, loads = calibrate_pulley_cable(params), PULLEY_TEST_LOADS_N
+    run = cable_runner(plant, params)
     chain = cal["chain"]
     t = np.arange(int(6.0 * CABLE_HZ)) / CABLE_HZ
     y_d = 2e-3 * np.sin(2 * np.pi * t / 2.0)
     after = t >= 1.0
     rms = {"none": [], "plain": [], "pulley": []}
     traces = {}
-    for load in TEST_LOADS_N:
+    for load in loads:
         # the plant's travel starts at the uniform stretch of its pretension: the model's absolute elongation
         # is taken from there
         cmds = {"none": y_d, "plain": backlash_inverse(y_d, cal["w"]),
                 "pulley": pulley_precompensate(y_d, load, chain) - load * float(np.sum(chain.spans)) / chain.EA}
         for name, x in cmds.items():
-            e = _cable(params, load).run(x, tip_input=load).x_tip[:, 0] - y_d
+            e = run(x, load)[0] - y_d
             rms[name].append(float(np.sqrt(np.mean(e[after] ** 2))) * 1e3)
-            if load == TEST_LOADS_N[-1]:
+            if load == loads[-1]:
                 traces[name] = e * 1e3
     traces["t"] = t
-    out = {"mode": "single_cable", "plant": "distributed",
-           "calibration": {"load_N": cal["load_N"], "lost_motion_mm": cal["w"] * 1e3, "F_pull_N": cal["F_pull_N"],
-                           "F_rel_N": cal["F_rel_N"], "mu": cal["mu"], "EA_N": cal["EA_N"],
-                           "chain_pulleys": CHAIN_PULLEYS},
-           "loads_N": list(TEST_LOADS_N), "tip_error_rms_mm": rms}
+    calib = {"load_N": cal["load_N"], "lost_motion_mm": cal["w"] * 1e3, "F_pull_N": cal["F_pull_N"],
+             "F_rel_N": cal["F_rel_N"], "mu": cal["mu"], "EA_N": cal["EA_N"]}
+    if plant == "distributed":
+        calib["chain_pulleys"] = CHAIN_PULLEYS
+    else:
+        calib["chain_pulleys"] = len(chain.pulleys)
+        calib["plant_EI_N_m2"] = params.EI
+    out = {"mode": "single_cable", "plant": plant, "calibration": calib, "loads_N": list(loads),
+           "tip_error_rms_mm": rms}
     return out, traces
+
+
+PLANT_TITLES = {"distributed": "plant distributed (one tendon-sheath cable, 2 mm sine)",
+                "pulley": "plant pulley (one cable over seed 002's pulley chain with bending rigidity, 2 mm sine)"}
 
 
 def single_cable_figure(out: dict, traces: dict):
@@ -431,21 +505,24 @@ def single_cable_figure(out: dict, traces: dict):
     a2.set_ylabel("tip error [mm]")
     a2.set_title(f"tip error at {out['loads_N'][-1]:g} N")
     legend_outside(a2, "below")
-    fig.suptitle("teleop bench feedforward --single-cable: plant distributed (one tendon-sheath cable, 2 mm sine)")
+    fig.suptitle(f"teleop bench feedforward --single-cable: {PLANT_TITLES[out['plant']]}")
     fig.tight_layout()
     return fig
 
 
 def run_single_cable(args) -> int:
-    if args.plant != "distributed":
-        raise InputError("--single-cable: runs on the distributed tendon-sheath cable; expected --plant distributed")
+    if args.plant not in ("distributed", "pulley"):
+        raise InputError("--single-cable: runs on one distributed tendon-sheath or pulley cable; expected --plant "
+                         "distributed or --plant pulley")
     if args.recordings or args.compensation:
         raise InputError("--single-cable: calibrates its own compensators; drop --recordings and --compensation")
     for flag, path in (("--json", args.json), ("--plot", args.plot)):
         if path:
             check_output(path, flag)
-    out, traces = bench_single_cable()
-    print(f"one distributed tendon-sheath cable, calibrated at {out['calibration']['load_N']:g} N: lost motion "
+    out, traces = bench_single_cable(plant=args.plant)
+    what = {"distributed": "one distributed tendon-sheath cable",
+            "pulley": "one cable over the pulley chain (bending rigidity, the compensator's chain without)"}
+    print(f"{what[args.plant]}, calibrated at {out['calibration']['load_N']:g} N: lost motion "
           f"{out['calibration']['lost_motion_mm']:.4f} mm, pulley chain mu {out['calibration']['mu']:.4f}, "
           f"EA {out['calibration']['EA_N']:.0f} N")
     print("tip load [N]   tip error RMS [mm]: none    plain    pulley")

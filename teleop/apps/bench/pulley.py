@@ -28,6 +28,7 @@ import math
 
 import numpy as np
 
+from scenes.pulley_transmission import INSTRUMENT_LAYOUT, PulleyTransmissionParams
 from teleop.apps.argtypes import output_figure, output_file, seed_int
 from teleop.core.physics.pulley import PulleyChain, chain_from_layout, pulley_band, pulley_elongation, \
     pulley_motor_force, segment_tensions
@@ -37,24 +38,19 @@ from teleop.io.outputs import save_figure, write_json
 NOT_IN_PAPER = "not in the project's copy of seed 002 (abstract, introduction, nomenclature only)"
 
 # the instrument: value, unit, source
+_D = PulleyTransmissionParams()  # the instrument's one home (scenes.pulley_transmission), the robot's pulley plant's
 PARAMS = {
-    "mu": (0.10, "1", "project assumption: steel cable on steel pulleys, shaft friction folded in "
+    "mu": (_D.mu, "1", "project assumption: steel cable on steel pulleys, shaft friction folded in "
                       "(seed 002 nomenclature mu_c, mu_s; values " + NOT_IN_PAPER + ")"),
-    "EI": (1.0e-6, "N m^2", "project estimate: 7x19 steel cable 0.45 mm, wires bending independently "
+    "EI": (_D.EI, "N m^2", "project estimate: 7x19 steel cable 0.45 mm, wires bending independently "
                             "(133 x E pi d_w^4 / 64, d_w = 0.03 mm, E = 200 GPa); seed 002 names EI, value "
                             + NOT_IN_PAPER),
-    "EA": (9.5e3, "N", "project estimate: same cable, metallic area 0.095 mm^2 x 100 GPa effective modulus "
+    "EA": (_D.EA, "N", "project estimate: same cable, metallic area 0.095 mm^2 x 100 GPa effective modulus "
                        "(seed 002 nomenclature E, A)"),
     "T_tip": (10.0, "N", "project assumption: grasping-load cable tension (seed 002 T_out)"),
 }
-# pulley places from the tip anchor to the motor exit: x [m] along the shaft, y [m], signed radius [m]
-# (teleop.core.physics.pulley.tangent); project layout of a wrist (two 1.5 mm idlers), a 400 mm shaft and a
-# 4 mm idler turning the cable to the motor capstan
-LAYOUT = ((0.0, 0.0, 0.0),
-          (-0.006, 0.0030, 0.0015),
-          (-0.010, 0.0010, -0.0015),
-          (-0.400, 0.0065, -0.0040),
-          (-0.4065, 0.040, 0.0))
+# pulley places from the tip anchor to the motor exit (scenes.pulley_transmission.INSTRUMENT_LAYOUT)
+LAYOUT = INSTRUMENT_LAYOUT
 LAYOUT_SOURCE = "project layout (seed 002 locates its pulleys in a figure " + NOT_IN_PAPER + ")"
 STROKE_M = 0.005
 SPREAD_N = 200

@@ -94,14 +94,22 @@ def pulley_out(T_in, K, B, pulling):
     return np.where(pulling, K * T_in + B, np.maximum((T_in - B) / K, 0.0))
 
 
-def segment_tensions(T_tip, chain: PulleyChain, pulling) -> np.ndarray:
-    """(p + 1, n) tensions [N] of the segments, tip segment first, for tip tension T_tip (n,) and the
-    direction `pulling` (bool, scalar or (n,)): the last row is the motor force."""
+def chain_tensions(T_tip, K, B, pulling) -> np.ndarray:
+    """(p + 1, n) segment tensions [N], tip segment first, over pulleys of tension ratios K and bending losses
+    B [N] (p rows each, tip side first; a row a scalar or (n,): a pulley whose wrap changes sample by sample),
+    for tip tension T_tip (n,) and the direction `pulling` (bool, scalar or (n,)): the last row is the motor
+    force."""
     T = np.atleast_1d(np.asarray(T_tip, dtype=float))
     rows = [T]
-    for K, B in zip(chain.K, chain.B):
-        rows.append(pulley_out(rows[-1], K, B, pulling))
+    for k, b in zip(K, B):
+        rows.append(pulley_out(rows[-1], k, b, pulling))
     return np.vstack(rows)
+
+
+def segment_tensions(T_tip, chain: PulleyChain, pulling) -> np.ndarray:
+    """(p + 1, n) tensions [N] of the segments, tip segment first, for tip tension T_tip (n,) and the
+    direction `pulling` (bool, scalar or (n,)): the last row is the motor force (`chain_tensions`)."""
+    return chain_tensions(T_tip, chain.K, chain.B, pulling)
 
 
 def pulley_band(T_tip, chain: PulleyChain) -> tuple[np.ndarray, np.ndarray]:
@@ -126,11 +134,28 @@ def pulley_elongation(F_motor, T_tip, chain: PulleyChain) -> np.ndarray:
     T = np.atleast_1d(np.asarray(T_tip, dtype=float))
     if not math.isfinite(chain.EA):
         return np.zeros(T.shape)
-    rel, pull = segment_tensions(T, chain, False), segment_tensions(T, chain, True)
+    return band_stretch(F_motor, segment_tensions(T, chain, False), segment_tensions(T, chain, True),
+                        chain.spans, chain.EA)
+
+
+def band_segments(F_motor, rel: np.ndarray, pull: np.ndarray) -> np.ndarray:
+    """(p + 1, n) segment tensions [N] while the motor force F_motor (n,) [N] sits in its band: the releasing
+    and pulling profiles rel, pull ((p + 1, n), `chain_tensions`) interpolated by where F_motor sits between
+    their last rows (the middle for an empty band)."""
     width = pull[-1] - rel[-1]
     s = np.where(width > 0, (np.asarray(F_motor, dtype=float) - rel[-1]) / np.where(width > 0, width, 1.0), 0.5)
-    seg = rel + np.clip(s, 0.0, 1.0) * (pull - rel)
-    return chain.spans @ seg / chain.EA
+    return rel + np.clip(s, 0.0, 1.0) * (pull - rel)
+
+
+def segment_stretch(seg: np.ndarray, spans, EA: float) -> np.ndarray:
+    """Cable stretch [m] sum_j T_j d_j / EA of segment tensions seg ((p + 1, ...) [N], tip segment first), spans
+    d_j (p + 1,) [m], EA [N]; the shape of seg without its first axis."""
+    return np.tensordot(np.asarray(spans, dtype=float), seg, axes=1) / EA
+
+
+def band_stretch(F_motor, rel: np.ndarray, pull: np.ndarray, spans, EA: float) -> np.ndarray:
+    """(n,) cable stretch [m] (`segment_stretch`) of the segments of `band_segments`."""
+    return segment_stretch(band_segments(F_motor, rel, pull), spans, EA)
 
 
 def tangent(c1, rho1: float, c2, rho2: float) -> tuple[np.ndarray, np.ndarray]:
