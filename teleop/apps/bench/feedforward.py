@@ -46,6 +46,9 @@ Test: the wanted tip a 2 mm sine (period 2 s, 6 s) at each tip load of TEST_LOAD
 there). JSON: {"mode": "single_cable", "plant", "calibration": {"load_N", "lost_motion_mm", "F_pull_N",
 "F_rel_N", "mu", "EA_N", "chain_pulleys"}, "loads_N", "tip_error_rms_mm": {"none", "plain", "pulley"} (per load)}.
 
+`--cable-params TOML` (with --single-cable or --plant pulley): the cable's [tendon_sheath] or [pulley_transmission]
+table (docs/formats.md) instead of the defaults.
+
 `--plant pulley` (`--single-cable` implied): the same offline comparison on one cable over seed 002's pulley
 chain with bending rigidity (scenes.pulley_transmission, default parameters: the guide on the scaffold bend
 theta0 with the sheath's mu, then the instrument's pulleys; its tip travel is the motor's minus the cable's
@@ -125,6 +128,9 @@ def register(subparsers) -> None:
     p.add_argument("--recordings", nargs="+", metavar="MCAP", type=input_file,
                    help="measure recorded sessions of the simulated robot instead (e.g. without, then with "
                         "--compensation); the ratio is first / second")
+    p.add_argument("--cable-params", type=input_file, default=None, metavar="TOML",
+                   help="with --single-cable or --plant pulley: the cable's parameters, a [tendon_sheath] or "
+                        "[pulley_transmission] table (docs/formats.md; default the built-in values)")
     add_geometry_option(p)
     p.add_argument("--json", metavar="F", help="write the result JSON here")
     p.add_argument("--plot", metavar="F", help="write the tip error over time (PNG)")
@@ -332,6 +338,8 @@ def run(args) -> int:
     _check(args)
     if args.single_cable or args.plant == "pulley":  # the pulley plant: one cable (module docstring)
         return run_single_cable(args)
+    if args.cable_params is not None:
+        raise InputError("--cable-params: the cable's parameters belong to --single-cable or --plant pulley")
     geometry = geometry_of(args)  # a bad file is one line before any session
     if args.recordings:
         out = bench_recordings(args.recordings, args.settle_s)
@@ -519,7 +527,11 @@ def run_single_cable(args) -> int:
     for flag, path in (("--json", args.json), ("--plot", args.plot)):
         if path:
             check_output(path, flag)
-    out, traces = bench_single_cable(plant=args.plant)
+    params = None
+    if args.cable_params is not None:
+        params = (TendonSheathParams if args.plant == "distributed" else PulleyTransmissionParams).from_toml(
+            args.cable_params)
+    out, traces = bench_single_cable(params, plant=args.plant)
     what = {"distributed": "one distributed tendon-sheath cable",
             "pulley": "one cable over the pulley chain (bending rigidity, the compensator's chain without)"}
     print(f"{what[args.plant]}, calibrated at {out['calibration']['load_N']:g} N: lost motion "

@@ -38,3 +38,20 @@ def test_command_writes_json_and_figure(tmp_path):
     assert main(["bench", "feedforward", "--plant", "pulley", "--json", str(js), "--plot", str(png)]) == 0
     out = json.loads(js.read_text())
     assert out["mode"] == "single_cable" and out["plant"] == "pulley" and png.stat().st_size > 0
+
+
+def test_cable_params_take_the_pulley_table_and_bad_input_is_one_line(tmp_path, capsys):
+    toml, js = tmp_path / "p.toml", tmp_path / "f.json"
+    toml.write_text("[pulley_transmission]\nEI_N_m2 = 0.0\nmu = 0.05\n")
+    assert main(["bench", "feedforward", "--plant", "pulley", "--cable-params", str(toml), "--json", str(js)]) == 0
+    out = json.loads(js.read_text())
+    assert out["calibration"]["plant_EI_N_m2"] == 0.0
+    default, _ = bench_single_cable(plant="pulley")
+    assert out["calibration"]["lost_motion_mm"] < default["calibration"]["lost_motion_mm"]
+    capsys.readouterr()
+    toml.write_text("[pulley_transmission]\nEI = 1e-6\n")
+    js2 = tmp_path / "g.json"
+    for argv in (["--plant", "pulley", "--cable-params", str(toml)], ["--cable-params", str(toml)]):
+        assert main(["bench", "feedforward", *argv, "--json", str(js2)]) == 2
+        assert len(capsys.readouterr().err.strip().splitlines()) == 1
+        assert not js2.exists()
