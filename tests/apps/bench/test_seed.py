@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from scenes.tendon_sheath import TendonSheathParams
+from scenes.tendon_sheath import TendonSheathParams, tension_at_b
 from teleop.apps.bench import cable, seed
 from teleop.apps.cli import main
 from teleop.apps.protocols.palpation import no_load_errors
@@ -49,7 +49,7 @@ def test_tension_at_b_meets_the_capstan_law_over_the_whole_bend():
         assert c["tension_B_change_N"] == pytest.approx(2 * c["weight_N"] * math.sinh(mt), rel=0.02)
     # element j alone: 5/6 of theta0 at N = 20, a swing ~14 % short
     T = np.array([[1.0] * 16 + [0.5] * 4])
-    assert cable.tension_at_b(T, p)[0] == pytest.approx(0.5 * 2.0 ** (1 - 22.5 / (22.5 + 140 / 3)), rel=1e-9)
+    assert tension_at_b(T, p)[0] == pytest.approx(0.5 * 2.0 ** (1 - 22.5 / (22.5 + 140 / 3)), rel=1e-9)
 
 
 def test_no_load_errors_count_turns_and_find_the_jump_after_one():
@@ -66,3 +66,22 @@ def test_no_load_errors_count_turns_and_find_the_jump_after_one():
     assert out["b"]["max_abs_near_turns_N"] == 1.0 and out["b"]["peak_to_peak_N"] == 1.0
     assert out["b"]["rmse_off_turns_N"] == pytest.approx(0.1 / math.sqrt(x.size - 100), rel=1e-3)
     assert out["a"]["rmse_N"] == 0.0
+
+
+def test_table3_builds_the_blind_rig_with_the_cable_params(monkeypatch, tmp_path):
+    toml = tmp_path / "cable.toml"
+    toml.write_text("[tendon_sheath]\nmu_c = 0.05\n")
+    seen = {}
+
+    class Built(Exception):
+        pass
+
+    def rig(options):
+        seen["options"] = options
+        raise Built
+
+    monkeypatch.setattr(seed, "SimRig", rig)
+    with pytest.raises(Built):
+        seed.run_figures(("table3",), 1, "distributed", cable_params=str(toml))
+    assert seen["options"].plant == "distributed" and seen["options"].cable_params == str(toml)
+    assert "--cable-params" in seed.command("table3", 1, "distributed", str(toml))
