@@ -15,7 +15,7 @@ With `backlash` (URL `backlash_mm=W`) each cable's motor-to-cable transmission h
 lengths are the play operator (teleop.core.physics backlash) of the commanded ones, cable by cable, and the pose
 is their least-squares forward kinematics (the elastic equilibrium of six equally stiff taut cables).
 With `cable` (URL `plant=distributed`) the distributed tendon-sheath cable (scenes.tendon_sheath) takes the
-lumped sheath's place in every cable, and the FSRs and FBGs read its element tensions (DistributedCables).
+lumped sheath's place in every cable, and the FSRs and FBGs read its tensions where each sits (DistributedCables).
 The batch path `run(lengths)` does the same with the array forms of those models (fast); `read()` uses
 their per-sample Step forms; both give the same counts for the same seed (tested).
 """
@@ -34,8 +34,9 @@ from scenes.pose_follow import PoseFollower
 from scenes.pulley_transmission import PulleyTransmission, PulleyTransmissionParams
 from scenes.rich_plant import PLANTS as RICH_PLANTS
 from scenes.rich_plant import RichPlant, RichPlantParams, plant_params, with_plant
+from scenes.sim_robot_kernels import reading_cables
 from scenes.sim_sensors import FBG_FROM_END_M, FbgArray, fbg_cables
-from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams
+from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams, b_node
 from scenes.tendon_sheath_kernels import O_MOTOR, O_ROWS
 from scenes.world import PadWorld, WorldParams
 from teleop.core.errors import InputError
@@ -330,6 +331,9 @@ class SimRobot(ContextDevice):
                                                                       float(self.geom.theta0))
         if p.pulley is not None:  # the same interface as DistributedCables
             self._cables = PulleyTransmission(p.pulley, n, self.L_home, float(self.geom.mu))
+        # the distributed cable with nothing between it and its FSR: one kernel call a reading (reading_cables)
+        self._fused = self._cables.kernel_args() if isinstance(self._cables, DistributedCables) and \
+            self._added is None else None
         self.is_open = True
 
     def close(self) -> None:
@@ -401,16 +405,28 @@ class SimRobot(ContextDevice):
         noise, k = self._noise_row()  # this reading's ADC noise [counts]: noise[k]
         # nothing acts between the lumped sheath and its FSR
         direct = self._added is None and self._rich is None and self._cables is None
-        # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable chain
-        # and, when direct, the FSRs (lag, conductance, ADC: FsrBranchLag.counts)
-        status = KS.reading_counts(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
-                                   self._cap, f, t_tip, t_fsr, steps, direct, *self._lag_args, noise, k, counts)
+        fused = self._fused
+        if fused is not None:  # the distributed cable and its FSRs in the same call (kernel reading_cables)
+            out = np.empty((fused[-1], n))  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
+            status = reading_cables(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
+                                    self._cap, f, t_tip, t_fsr, steps, self.L_cmd if self._play is None else
+                                    self._L_real, *fused[:4], out, TAP_FSR, *self._lag_args, noise, k, counts)
+        else:
+            # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable
+            # chain and, when direct, the FSRs (lag, conductance, ADC: FsrBranchLag.counts)
+            status = KS.reading_counts(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
+                                       self._cap, f, t_tip, t_fsr, steps, direct, *self._lag_args, noise, k, counts)
         if status != KT.OK:
             # not the one-dimensional null space, or infeasible: teleop.core.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
             SH.motor_forces(self._cap, x, t_tip, self._theta, self._kc, t_fsr)
         t_fbg, extras = t_tip, {}
-        if self._cables is not None:  # the distributed cable in place of the lumped sheath
+        counted = status == KT.OK and (direct or fused is not None)  # the FSRs' counts came with the kernel call
+        if fused is not None and status == KT.OK:  # the cable's tick was in the call: its output rows
+            self._cables.sheath.t += p.dt
+            t_fsr, t_fbg = out[TAP_FSR], out[TAP_FBG]
+            extras["t_motor"] = out[O_MOTOR]
+        elif self._cables is not None:  # the distributed cable in place of the lumped sheath
             t_fsr, t_fbg, t_motor = self._cables.step(self.L_cmd if self._play is None else self._L_real, t_tip,
                                                       self._theta)
             extras["t_motor"] = t_motor
@@ -418,7 +434,7 @@ class SimRobot(ContextDevice):
             t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + p.dt])[0]
-        if not direct or status != KT.OK:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
+        if not counted:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
             fsr_counts(t_fsr, *self._lag_args, noise[k], counts)
         fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + p.dt)  # distal FBGs (sim_sensors)
         self.t += p.dt
@@ -510,7 +526,7 @@ class SimRobot(ContextDevice):
                         counts=counts, theta=theta, fbg_pm=fbg)
 
 
-TAP_FSR, TAP_FBG = O_ROWS, O_ROWS + 1  # rows of a DistributedCables tick's output: its two tapped elements
+TAP_FBG, TAP_FSR = O_ROWS, O_ROWS + 1  # rows of a DistributedCables tick's output: the FBG's element, the FSR's node
 
 
 class DistributedCables:
@@ -523,21 +539,30 @@ class DistributedCables:
     prescribed tip travel from the end effector's lengths would leave the cable's stretch, and with it the
     contact, out of the tensions: those lengths follow the commanded ones exactly.) The kinematic bend theta
     (eq 6) sits on the sheath's kinematic span, the scaffold and route bends are the cable's own.
-    Sensors read element tensions: the FSR the element at B, where the scaffold bend begins
-    (TendonSheathParams.scaffold_span[0]); the FBG the element FBG_FROM_END_M before the sheath's end.
+    Sensors read the cable's tensions: the FSR the tension at B, the node where the scaffold bend begins
+    (scenes.tendon_sheath.b_node, the tension between its two elements as tension_at_b reads it); the FBG the
+    element FBG_FROM_END_M before the sheath's end.
     `step` (one reading) and `run` (m readings) call the same compiled step.
     """
 
     def __init__(self, params: TendonSheathParams, n: int, pretension: float, tick: float, L_home=0.0,
                  theta0: float = 0.0):
         self.params = params
-        self.j_fsr = self.element_at(params.scaffold_span[0])
+        self.j_fsr = b_node(params)  # a node
         self.j_fbg = self.element_at(params.length - FBG_FROM_END_M)
         self.sheath = TendonSheath(params, SheathLoad("force"), pretension=pretension, n_cables=n, tick=tick,
-                                   taps=(self.j_fsr, self.j_fbg), motor_ref=L_home, motor_sign=-1.0,
+                                   taps=(self.j_fbg,), node_taps=(self.j_fsr,), motor_ref=L_home, motor_sign=-1.0,
                                    theta_offset=theta0)
         self._rows = self.sheath.out_rows
         self._step_into = self.sheath.step_into
+
+    def kernel_args(self) -> tuple:
+        """(S, cab, p, T, rows): the cables' state, parameters and element tensions as kernel
+        tendon_sheath_kernels.step takes them (written in place), and the rows of a tick's output, for a caller
+        that fuses the step into its own kernel (scenes.sim_robot_kernels.reading_cables); it advances
+        sheath.t itself."""
+        s = self.sheath
+        return s._S, s._cab, s._p, s.tensions, self._rows
 
     def element_at(self, s: float) -> int:
         """Index of the element holding arc length s [m] from the motor (TendonSheath.tension_at's rule)."""
@@ -556,7 +581,8 @@ class DistributedCables:
         """`step` over m readings, (m, n) lengths, tip tensions and wraps -> (m, n) tensions at the FSR, the FBG
         and the motor [N]."""
         r = self.sheath.run(X, T_tip, TH)
-        return tuple(np.ascontiguousarray(a) for a in (r.tapped[:, 0], r.tapped[:, 1], r.f_motor))
+        return tuple(np.ascontiguousarray(a) for a in (r.tapped[:, TAP_FSR - O_ROWS], r.tapped[:, TAP_FBG - O_ROWS],
+                                                        r.f_motor))
 
 
 class _AddedEffects:

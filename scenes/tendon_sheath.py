@@ -269,8 +269,8 @@ class SheathRun:
     Attributes:
         t (m,) time [s]; x_motor, f_motor, f_tip, x_tip (m, c): motor travel [m], motor force (tension at the
         sheath's entrance) [N], tip load force [N], tip travel [m]; iterations (m, c) Newton iterations a
-        tick; tensions (m, c, N) element tensions [N] or None; tapped (m, taps, c) the tensions [N] of the
-        sheath's tapped elements (TendonSheath taps).
+        tick; tensions (m, c, N) element tensions [N] or None; tapped (m, taps, c) the tensions [N] at the
+        sheath's tapped elements, then its tapped nodes (TendonSheath taps, node_taps).
     """
 
     t: np.ndarray
@@ -317,6 +317,8 @@ class TendonSheath:
         tick: the loop's period [s].
         theta0, theta1: scaffold and route bends per cable [rad], scalar or (c,); None: params' values.
         taps: indices of elements whose tension every tick reports (sensors there; `step_into`, SheathRun.tapped).
+        node_taps: indices of nodes whose tension every tick reports after the elements' (a sensor at a node,
+            between two elements: tendon_sheath_kernels.node_tension, as `tension_at_b`).
         motor_ref, motor_sign, theta_offset: the inputs' map, per cable (scalar or (c,)): a tick's motor input x
             is the motor travel motor_ref + motor_sign x [m] (the robot gives its cable lengths: L_home - L), its
             theta input the kinematic bend |theta - theta_offset| [rad]. Defaults: the travel and the bend.
@@ -324,7 +326,7 @@ class TendonSheath:
 
     def __init__(self, params: TendonSheathParams = TendonSheathParams(), load: SheathLoad = SheathLoad("force"),
                  pretension=2.0, n_cables: int = 1, tick: float = 1e-3, theta0=None, theta1=None, taps=(),
-                 motor_ref=0.0, motor_sign=1.0, theta_offset=0.0):
+                 motor_ref=0.0, motor_sign=1.0, theta_offset=0.0, node_taps=()):
         if not (math.isfinite(tick) and tick > 0) or n_cables < 1:
             raise InputError(f"tendon sheath: need tick > 0 and n_cables >= 1, got {tick}, {n_cables}")
         pre = np.broadcast_to(np.asarray(pretension, dtype=float), (n_cables,)).copy()
@@ -334,9 +336,12 @@ class TendonSheath:
         taps = np.array(taps, dtype=np.int64).reshape(-1)
         if np.any((taps < 0) | (taps >= N)):
             raise InputError(f"tendon sheath: taps must be element indices in [0, {N}), got {taps.tolist()}")
+        node_taps = np.array(node_taps, dtype=np.int64).reshape(-1)
+        if np.any((node_taps < 0) | (node_taps >= N)):
+            raise InputError(f"tendon sheath: node_taps must be node indices in [0, {N}), got {node_taps.tolist()}")
         self.params, self.load, self.tick, self.n_cables = params, load, float(tick), n_cables
         self.pretension = pre
-        self.taps = taps
+        self.taps, self.node_taps = taps, node_taps
         self.n_sub = max(1, math.ceil(self.tick / params.max_step - 1e-9))
         rest = load.rest
         if load.kind == "spring" and rest is None:
@@ -344,8 +349,8 @@ class TendonSheath:
                 raise InputError("tendon sheath: a spring load's default rest needs one pretension for all cables")
             rest = -float(pre[0]) / load.stiffness
         p = params.kernel_params(load, 0.0 if rest is None else rest)
-        p[K.P_MODE], p[K.P_TICK], p[K.P_NSUB] = load.mode, self.tick, self.n_sub
-        self._p = np.concatenate([p, taps.astype(float)])  # the kernel's parameters, then the taps
+        p[K.P_MODE], p[K.P_TICK], p[K.P_NSUB], p[K.P_ETAPS] = load.mode, self.tick, self.n_sub, len(taps)
+        self._p = np.concatenate([p, taps.astype(float), node_taps.astype(float)])  # the parameters, then the taps
         # the kernel's arrays (scenes.tendon_sheath_kernels): node arrays S (u, v, z, the bend weights and the
         # step's scratch), per-cable scalars cab (pretension, last tip input, fixed bends, the inputs' map and
         # the step's scratch)
@@ -366,8 +371,8 @@ class TendonSheath:
     @property
     def out_rows(self) -> int:
         """Rows of a tick's output (`step_into`): motor force, tip load force, tip travel, Newton iterations, then
-        the tapped elements' tensions."""
-        return K.O_ROWS + len(self.taps)
+        the tapped elements' tensions, then the tapped nodes'."""
+        return K.O_ROWS + len(self.taps) + len(self.node_taps)
 
     def reset(self) -> None:
         """Back to the initial configuration: motor and tip at 0, uniform pretension, no friction stored."""
@@ -434,8 +439,8 @@ class TendonSheath:
     def step_into(self, x_motor, tip_input, theta, out) -> None:
         """`step` without its input checks, for a caller whose inputs are its own arrays: x_motor, tip_input,
         theta (c,) float64, C-contiguous and finite; writes out (out_rows, c): motor force [N], tip load force
-        [N], tip travel [m], Newton iterations of the tick, then the tension [N] of each tapped element. One
-        compiled call for all cables and sub-steps."""
+        [N], tip travel [m], Newton iterations of the tick, then the tension [N] at each tapped element and
+        node. One compiled call for all cables and sub-steps."""
         K.step(self._S, self._cab, self._p, x_motor, tip_input, theta, self.tensions, out)
         self.t += self.tick
 
@@ -462,6 +467,25 @@ class TendonSheath:
             raise InputError(f"tendon sheath: s must be in [0, {self.params.length}] m, got {s}")
         j = min(int(s / self.params.element_length), self.params.n_elements - 1)
         return self.tensions[:, j].copy()
+
+
+def b_node(params: TendonSheathParams) -> int:
+    """The node at B, the scaffold bend's start s_B (s_B = j l, rounded down; at most N - 1)."""
+    return min(int(params.scaffold_span[0] / params.element_length), params.n_elements - 1)
+
+
+def tension_at_b(T: np.ndarray, params: TendonSheathParams, theta1=None) -> np.ndarray:
+    """(m,) tension [N] at B (`b_node`, a sensor there: the FSR) from element tensions T (m, N) [N] with the
+    sheath's fixed bends (theta0, and theta1 or params'): tendon_sheath_kernels.node_tension of the node's
+    two elements, as TendonSheath's node taps read it each tick."""
+    T = np.ascontiguousarray(T, dtype=float)
+    j = b_node(params)
+    w_scaffold, w_route, _ = params.bend_weights
+    th1 = params.theta1 if theta1 is None else float(theta1)
+    b = params.theta0 * w_scaffold + th1 * w_route  # (N,) bend of each element [rad] (the kernel's order)
+    out = np.empty(T.shape[0])
+    K.node_tension_rows(T, j, float(b[j - 1]) if j > 0 else 0.0, float(b[j]), out)
+    return out
 
 
 # ---- closed forms for a uniform bend (Kaneko), Coulomb friction mu over a total bend Theta ---------------

@@ -26,9 +26,11 @@ Arrays of c cables (the TendonSheath's, written in place):
     cab (c, CAB_COLS)    columns C_T0 (t0 [N]), C_TIP (the last tick's tip input), C_THETA0, C_THETA1 (the
                          scaffold and route bends [rad]), C_X0, C_XS, C_TH_OFF (the inputs' map: motor travel
                          x0 + s x_in [m], kinematic bend |theta_in - offset| [rad]); from C_DU0 on the scratch
-    p (P_COUNT + taps,)  the parameters, then the indices of the tapped elements
+    p (P_COUNT + taps,)  the parameters, then the taps: p[P_ETAPS] indices of tapped elements, then the
+                         indices of tapped nodes
     out (O_ROWS + taps, c)  a tick's motor force [N], tip load force [N], tip travel [m], Newton iterations,
-                         then the tension [N] of each tapped element (a sensor there)
+                         then the tension [N] at each tap (a sensor there): an element's tension, or at a node
+                         the tension between its two elements' (`node_tension`)
 How the cables share a step: they run in lockstep, node by node (the Newton sweeps' recurrences are chains of
 dependent divisions; c independent chains side by side keep the processor busy), each cable iterating until
 its own convergence: a cable's numbers do not depend on the others'.
@@ -56,7 +58,8 @@ P_ITER = 11  # Newton iteration limit [-]
 P_MODE = 12  # MODE_SPRING or MODE_POSITION
 P_TICK = 13  # the tick [s]
 P_NSUB = 14  # implicit steps a tick [-]
-P_COUNT = 15
+P_ETAPS = 15  # how many of the taps after P_COUNT are elements (the rest are nodes)
+P_COUNT = 16
 
 MODE_SPRING = 0  # tip load F = k_load (u_N - rest) + f_ext, f_ext the tip input [N]
 MODE_POSITION = 1  # tip travel prescribed, the tip input [m]; F the reaction
@@ -116,6 +119,30 @@ def taut(t0, k, stretch):
     if s > 0.0:
         return s, k
     return 0.0, 0.0
+
+
+@njit
+def node_tension(Tl, Tr, bl, br):
+    """Tension [N] at a node between its proximal and distal elements (tensions Tl, Tr [N], bends bl, br
+    [rad]). The node's friction comes from the bends of its two half elements, so the tension there lies
+    between Tl and Tr: Tr (Tl / Tr)^w, w = br / (bl + br), the capstan split of the node's friction by bend
+    (Tr alone would have lost half of the distal element's bend); Tr with no bend on either side, 0 when
+    the distal element is slack."""
+    if bl + br <= 0.0:
+        return Tr
+    if not Tr > 0.0:
+        return 0.0
+    lo = max(Tr, 1e-12)
+    hi = max(Tl, 1e-12)
+    return lo * (hi / lo) ** (br / (bl + br))
+
+
+@njit
+def node_tension_rows(T, j, bl, br, out):
+    """out (m,) = node_tension of node j of each row of element tensions T (m, N) [N] with bends bl, br
+    [rad] of elements j - 1 and j (node 0: T[:, 0])."""
+    for r in range(T.shape[0]):
+        out[r] = T[r, 0] if j == 0 else node_tension(T[r, j - 1], T[r, j], bl, br)
 
 
 @njit
@@ -261,7 +288,8 @@ def step(S, cab, p, x_in, tip_in, theta_in, T, out):
     theta_in (c,) kinematic bend theta_in - cab[C_TH_OFF] [rad] (abs taken); the tick p[P_TICK] [s] in
     p[P_NSUB] steps, the motor and tip inputs interpolated linearly. Writes T (c, N) element tensions [N] and
     out (O_ROWS + taps, c): motor force [N], tip load force [N], tip travel [m], Newton iterations of the tick,
-    then the tension [N] of each tapped element (indices p[P_COUNT:])."""
+    then the tension [N] at each tap (p[P_COUNT:]: p[P_ETAPS] elements, then nodes, `node_tension` with the
+    tick's bends)."""
     nc = S.shape[1]
     N = S.shape[2] - 1
     n_sub = int(p[P_NSUB])
@@ -284,6 +312,7 @@ def step(S, cab, p, x_in, tip_in, theta_in, T, out):
                 cab[c, C_A] = (tip_in[c] - u[c, N]) / (n_sub - s)
         cables_step(S, cab, p, h)
     R = S[S_R]
+    n_etaps = int(p[P_ETAPS])
     for c in range(nc):
         cab[c, C_TIP] = tip_in[c]
         for j in range(N):
@@ -293,7 +322,11 @@ def step(S, cab, p, x_in, tip_in, theta_in, T, out):
         out[O_X_TIP, c] = u[c, N]
         out[O_ITER, c] = cab[c, C_IT]
         for q in range(out.shape[0] - O_ROWS):
-            out[O_ROWS + q, c] = R[c, int(p[P_COUNT + q])]
+            j = int(p[P_COUNT + q])
+            if q < n_etaps or j == 0:
+                out[O_ROWS + q, c] = R[c, j]
+            else:
+                out[O_ROWS + q, c] = node_tension(R[c, j - 1], R[c, j], b[c, j - 1], b[c, j])
 
 
 @njit

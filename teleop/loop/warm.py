@@ -23,6 +23,7 @@ import numpy as np
 
 from scenes import tendon_sheath_kernels
 from scenes.sim_robot import DistributedCables
+from scenes.sim_robot_kernels import reading_cables
 from scenes.tendon_sheath import TendonSheathParams
 from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
 from teleop.core.estimation.kalman import KalmanNoise
@@ -200,6 +201,7 @@ def _sim_robot(s) -> None:
                           np.empty(n, dtype=np.int64))
     KS.conductance_loop(np.full(n, P), np.asarray(default_fsr_calibration().loading, dtype=float), np.empty(n))
     s.q, s.L, s.A, s.P = q, L, A, P
+    s.tip, s.theta, s.kc = tip, theta, kc
 
 
 def _cables(s) -> None:
@@ -208,6 +210,12 @@ def _cables(s) -> None:
     cables = DistributedCables(TendonSheathParams(), n, P, 1e-3)
     cables.step(np.zeros(n), np.full(n, P), np.zeros(n))
     cables.run(np.zeros((2, n)), np.full((2, n), P), np.zeros((2, n)))
+    S, cab, p, T, rows = cables.kernel_args()  # its reading in one call (scenes.sim_robot_kernels)
+    reading_cables(s.tip, (0.0, 0.0, 0.0), s.A, s.theta, -s.L, s.L, s.L, s.kc, SH.new_state(n), np.empty(6),
+                   np.empty(n), np.empty(n), np.empty(n, dtype=np.int64), s.L, S, cab, p, T, np.empty((rows, n)),
+                   rows - 1,
+                   *FsrBranchLag(default_fsr_calibration(), n).kernel_args(), np.zeros((1, n)), 0,
+                   np.empty(n, dtype=np.int64))
     lag = FsrBranchLag(default_fsr_calibration(), n)
     for _ in range(2):  # the first reading, then the lag
         lag.counts(np.full(n, P), np.zeros(n))

@@ -12,7 +12,7 @@ import pytest
 from scenes.pads import blind_test_pad
 from scenes.rich_plant import RichPlantParams
 from scenes.sim_robot import DistributedCables, SimRobot, SimRobotParams, with_named_plant
-from scenes.tendon_sheath import TendonSheathParams
+from scenes.tendon_sheath import TendonSheathParams, tension_at_b
 from teleop.apps.bench.feedforward import bench_feedforward
 from teleop.apps.bench.sim import bench_sim
 from teleop.apps.campaign.blind import make_point
@@ -66,8 +66,11 @@ def test_friction_puts_the_motor_side_above_the_tip_side_while_hauling_in():
     with SimRobot(params=SimRobotParams(cable=TendonSheathParams()), seed=1) as robot:
         L = poses2lengths(_press(), robot.geom)
         t_fsr, t_tip, t_motor, _ = _read_all(robot, L)
+        # the FSR reads the tension at B, between its node's two elements
+        assert np.array_equal(tension_at_b(robot._cables.sheath.tensions, robot.params.cable), t_fsr[-1])
         j = robot._cables.j_fsr
-        assert np.array_equal(robot._cables.sheath.tensions[:, j], t_fsr[-1])  # the FSR reads its element
+        T = robot._cables.sheath.tensions
+        assert np.all((T[:, j] - t_fsr[-1]) * (T[:, j - 1] - t_fsr[-1]) < 0)
     v = np.gradient(-L, axis=0)                     # haul-in speed of each cable
     hauling, paying = v > 1e-7, v < -1e-7
     settled = np.zeros(len(L), dtype=bool)

@@ -8,9 +8,12 @@ import math
 import numpy as np
 import pytest
 
+from scenes import sim_robot_kernels
+from scenes import tendon_sheath_kernels as K
 from scenes.tendon_sheath import TOML_KEYS, SheathLoad, TendonSheath, TendonSheathParams, apparent_stiffness, \
-    capstan_ratio, dead_zone_uniform, span_weights
+    b_node, capstan_ratio, dead_zone_uniform, span_weights, tension_at_b
 from teleop.core.errors import InputError
+from teleop.core.kernels import jit
 
 EA = 1.0e4  # [N]
 K_LOAD = 1.0e3  # [N/m]
@@ -263,6 +266,42 @@ def test_taps_report_their_elements_tensions_every_tick():
     assert sheath.out_rows == 6 and np.array_equal(out[4:], sheath.tensions[:, [3, 17]].T)
     with pytest.raises(InputError, match="taps"):
         TendonSheath(params, taps=(20,))
+
+
+def test_node_taps_read_the_tension_at_b_as_tension_at_b_does():
+    """A node tap (the robot's FSR at B) reads each tick what tension_at_b reads from that tick's element
+    tensions, between the node's two elements' (not the distal element's own)."""
+    params = TendonSheathParams()
+    j = b_node(params)
+    sheath = TendonSheath(params, SheathLoad("spring", K_LOAD), pretension=2.0, n_cables=2, taps=(3,),
+                          node_taps=(j, 0))
+    x = np.stack([ramp(0.0, 1e-3), ramp(0.0, 5e-4, speed=5e-4)], axis=1)
+    run = sheath.run(x, theta=0.3, keep_tensions=True)
+    assert sheath.out_rows == 7 and np.array_equal(run.tapped[:, 0], run.tensions[:, :, 3])
+    for c in range(2):
+        assert np.array_equal(run.tapped[:, 1, c], tension_at_b(run.tensions[:, c], params))
+    assert np.array_equal(run.tapped[:, 2], run.tensions[:, :, 0])  # node 0: the first element's
+    T = run.tensions[-1]
+    assert np.all((T[:, j - 1] - run.tapped[-1, 1]) * (T[:, j] - run.tapped[-1, 1]) < 0)  # strictly between
+    with pytest.raises(InputError, match="node_taps"):
+        TendonSheath(params, node_taps=(20,))
+
+
+def test_tension_at_b_without_bends_and_when_slack():
+    p = dataclasses.replace(TendonSheathParams(), theta0=0.0, theta1=0.0)
+    T = np.array([[3.0] * 16 + [2.0] * 4, [3.0] * 16 + [0.0] * 4])
+    assert np.array_equal(tension_at_b(T, p), [2.0, 0.0])  # no bend at B: the distal element's
+    assert np.array_equal(tension_at_b(T, TendonSheathParams()), [2.0 * 1.5 ** (140 / 3 / (140 / 3 + 22.5)), 0.0])
+
+
+@pytest.mark.skipif(not jit.COMPILED, reason="numba not installed (or TELEOP_NO_JIT)")
+def test_the_cable_kernels_caches_carry_every_kernel_source_s_stamp():
+    """The robot's reading kernel holds the cable's step and the core reading kernels compiled in: its cache
+    and the cable's go stale with any of their sources (jit.OUTER_KERNELS), as the core kernels' do."""
+    for k in (K.step, K.run, sim_robot_kernels.reading_cables):
+        assert k._cache._cache_file._source_stamp == jit._kernels_stamp()
+    names = [name for name, _ in jit._kernel_files()]
+    assert "scenes/tendon_sheath_kernels.py" in names and "scenes/sim_robot_kernels.py" in names
 
 
 def test_the_input_map_gives_the_plain_sheath_s_numbers():

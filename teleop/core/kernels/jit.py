@@ -12,7 +12,9 @@ Cache freshness: a kernel's cached machine code holds the kernels it calls, comp
 only the kernel's own file (its time stamp and size). A change in a callee's module (linalg.py under
 geometry.py's forward kinematics) left the old code running from the cache (a fresh compile gave other
 contact forces). So every kernel's cache is stamped with a hash of all the kernel sources
-(`_kernels_stamp`): any change to any of them recompiles all, once.
+(`_kernels_stamp`): any change to any of them recompiles all, once. The kernel sources are this directory's
+and the outer layers' kernel modules named in `OUTER_KERNELS` (paths, not imports: a scenes kernel that calls
+these kernels, compiled into one call, is stamped with them, and they with it).
 """
 
 from __future__ import annotations
@@ -32,15 +34,28 @@ except ImportError:  # pragma: no cover - exercised with TELEOP_NO_JIT=1
 
 COMPILED = _numba is not None
 _KERNEL_DIR = os.path.dirname(os.path.abspath(__file__))
+_ROOT = os.path.dirname(os.path.dirname(os.path.dirname(_KERNEL_DIR)))  # the project's root (teleop's parent)
+#: kernel modules of the outer layers (paths from the project's root) whose kernels call these: stamped with them
+OUTER_KERNELS = ("scenes/tendon_sheath_kernels.py", "scenes/sim_robot_kernels.py")
+
+
+def _kernel_files() -> list[tuple[str, str]]:
+    """(name, path) of every kernel source file: this directory's *.py, then OUTER_KERNELS that exist."""
+    files = [(name, os.path.join(_KERNEL_DIR, name)) for name in sorted(os.listdir(_KERNEL_DIR))
+             if name.endswith(".py")]
+    outer = [(rel, os.path.join(_ROOT, *rel.split("/"))) for rel in OUTER_KERNELS]
+    return files + [(rel, path) for rel, path in outer if os.path.isfile(path)]
+
+
+_STAMPED = {os.path.normcase(path) for _, path in _kernel_files()}  # the files whose caches carry the stamp
 
 
 def _kernels_stamp() -> str:
-    """sha256 of every kernel source file (this directory's *.py, by name and content)."""
+    """sha256 of every kernel source file (`_kernel_files`, by name and content)."""
     h = hashlib.sha256()
-    for name in sorted(os.listdir(_KERNEL_DIR)):
-        if name.endswith(".py"):
-            with open(os.path.join(_KERNEL_DIR, name), "rb") as f:
-                h.update(name.encode() + b"\0" + f.read())
+    for name, path in _kernel_files():
+        with open(path, "rb") as f:
+            h.update(name.encode() + b"\0" + f.read())
     return h.hexdigest()
 
 
@@ -63,7 +78,7 @@ def _stamp_caches() -> None:
 
         @classmethod
         def from_function(cls, py_func, py_file):
-            if os.path.dirname(os.path.abspath(py_file)) != _KERNEL_DIR:
+            if os.path.normcase(os.path.abspath(py_file)) not in _STAMPED:
                 return None
             return super().from_function(py_func, py_file)
 
