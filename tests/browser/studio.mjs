@@ -4,8 +4,9 @@
 //
 //   node studio.mjs CONFIG.json
 //
-// CONFIG: {chromium, out (screenshot folder), layout (layout file), fault_wait_s, ee_rgb and ee_fault_rgb
-// ([r, g, b] 0..255 of the end effector, normal and in FAULT), timeout_s}. One JSON line {"stage": ...} per
+// CONFIG: {chromium, out (screenshot folder), layout (layout file), layout_fbg (the layout for sessions with FBG
+// sensors), fault_wait_s, ee_rgb and ee_fault_rgb ([r, g, b] 0..255 of the end effector, normal and in FAULT),
+// timeout_s}. One JSON line {"stage": ...} per
 // stage: "ready" (Studio loaded with no data source, while the session starts), then per line on stdin, each
 // opening Studio again in the same page on a deep link (studio/host.js's studioOpen: no reload of the build):
 //   live WS_URL ROBOT_PID   -> "live" (Studio's foxglove-websocket deep link with the layout: the sidebar, every
@@ -14,6 +15,8 @@
 //                              until a log panel shows a FAULT line, at most fault_wait_s; the log panels)
 //   recording PATH [ISO]    -> "recording" (the same page opening PATH through Studio's remote-file source, at
 //                              time ISO if given (Studio's `time` deep link): its topic list and problems)
+//   live-fbg WS_URL         -> "live_fbg" (as "live", with layout_fbg and no fault: a session with FBG sensors;
+//                              screenshots live-fbg-1.png, live-fbg.png)
 // and "done" when stdin ends (the console errors and the server's 404s).
 import { mkdtempSync, readFileSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
@@ -31,12 +34,14 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const emit = (obj) => process.stdout.write(JSON.stringify({ ...obj, elapsed_s: elapsed() }) + "\n");
 const stdinLines = createInterface({ input: process.stdin });
 
-const layout = JSON.parse(readFileSync(cfg.layout, "utf8"));
-const panelIds = Object.keys(layout.configById);
+const panelIdsOf = (file) => Object.keys(JSON.parse(readFileSync(file, "utf8")).configById);
+const panelIds = panelIdsOf(cfg.layout);
 const files = { "layout.json": cfg.layout };
+if (cfg.layout_fbg) files["layout-fbg.json"] = cfg.layout_fbg;
 
-/** Every panel of the layout: its type, whether it is mounted, its text and its box on the page. */
-async function panels(page) {
+/** Every panel of the layout (`ids`: its panels; the main layout's by default): its type, whether it is mounted,
+ *  its text and its box on the page. */
+async function panels(page, ids = panelIds) {
   return page.evaluate((ids) => {
     const out = {};
     for (const id of ids) {
@@ -48,7 +53,7 @@ async function panels(page) {
       };
     }
     return out;
-  }, panelIds);
+  }, ids);
 }
 
 /** What two screenshots (PNG buffers, one taken after the other) show inside each panel's box: `changed`
@@ -135,12 +140,14 @@ async function open(page, url) {
   await page.evaluate((search) => window.studioOpen(search), new URL(url).search.slice(1));
 }
 
-async function live(page, host, timeout, ws, robotPid) {
+/** Studio on `host` (its layout) connected to the session at `ws`: once data shows in every panel of `ids`, the
+ *  panels' text twice 2.5 s apart and the pixels changed between two screenshots (`shot`-1.png, `shot`.png). */
+async function watch(page, host, timeout, ws, ids, shot) {
   const asked = elapsed();
   await open(page, `${host}&ds=foxglove-websocket&ds.url=${encodeURIComponent(ws)}`);
   const loaded = elapsed();
   const connected = await waitFor("data in every panel", async () => {
-    const ps = await panels(page);
+    const ps = await panels(page, ids);
     const info = await sidebar(page, "Problems");
     // connected: the server's name beside its URL and a start time (Studio 1.48's websocket player takes it from
     // its own clock; it read 0 in two runs on a loaded machine, with every panel receiving)
@@ -151,17 +158,25 @@ async function live(page, host, timeout, ws, robotPid) {
   }, timeout);
   const shown = elapsed();
   await sleep(1000);
-  const first = await panels(page);
-  const shotA = await page.screenshot({ path: join(cfg.out, "live-1.png") });
+  const first = await panels(page, ids);
+  const shotA = await page.screenshot({ path: join(cfg.out, `${shot}-1.png`) });
   await sleep(2500); // the 1 Hz panels (timing, stats) have news twice over; plots and the time axes move on
-  const second = await panels(page);
-  const shotB = await page.screenshot({ path: join(cfg.out, "live.png") });
-  emit({
-    stage: "live", connected: !connected.timedOut, asked_s: asked, loaded_s: loaded, shown_s: shown,
-    sidebar: await sidebar(page, "Problems"), first, second,
-    pixels: await pixels(page, shotA, shotB, boxes(second), cfg.ee_rgb),
-    host_error: await page.evaluate(() => window.hostError ?? null),
-  });
+  const second = await panels(page, ids);
+  const shotB = await page.screenshot({ path: join(cfg.out, `${shot}.png`) });
+  return {
+    report: {
+      connected: !connected.timedOut, asked_s: asked, loaded_s: loaded, shown_s: shown,
+      sidebar: await sidebar(page, "Problems"), first, second,
+      pixels: await pixels(page, shotA, shotB, boxes(second), cfg.ee_rgb),
+      host_error: await page.evaluate(() => window.hostError ?? null),
+    },
+    shotB,
+  };
+}
+
+async function live(page, host, timeout, ws, robotPid) {
+  const { report, shotB } = await watch(page, host, timeout, ws, panelIds, "live");
+  emit({ stage: "live", ...report });
 
   // an induced fault: the robot process paused until the log panel shows the fault (the loop, slower than real
   // time on a loaded machine, takes its staleness limit in its own ticks), then let go
@@ -196,6 +211,12 @@ async function recording(page, host, timeout, path, endIso) {
   const problems = await sidebar(page, "Problems");
   await page.screenshot({ path: join(cfg.out, "recording-problems.png") });
   emit({ stage: "recording", opened: !opened.timedOut, topics, sidebar: problems, panels: await panels(page) });
+}
+
+async function liveFbg(page, origin, timeout, ws) {
+  const host = `${origin}/studio/index.html?layoutId=teleop-fbg&layout=/files/layout-fbg.json`;
+  const { report } = await watch(page, host, timeout, ws, panelIdsOf(cfg.layout_fbg), "live-fbg");
+  emit({ stage: "live_fbg", ...report });
 }
 
 const THREE_D = panelIds.find((id) => id.startsWith("3D!"));
@@ -236,6 +257,7 @@ try {
     const [cmd, ...args] = line.trim().split(" ");
     if (cmd === "live") await live(page, host, timeout, args[0], Number(args[1]));
     else if (cmd === "recording") await recording(page, host, timeout, args[0], args[1]);
+    else if (cmd === "live-fbg") await liveFbg(page, origin, timeout, args[0]);
     else break;
   }
   emit({ stage: "done", console_errors: consoleErrors, http_404: httpLog });

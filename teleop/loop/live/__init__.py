@@ -5,7 +5,7 @@
     server.py    the Foxglove WebSocket server with per-viewer drop counters
 
 Open it in Foxglove: "Open connection" -> Foxglove WebSocket -> ws://localhost:PORT, then import
-examples/foxglove-layout.json (docs/live-view.md).
+examples/foxglove-layout.json (a session with FBG sensors: examples/foxglove-layout-fbg.json; docs/live-view.md).
 """
 
 from teleop.loop.live.process import LiveView

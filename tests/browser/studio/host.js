@@ -1,19 +1,21 @@
 // Renders Foxglove Studio's `App` (put on `window` by @foxglove/studio-base's assets/index.js) the way its web
 // build does, with what a test needs instead of the browser's storage: the layout given by the page's
 // `layout` parameter (a URL on this server) as the one stored layout, selected through Studio's own
-// `layoutId` deep-link parameter; every other parameter (ds, ds.url) is Studio's own deep link.
+// `layoutId` deep-link parameter (a later `studioOpen` with another `layoutId` and `layout` adds that layout);
+// every other parameter (ds, ds.url) is Studio's own deep link.
 /* global App, initI18n, FoxgloveWebSocketDataSourceFactory, McapLocalDataSourceFactory, RemoteDataSourceFactory */
 (async () => {
   const params = new URLSearchParams(window.location.search);
   const layoutId = params.get("layoutId");
   const layouts = new Map();
-  if (layoutId && params.get("layout")) {
-    const data = await (await fetch(params.get("layout"))).json();
-    layouts.set(layoutId, {
-      id: layoutId, name: layoutId, permission: "CREATOR_WRITE",
+  const addLayout = async (id, url) => {
+    const data = await (await fetch(url)).json();
+    layouts.set(id, {
+      id, name: id, permission: "CREATOR_WRITE",
       baseline: { data, savedAt: new Date().toISOString() }, working: undefined, syncInfo: undefined,
     });
-  }
+  };
+  if (layoutId && params.get("layout")) await addLayout(layoutId, params.get("layout"));
   const layoutStorage = {
     async list() { return [...layouts.values()]; },
     async get(_ns, id) { return layouts.get(id); },
@@ -41,7 +43,11 @@
   }), root);
   // Studio opened again on other deep-link parameters without reloading its 56 MB build: the page's URL set to
   // them, the app unmounted (its player closed) and mounted afresh, as on a page load
-  window.studioOpen = (search) => {
+  window.studioOpen = async (search) => {
+    const p = new URLSearchParams(search);
+    if (p.get("layoutId") && p.get("layout") && !layouts.has(p.get("layoutId"))) {
+      await addLayout(p.get("layoutId"), p.get("layout"));
+    }
     window.history.replaceState(null, "", `${window.location.pathname}?${search}`);
     ReactDOM.unmountComponentAtNode(root);
     mount();

@@ -17,13 +17,23 @@ SUBPROTOCOL = "foxglove.websocket.v1"
 
 def start_session(tmp_path, seconds: float, *extra) -> tuple[subprocess.Popen, int]:
     """`teleop session --live 0` in a subprocess; returns (process, port) once it serves."""
-    proc = subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "session", "--live", "0", "--seconds", str(seconds),
-                             "--json", str(tmp_path / "session.json"), *extra],
+    proc = spawn_session(tmp_path, seconds, *extra)
+    return proc, served_port(proc)
+
+
+def spawn_session(tmp_path, seconds: float, *extra) -> subprocess.Popen:
+    """`teleop session --live 0 --json tmp_path/session.json` in a subprocess, started (served_port: its port)."""
+    return subprocess.Popen([sys.executable, "-m", "teleop.apps.cli", "session", "--live", "0", "--seconds",
+                             str(seconds), "--json", str(tmp_path / "session.json"), *extra],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def served_port(proc: subprocess.Popen) -> int:
+    """The port a spawn_session process serves its live view on, once it does."""
     for line in proc.stdout:
         m = re.match(r"live view: ws://127\.0\.0\.1:(\d+)", line)
         if m:
-            return proc, int(m.group(1))
+            return int(m.group(1))
     raise AssertionError(f"no live view line; stderr: {proc.stderr.read()}")
 
 

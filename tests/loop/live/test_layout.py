@@ -1,13 +1,25 @@
-"""examples/foxglove-layout.json: every panel it holds is placed, and every topic it shows is a live channel."""
+"""examples/foxglove-layout.json (every session) and examples/foxglove-layout-fbg.json (sessions of the FBG sensor
+kinds): every panel each holds is placed, every topic it shows is a live channel of its sessions, and only the
+FBG layout shows the FBG channel (in an FSR session that panel would stay empty)."""
 
 import json
 import re
 from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
 
 from teleop.loop.live import channels as lc
+from teleop.loop.sensor_tap import with_fbg_channel
 from teleop.loop.session import PAD_COLORS
+from teleop.loop.tap import session_layout
 
-LAYOUT = Path(__file__).resolve().parents[3] / "examples" / "foxglove-layout.json"
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+LAYOUT = EXAMPLES / "foxglove-layout.json"
+LAYOUT_FBG = EXAMPLES / "foxglove-layout-fbg.json"
+# each layout with the row layout of the sessions it is for (the FBG one: sensor fbg, every cable an FBG)
+ROWS = {LAYOUT: session_layout(), LAYOUT_FBG: with_fbg_channel(session_layout(), SimpleNamespace(kind="fbg", n=6))}
+LAYOUTS = pytest.mark.parametrize("path", [LAYOUT, LAYOUT_FBG], ids=["default", "fbg"])
 
 
 def leaves(node):
@@ -16,16 +28,20 @@ def leaves(node):
     return leaves(node["first"]) + leaves(node["second"])
 
 
-def test_layout_panels_and_topics():
-    doc = json.loads(LAYOUT.read_text())
+@LAYOUTS
+def test_layout_panels_and_topics(path):
+    doc = json.loads(path.read_text())
     assert sorted(leaves(doc["layout"])) == sorted(doc["configById"])
     topics = set(re.findall(r'"(/live/[a-z_]+)', json.dumps(doc["configById"])))
-    live = set(lc.RATES) | {lc.TOPIC_FAULTS}
+    rows = ROWS[path]
+    live = set(lc.rates(rows)) | {lc.TOPIC_FAULTS}
     assert topics <= live and {"/live/scene", "/live/faults", "/live/stylus", "/live/loop"} <= topics
+    assert (lc.TOPIC_FBG_LIVE in topics) == (path == LAYOUT_FBG)
     paths = re.findall(r'"(/live/[a-z_]+)\.([a-z_]+)', json.dumps(doc["configById"]))
     assert len(paths) > 20
+    plots = lc.plots(rows)
     for topic, name in paths:  # every plotted field is one the channel carries
-        assert name in lc.PLOTS[topic][1] or (topic, name) == ("/live/loop", "state_name"), (topic, name)
+        assert name in plots[topic][1] or (topic, name) == ("/live/loop", "state_name"), (topic, name)
 
 
 # panel types Foxglove Studio 1.48 registers (@foxglove/studio-base src/panels/index.js) that the layout uses
@@ -33,8 +49,9 @@ STUDIO_PANELS = {"3D", "Plot", "RawMessages", "RosOut", "StateTransitions"}
 AXIS_LENGTH = 0.2  # [m] of a frame's axes at axisScale 1 (Studio's renderables/Axis: shaft 0.154 + head 0.046)
 
 
-def test_layout_opens_in_studio_framed_on_the_robot():
-    doc = json.loads(LAYOUT.read_text())
+@LAYOUTS
+def test_layout_opens_in_studio_framed_on_the_robot(path):
+    doc = json.loads(path.read_text())
     conf = doc["configById"]
     assert {k.split("!")[0] for k in conf} <= STUDIO_PANELS  # "Log" is "Unknown panel type" in Studio
     assert conf["RosOut!faults"]["topicToRender"] == lc.TOPIC_FAULTS
