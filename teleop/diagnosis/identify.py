@@ -18,6 +18,8 @@ An added effect's general form (ParamSpec.shape) is tried once it is named (`gen
 own, in place of the additions once they are exhausted (`_general_baseline`: the capstan's pretension).
 The fit part is scored with Huber's loss (`robust_rms`) for the information criterion; held-out scores are
 plain RMSEs.
+An effect that extends a simpler one (Rules.extends: a Stribeck friction a Coulomb one) is also fitted from
+the simpler one's candidate fit (`_nested`), its extra parameters at the rule's starts.
 Every effect-specific rule (which effects are never findings, what a fit holds, extra starts, a form the
 fitted values contradict, a baseline effect beside which an effect is no candidate, effects of the drive
 position alone) is the effect's own (teleop.core.physics.base.Rules), read here through `record(d)`.
@@ -477,7 +479,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
         floor = noise_level(d.y - predict(d, current.model))
         if current.rmse_hold < ACCEPT * floor:
             break
-        cands = []
+        cands, by_name = [], {}
         for name in pool:
             if name in current.names:
                 continue
@@ -495,10 +497,17 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
             if round_ == 0:
                 ranking[name] = f
             cands.append(f)
+            by_name[name] = f
             if position_only(name):
                 cands.extend(_curved(d, f, name, fit_idx, hold_idx, seed))
             if progress is not None:
                 progress(1)
+        for name, f in list(by_name.items()):   # an effect also fitted from the simpler one it extends
+            g = _nested(d, f, name, by_name, fit_idx, hold_idx, seed)
+            if g is not f:
+                cands[next(i for i, c in enumerate(cands) if c is f)] = g
+                if round_ == 0:
+                    ranking[name] = g
         cands = [f for f in cands if not load_alike(d, current, f, hold_idx)]
         if not cands:
             break
@@ -549,6 +558,36 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
         steps.append((current, pick))
         current = pick
     return tuple(steps), current, delay
+
+
+def _nested(d: LinkData, f: Fit, name: str, by_name: dict, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:
+    """The candidate Fit `f` of effect `name`, or a better one (lower fit-part score) refitted from the fit
+    of the simpler effect it extends (Rules.extends, among `by_name`: {effect: its candidate Fit this
+    round}): that chain with the simpler effect replaced by this one, its shared parameters at the simpler
+    one's values and the rest at each of Rules.nested_starts. Its extra parameters must still pay on
+    held-out data: among candidates within PARSIMONY the simpler one wins (`_pick`)."""
+    rule = get_effect(name).rules
+    simple = by_name.get(rule.extends)
+    if simple is None or rule.nested_starts is None:
+        return f
+    base = simple.model.without((rule.extends,))
+    sig, _ = _target_signals(d, base, name)
+    fitted = dict(simple.model.effects)[rule.extends]
+    eff = get_effect(name)
+    best = f
+    for p0 in rule.nested_starts(fitted, sig):
+        p = {**eff.defaults(), **{k: v for k, v in fitted.items() if k in eff.param_names}, **p0}
+        p = {k: eff.spec(k).clip(v) for k, v in p.items()}
+        p.update(fixed_params(d, name, direction=base.direction))
+        seeded = simple.model.with_effects([(name, p) if n == rule.extends else (n, q)
+                                            for n, q in simple.model.effects])
+        try:
+            g = fit_chain(d, seeded, (), fit_idx, hold_idx, seed=seed)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            continue
+        if g.rmse_fit < best.rmse_fit:
+            best = g
+    return best
 
 
 def _curved(d: LinkData, plain: Fit, name: str, fit_idx: slice, hold_idx: slice, seed: int) -> list:

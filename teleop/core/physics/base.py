@@ -357,7 +357,13 @@ class Rules:
     it is a sensor effect's (kept where that link's baseline fits better with it).
     also_known_as: names a generator gives this physics when it writes it itself, outside the catalogue (the
     single-cable rig's late tip-force sensor, "sensor_delay", is a transport_delay): a bench scores a finding
-    of this effect as the right answer for them (the generator's truth carries this effect's parameters)."""
+    of this effect as the right answer for them (the generator's truth carries this effect's parameters).
+    extends: a simpler catalogue effect that is this one's special case (its parameters a subset of this
+    one's, by name): where both are candidates, this one is also fitted from the other's fitted chain, so
+    that its extra parameters start where the simpler law ends (a fit from its own guess can end in a
+    basin worse than the simpler law it contains), and it is named only where they pay on held-out data.
+    nested_starts(params, signals) -> [params]: the starts of that fit, from the simpler effect's fitted
+    parameters and the signals the effect reads (Signals: v, load)."""
 
     channel: str = ""
     primary: tuple[str, ...] = ()
@@ -377,6 +383,8 @@ class Rules:
     input_units: tuple[str, ...] = ()
     reading: bool = False
     also_known_as: tuple[str, ...] = ()
+    extends: str = ""
+    nested_starts: Callable[[Mapping[str, float], Signals], list] | None = None
 
 
 @dataclass(frozen=True)

@@ -100,6 +100,26 @@ def _dahl_guess(s: Signals, y: np.ndarray) -> dict:
 
 _FC = ParamSpec("Fc", "N", 0.0, 50.0, 0.2, "Coulomb (kinetic) friction force")
 
+#: percentiles of the moving drive's speed a Stribeck velocity is started at from a fitted Coulomb friction,
+#: and the breakaway force's start as a multiple of that friction
+STRIBECK_SPEED_PERCENTILES = (5.0, 15.0, 35.0)
+STRIBECK_PEAK_START = 2.0
+
+
+def _stribeck_from_coulomb(p, s: Signals) -> list:
+    """Stribeck starts from a fitted Coulomb friction p (its Fc [N]): the breakaway force a multiple of it,
+    the Coulomb level below it (the fitted Coulomb force averages the peak in), the Stribeck velocity [m/s] at
+    a few low percentiles of the drive's moving speed (the peak shows only where the drive is slow, and a
+    data-driven guess from the speed bins can miss it by a decade on a short slow stretch)."""
+    m = _moving(s.v)
+    if m.sum() < 10:
+        return []
+    sp = np.abs(s.v[m])
+    Fc = max(float(p["Fc"]), 1e-6)
+    return [{"Fc": 0.8 * Fc, "Fs": STRIBECK_PEAK_START * Fc, "vs": max(float(np.percentile(sp, q)), 1e-7)}
+            for q in STRIBECK_SPEED_PERCENTILES]
+
+
 def _stribeck_wrong(p, rec) -> bool:
     """Stribeck means more friction at low speed than in sliding (Fs > Fc)."""
     return p["Fs"] <= 1.1 * p["Fc"]
@@ -139,7 +159,7 @@ STRIBECK_FRICTION = register(Effect(
     # the peak and its velocity scale have basins of their own (a sine's low-speed stretches are short:
     # from its data-driven guess a fit can settle on half the peak at twice the speed)
     rules=Rules(channel="motor_force", primary=("Fc", "Fs"), alike=("dahl_hysteresis",), starts=6,
-                wrong_form=_stribeck_wrong,
+                wrong_form=_stribeck_wrong, extends="coulomb_friction", nested_starts=_stribeck_from_coulomb,
                 draw=lambda rng, s: {"Fc": s.friction, "Fs": s.friction * rng.uniform(1.8, 3.0),
                                      "vs": s.v_slow * rng.uniform(0.6, 1.2)})))
 
