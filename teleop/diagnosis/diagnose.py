@@ -335,5 +335,5 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
         if sindy:   # the generic sparse-regression peer (PySINDy), same split
             s = sindy_rmse(d, fit_idx, hold_idx)
             peer[link.output].update({"sindy_static_rmse": s["static"], "sindy_free_run_rmse": s["free_run"],
-                                      "sindy_rmse": s["best"]})
+                                      "sindy_rmse": s["best"], "sindy_choice": s["choice"]})
     return Diagnosis(rec, holdout, tuple(results), peer, tuple(baseline))
