@@ -117,9 +117,11 @@ class FbgReplayRobot(ReplayRobot):
     def open(self) -> None:
         super().open()
         fbg = {int(m["tick"]): m for m in self._messages(TOPIC_FBG)}
+        self.fbg_missing = set()  # ticks with a reading but no FBG message (a recording cut inside their row)
         for k, i in self.by_tick.items():
             m = fbg.get(k)
             if m is None:
+                self.fbg_missing.add(k)
                 continue
             rd = self.items[i]
             pm = np.full((2, len(rd.fsr_counts)), math.nan)
@@ -160,8 +162,8 @@ def replay_session(path: str, estimator=None, session=None) -> ReplayReport:
         tp.start(0.0 if first_t >= 0 else first_t)
         for m in loop_msgs:
             k = m["tick"]
-            if k not in forces:
-                break  # the recording ends inside this tick's row (damaged tail)
+            if k not in forces or k in getattr(robot, "fbg_missing", ()):
+                break  # the recording ends inside this tick's row (damaged tail; the FBG channel is its last)
             haptic.sync(k)
             robot.sync(k)
             tp.k = k

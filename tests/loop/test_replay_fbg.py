@@ -76,3 +76,14 @@ def test_unreplayable_fbg_recordings_say_why(recorded):
     del s.metadata["session"]["calibration"]["fbg"]
     with pytest.raises(InputError, match="FBG estimator settings not understood"):
         replay_session(str(rec), session=s)
+
+
+def test_a_recording_cut_before_its_last_fbg_message_replays_its_whole_ticks(recorded):
+    """The FBG channel is the last of a tick's row: a file cut between a tick's wrench and its FBG message
+    replays up to the tick before, and that prefix reproduces."""
+    kind, rec = recorded
+    s = read_session(rec)
+    last = max(i for i, r in enumerate(s.records) if r[0] == TOPIC_FBG)
+    s.records = s.records[:last]
+    rep = replay_session(str(rec), session=s)
+    assert rep.reproduced and rep.ticks == len(s.messages("/loop")) - 1
