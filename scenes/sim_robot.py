@@ -334,6 +334,7 @@ class SimRobot(ContextDevice):
         # the distributed cable with nothing between it and its FSR: one kernel call a reading (reading_cables)
         self._fused = self._cables.kernel_args() if isinstance(self._cables, DistributedCables) and \
             self._added is None else None
+        self._dt = p.dt  # [s] a reading's period (read's: a property call less)
         self.is_open = True
 
     def close(self) -> None:
@@ -423,7 +424,7 @@ class SimRobot(ContextDevice):
         t_fbg, extras = t_tip, {}
         counted = status == KT.OK and (direct or fused is not None)  # the FSRs' counts came with the kernel call
         if fused is not None and status == KT.OK:  # the cable's tick was in the call: its output rows
-            self._cables.sheath.t += p.dt
+            self._cables.sheath.t += self._dt
             t_fsr, t_fbg = out[TAP_FSR], out[TAP_FBG]
             extras["t_motor"] = out[O_MOTOR]
         elif self._cables is not None:  # the distributed cable in place of the lumped sheath
@@ -431,13 +432,13 @@ class SimRobot(ContextDevice):
                                                       self._theta)
             extras["t_motor"] = t_motor
         if self._added is not None:
-            t_fsr = self._added.forces(t_fsr, x, self.t + p.dt)
+            t_fsr = self._added.forces(t_fsr, x, self.t + self._dt)
         if self._rich is not None:
-            t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + p.dt])[0]
+            t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + self._dt])[0]
         if not counted:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
             fsr_counts(t_fsr, *self._lag_args, noise[k], counts)
-        fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + p.dt)  # distal FBGs (sim_sensors)
-        self.t += p.dt
+        fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + self._dt)  # distal FBGs (sim_sensors)
+        self.t += self._dt
         self.seq += 1
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
