@@ -19,8 +19,8 @@ training part) and scored there (the free run from the measured output at the va
 choice is then refitted on the whole fit part; the free run keeps the validated model itself (a state model
 refitted on more data can lose the stability its validation showed). Extrapolation is guarded: a free run
 clips its inputs and state to the ranges its training part spans; the static form's guard is validated too,
-either that clip or, on samples whose inputs leave those ranges, the best-validated degree-1 model (a linear
-law extrapolates linearly, a cubic does not). `choice` reports the form, degree, threshold, guard, number of
+either that clip or the clip continued linearly past the ranges by the best-validated degree-1 model's
+change (a linear law extrapolates linearly, a cubic does not). `choice` reports the form, degree, threshold, guard, number of
 terms and validation RMSE [output units].
 
 Hand-written beside pysindy, and why: the validation split and the extrapolation guard (pysindy has no
@@ -45,7 +45,9 @@ from teleop.diagnosis.peer import PEER_HZ
 
 DEGREES = (1, 2, 3)                                     # polynomial library degrees tried
 THRESHOLDS = (0.0, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3)    # STLSQ thresholds (standardised features and output)
-VALIDATION = 0.25    # the fit part's last quarter validates the choice
+VALIDATION = 0.25    # the free run: the fit part's last quarter validates the choice
+FOLDS = 4            # the static form: cross-validation over the fit part in this many folds, each
+BLOCKS_PER_FOLD = 16  # this many contiguous blocks spread over the fit part
 ALPHA = 1e-6         # STLSQ's ridge weight (standardised units): only breaks exact ties (sign(v)^2 = 1)
 FORMS = ("discrete", "continuous")
 
@@ -172,28 +174,41 @@ class _Static:
 
 
 def _static_guarded(model: _Static, W: np.ndarray, fallback_thr: float) -> dict:
-    """{(degree, threshold, guard): prediction} for guard "clip" and "linear" (raw inside the ranges, the
-    degree-1 model at fallback_thr outside them)."""
+    """{(degree, threshold, guard): prediction}: guard "clip" (the inputs clipped to the fitted ranges) and
+    "linear" (that, continued past the ranges by the degree-1 model at fallback_thr: plus its change from
+    the clipped inputs to the actual ones; the same inside the ranges)."""
     clipped, raw = model.predict(W, True), model.predict(W, False)
-    out_of = model.scale.outside(model.scale.z(W))
-    lin = raw[1, fallback_thr]
+    beyond = raw[1, fallback_thr] - clipped[1, fallback_thr]
     out = {}
     for (deg, thr), p in clipped.items():
         out[deg, thr, "clip"] = p
-        out[deg, thr, "linear"] = np.where(out_of, lin, raw[deg, thr])
+        out[deg, thr, "linear"] = p + beyond
     return out
 
 
 def static_fit(d: LinkData, fit_idx: slice, hold_idx: slice) -> tuple[float, dict]:
     """(held-out RMSE in output units, choice) of the static sparse regression, its degree, threshold and
-    guard chosen on the validation part."""
+    guard chosen by cross-validation within the fit part: FOLDS folds of BLOCKS_PER_FOLD contiguous blocks
+    spread over it, each fold validating a model fitted on the others; the median of the folds' RMSEs
+    decides (one fold holding an unrepresentative stretch, such as a start from rest, does not)."""
     W, _ = _inputs(d)
-    idx, k_train, k_fit = _parts(d, fit_idx)
-    train, val, fit = idx[:k_train], idx[k_train:k_fit], idx[:k_fit]
-    m = _Static(W, d.y, train)
-    raw_val = m.predict(W[val], False)
-    lin_thr = min(THRESHOLDS, key=lambda thr: _rms(raw_val[1, thr] - d.y[val]))
-    scores = {k: _rms(p - d.y[val]) for k, p in _static_guarded(m, W[val], lin_thr).items()}
+    idx, _, k_fit = _parts(d, fit_idx)
+    fit = idx[:k_fit]
+    blocks = np.array_split(np.arange(k_fit), FOLDS * BLOCKS_PER_FOLD)
+    folds = []
+    for j in range(FOLDS):
+        block = np.concatenate(blocks[j::FOLDS])
+        m = _Static(W, d.y, np.delete(fit, block))
+        folds.append((m, fit[block], m.predict(W[fit[block]], False)))
+
+    def pooled(preds):   # {key: [prediction per fold]} -> {key: the median over the folds of their RMSE}
+        return {k: float(np.median([_rms(p - d.y[val]) for p, (_, val, _) in zip(ps, folds)]))
+                for k, ps in preds.items()}
+
+    lin = pooled({thr: [raw[1, thr] for _, _, raw in folds] for thr in THRESHOLDS})
+    lin_thr = min(lin, key=lin.get)
+    guarded = [_static_guarded(m, W[val], lin_thr) for m, val, _ in folds]
+    scores = pooled({k: [g[k] for g in guarded] for k in guarded[0]})
     deg, thr, guard = min(scores, key=scores.get)
     full = _Static(W, d.y, fit, [(deg, thr), (1, lin_thr)])
     pred = _static_guarded(full, W[hold_idx], lin_thr)[deg, thr, guard]

@@ -50,11 +50,11 @@ def test_a_drifting_input_ruins_the_plain_fit_not_the_validated_peer(seed):
     fit, hold = split(d.n, 0.4)
     assert _plain_cubic_rmse(d, fit, hold) > 5 * SIGMA          # the trap is real
     r = sindy_rmse(d, fit, hold)
-    assert r["static"] < 1.2 * SIGMA
+    assert r["static"] < 1.3 * SIGMA
     assert r["best"] == min(r["static"], r["free_run"])
     c = r["choice"]["static"]
     assert c["degree"] in DEGREES and c["threshold"] in THRESHOLDS and c["guard"] in ("none", "clip", "linear")
-    assert c["terms"] >= 1 and c["validation_rmse"] < 1.2 * SIGMA
+    assert c["terms"] >= 1 and c["validation_rmse"] < 1.3 * SIGMA
     # a cubic kept only with a guard: unguarded, it is the plain fit above
     assert c["degree"] == 1 or c["guard"] != "none"
 
