@@ -227,6 +227,9 @@ BENCHES: tuple[Bench, ...] = (
           "the Arduino link on the emulated firmware (simavr): round trip and watchdog stop"),
     Bench("sim", ("teleop", "bench", "sim", "--seconds", "10"), True, sim_rows,
           "the simulation unpaced: stylus, loop and pybullet robot, times real time"),
+    Bench("sim-distributed", ("teleop", "bench", "sim", "--plant", "distributed"), True, sim_rows,
+          "the simulation unpaced with the distributed tendon-sheath plant (six cables of 20 elements), times real "
+          "time"),
     Bench("diagnose", ("teleop", "bench", "diagnose", "--cases", "40", "--seed", "1"), False, diagnose_rows,
           "diagnosis accuracy on generated recordings with a concealed effect"),
     Bench("session-diagnose", ("teleop", "bench", "session-diagnose", "--effect", "coulomb_friction:Fc=0.3",
