@@ -16,34 +16,35 @@ def run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "teleop.apps.cli", *args], capture_output=True, text=True, cwd=cwd)
 
 
-def test_geometry_command_writes_json(tmp_path):
+# `main` in this process: the exit code it returns is the process's (the entry-point and Ctrl-C tests below
+# run the real `python -m teleop.apps.cli`)
+
+def test_geometry_command_writes_json(tmp_path, capsys):
     out = tmp_path / "g.json"
-    r = run("geometry", "--json", str(out))
-    assert r.returncode == 0, r.stderr
+    assert main(["geometry", "--json", str(out)]) == 0, capsys.readouterr().err
     data = json.loads(out.read_text())
     np.testing.assert_allclose(data["lengths_mm"], 25.0)
 
 
-def test_bad_geometry_file_exit_2_one_line_nothing_written(tmp_path):
+def test_bad_geometry_file_exit_2_one_line_nothing_written(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text("[geometry]\nmu = 1\n")
     out = tmp_path / "g.json"
-    r = run("geometry", "--geometry", str(bad), "--json", str(out))
-    assert r.returncode == 2
-    lines = r.stderr.strip().splitlines()
+    assert main(["geometry", "--geometry", str(bad), "--json", str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and str(bad) in lines[0]
     assert not out.exists()
 
 
-def test_nan_and_unreachable_pose_exit_2():
-    r = run("geometry", "--pose-mm-deg", "0", "0", "nan", "0", "0", "0")
-    assert r.returncode == 2 and "finite" in r.stderr
-    r = run("geometry", "--pose-mm-deg", "0", "0", "80", "0", "0", "0")
-    assert r.returncode == 2 and "unreachable" in r.stderr
+def test_nan_and_unreachable_pose_exit_2(capsys):
+    assert main(["geometry", "--pose-mm-deg", "0", "0", "nan", "0", "0", "0"]) == 2
+    assert "finite" in capsys.readouterr().err
+    assert main(["geometry", "--pose-mm-deg", "0", "0", "80", "0", "0", "0"]) == 2
+    assert "unreachable" in capsys.readouterr().err
 
 
-def test_unknown_argument_exit_2():
-    assert run("geometry", "--bogus").returncode == 2
+def test_unknown_argument_exit_2(capsys):
+    assert main(["geometry", "--bogus"]) == 2
 
 
 # Every argparse error, in every subcommand: exactly one stderr line

@@ -1,8 +1,6 @@
 """The first run's kernel compilation is said before it starts (teleop.loop.warm), `teleop warm` does it a group
 at a time with a line each, and blind-test compiles before its progress starts (its ETA counts participants)."""
 
-import subprocess
-import sys
 from types import SimpleNamespace
 
 import pytest
@@ -49,10 +47,11 @@ def test_a_cold_cache_is_said_before_anything_compiles(monkeypatch, cold):
     assert warm.warm_up(say=said.append) == 0.0 and len(said) == 2 + cold  # once per process
 
 
-def test_teleop_warm_says_each_group_and_its_time():
-    r = subprocess.run([sys.executable, "-m", "teleop.apps.cli", "warm"], capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stderr
-    lines = r.stdout.splitlines()
+def test_teleop_warm_says_each_group_and_its_time(monkeypatch, capsys):
+    """`teleop warm` in this process, as in a fresh one (no warm-up done yet here)."""
+    monkeypatch.setattr(warm, "_done", [])
+    assert cli.main(["warm"]) == 0
+    lines = capsys.readouterr().out.splitlines()
     assert lines[0] in (warm.COLD_MESSAGE, "loading compiled kernels ...")
     for name, _ in warm.GROUPS:
         assert any(line.startswith(f"  {name}: ") and line.endswith(" s") for line in lines), (name, lines)

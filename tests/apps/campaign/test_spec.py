@@ -1,13 +1,11 @@
 """Campaign files: the grid and its tasks, and bad input named with the file and key (exit 2, one line,
 nothing written)."""
 
-import subprocess
-import sys
-
 import pytest
 
 from teleop.apps.campaign.blind import point_tasks, tasks
 from teleop.apps.campaign.spec import load_campaign
+from teleop.apps.cli import main
 from teleop.core.errors import InputError
 
 GOOD = """
@@ -94,12 +92,9 @@ def test_recordings_campaign_paths_maps_and_errors(tmp_path):
         assert message in str(err.value)
 
 
-def run_cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "teleop.apps.cli", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=120)
-
-
-def test_cli_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
+def test_cli_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, monkeypatch, capsys):
+    """Through `teleop.apps.cli.main` in this process, run in tmp_path (`--out out` is relative to it)."""
+    monkeypatch.chdir(tmp_path)
     bad = write(tmp_path, GOOD.replace("robot_substeps = 4", "robot_substeps = 'four'"))
     for args, needle in (
             (["campaign", "run", str(bad), "--out", "out"], "[rig] robot_substeps: expected a whole number"),
@@ -109,7 +104,7 @@ def test_cli_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
             (["bench", "blind-jnd", "--scheduler", "udp://x:1"], "expected none, local:N"),
             (["campaign", "summary", str(write(tmp_path, GOOD, "g.toml")), "--out", "out"],
              "holds no campaign results")):
-        r = run_cli(*args, cwd=tmp_path)
-        assert r.returncode == 2, r.stderr
-        assert len(r.stderr.strip().splitlines()) == 1 and needle in r.stderr, r.stderr
+        rc, err = main(args), capsys.readouterr().err
+        assert rc == 2, err
+        assert len(err.strip().splitlines()) == 1 and needle in err, err
         assert not (tmp_path / "out").exists()
