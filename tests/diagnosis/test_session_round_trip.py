@@ -2,12 +2,29 @@
 Coulomb friction switched on in the simulated robot beyond its sheath's capstan is named on the exported
 cable, in every column subset, and the model saved from the diagnosis, loaded back into the simulated robot,
 replays the session's commands with a residual several times smaller than the plain robot's; compounds
-(Coulomb + viscous, Coulomb + Dahl) are named as both."""
+(Coulomb + viscous, Coulomb + Dahl) are named as both.
+
+The bench's `teleop session` and `teleop export` run in this process here (`in_process`): the same commands
+on the same arguments (a simulated-clock session is the same on any machine), without a child interpreter's
+start and kernel loading each; tests/apps/test_cli_geometry.py runs the bench with its child processes."""
 
 import pytest
 
+from teleop.apps import cli
+from teleop.apps.bench import session_diagnosis
 from teleop.apps.bench.session_diagnosis import bench_session_diagnosis, parse_effect
 from teleop.core.errors import InputError
+
+
+@pytest.fixture(autouse=True)
+def in_process(monkeypatch):
+    """The bench's child commands through `teleop.apps.cli.main` in this process; a failure raises as theirs."""
+    def teleop(*args):
+        rc = cli.main(list(args))
+        if rc != 0:
+            raise RuntimeError(f"{' '.join(args[:2])} failed ({rc})")
+
+    monkeypatch.setattr(session_diagnosis, "_teleop", teleop)
 
 
 def test_coulomb_found_in_a_session_and_handed_back(tmp_path):

@@ -5,11 +5,10 @@ simulation's numerical precision. Sessions as `teleop bench session-diagnose` ma
 the simulated operator's pokes), without any effect switched on."""
 
 import math
-import subprocess
-import sys
 
 import pytest
 
+from teleop.apps.cli import main
 from teleop.diagnosis.diagnose import diagnose
 from teleop.io.recording_io import read_interchange
 from scenes.sim_robot import SimRobotParams
@@ -20,8 +19,9 @@ SESSIONS = [(1, 6.0), (2, 10.0), (3, 8.0)]
 
 
 def _teleop(*args):
-    res = subprocess.run([sys.executable, "-m", "teleop.apps.cli", *args], capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr[-800:]
+    """`teleop ARGS` in this process (a simulated-clock session is the same in any process; a child
+    interpreter's start and kernel loading cost about as much as the session itself)."""
+    assert main(list(args)) == 0, args
 
 
 @pytest.fixture(scope="module")
