@@ -46,6 +46,8 @@ PARSIMONY = 0.08     # candidates within 8 % of the best held-out RMSE count as 
                      # discontinuous model's switching time is noise-limited: smoother relatives win a
                      # few per cent at reversals without being the physics)
 MAX_EFFECTS = 3      # per link
+NEAR_FLOOR = 1.15    # an addition that ends within this factor of the residual's white noise ...
+NEAR_ACCEPT = math.sqrt(ACCEPT)   # ... pays from this held-out improvement on (`_pays`)
 FIT_SAMPLES = 2000   # fits run on the fit part decimated to about this many samples (stateful effects
                      # integrate along the smoothed drive, exact on monotone stretches); scores use all
 MIN_FIT_RATE_DT = 0.01  # ... but never decimated below 100 Hz (reversal timing), so long records fit more
@@ -498,7 +500,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
                 ranking[name] = f
             cands.append(f)
             by_name[name] = f
-            if position_only(name):
+            if position_only(name) or get_effect(name).rules.general_candidate:
                 cands.extend(_curved(d, f, name, fit_idx, hold_idx, seed))
             if progress is not None:
                 progress(1)
@@ -528,8 +530,8 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
                 except (ValueError, FloatingPointError, np.linalg.LinAlgError):
                     pass
             refit = _pick(joint, d)
-            if _pays(pick, current):
-                if _pays(refit, current):
+            if _pays(pick, current, floor):
+                if _pays(refit, current, floor):
                     pick = refit
             elif refit is not None and refit.rmse_hold * ACCEPT ** 2 <= current.rmse_hold:
                 pick = refit
@@ -539,7 +541,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
                     pick is None or r_delay * (1 + PARSIMONY) < pick.rmse_hold):
                 delay = (tau, r_delay)   # a plain delay explains it better: name nothing
                 break
-        pays = _pays(pick, current)
+        pays = _pays(pick, current, floor)
         if pays and foreign(d, current, pick, fit_idx, hold_idx):
             break
         if not pays and round_ == 0 and len(cands) >= 2 and current.rmse_hold >= ACCEPT ** 2 * floor:
@@ -595,12 +597,27 @@ def _curved(d: LinkData, plain: Fit, name: str, fit_idx: slice, hold_idx: slice,
     the chain refitted with it)] as a candidate of its own where it beats the plain form as every general
     form must (held-out RMSE lower by PARSIMONY, a better information criterion), else []. Wherever the
     load follows the drive position, a position-only force's linear part is the baseline gain's to take
-    and its curvature is what tells it apart, so the general form cannot wait for the plain one to pay."""
-    shape = tuple(f"{name}.{s.name}" for s in get_effect(name).params if s.shape)
-    try:
-        f = fit_chain(d, plain.model, (), fit_idx, hold_idx, seed=seed, free_shape=shape)
-    except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+    and its curvature is what tells it apart, so the general form cannot wait for the plain one to pay.
+    The same for an effect whose rules say so (Rules.general_candidate: a stretch under a load read at the
+    motor, beyond the sheath's friction)."""
+    eff = get_effect(name)
+    shape = tuple(f"{name}.{s.name}" for s in eff.params if s.shape)
+    starts = [plain.model]
+    if eff.rules.general_candidate:   # also from the middle of the range of a shape parameter whose plain
+        mid = {s.name: s.from_unit(0.5) for s in eff.params   # value is a bound (a gradient-free start there)
+               if s.shape and s.to_unit(s.default) in (0.0, 1.0)}
+        if mid:
+            starts.append(plain.model.with_effects([(n, {**p, **mid} if n == name else p)
+                                                    for n, p in plain.model.effects]))
+    fits = []
+    for start in starts:
+        try:
+            fits.append(fit_chain(d, start, (), fit_idx, hold_idx, seed=seed, free_shape=shape))
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            pass
+    if not fits:
         return []
+    f = min(fits, key=lambda g: g.rmse_fit)
     better = f.rmse_hold * (1 + PARSIMONY) <= plain.rmse_hold and delta_bic(f, plain) < 0
     # and the curvature must be what it gains by, not a better start of the plain form's parameters: the
     # same fit with the general form's parameters at their plain defaults is worse by PARSIMONY
@@ -609,9 +626,17 @@ def _curved(d: LinkData, plain: Fit, name: str, fit_idx: slice, hold_idx: slice,
     return [f] if better and needed and not f.at_bound else []
 
 
-def _pays(pick: Fit | None, current: Fit) -> bool:
-    """An addition pays: held-out RMSE lower by ACCEPT and a better information criterion."""
-    return pick is not None and pick.rmse_hold * ACCEPT <= current.rmse_hold and delta_bic(pick, current) < 0
+def _pays(pick: Fit | None, current: Fit, floor: float = 0.0) -> bool:
+    """An addition pays: a better information criterion, and a held-out RMSE lower by ACCEPT, or (with the
+    residual's white noise `floor`, locate.noise_level) lower by NEAR_ACCEPT and within NEAR_FLOOR of the
+    floor: where the baseline has already absorbed most of an effect (a capstan's mu takes a Dahl friction's
+    steady part) what is left above the noise is small, and an addition that takes the chain from above
+    ACCEPT of the floor (the search's own gate) down to it explains what there was to explain."""
+    if pick is None or delta_bic(pick, current) >= 0:
+        return False
+    if pick.rmse_hold * ACCEPT <= current.rmse_hold:
+        return True
+    return floor > 0 and pick.rmse_hold * NEAR_ACCEPT <= current.rmse_hold and pick.rmse_hold <= NEAR_FLOOR * floor
 
 
 def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:
@@ -619,8 +644,10 @@ def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: 
     play, growth with position and start) when that form pays: held-out RMSE lower by more than PARSIMONY
     and a better information criterion. A shape parameter that ends on its plain bound is held there and
     the rest refitted once. Else `pick` as it is."""
-    # a position-only effect's general form was a candidate of its own (_curved), under the same rule
-    free = tuple(f"{n}.{s.name}" for n in added if not position_only(n) for s in get_effect(n).params if s.shape)
+    # a position-only effect's general form was a candidate of its own (_curved), under the same rule, and so
+    # was one whose rules say so (Rules.general_candidate)
+    free = tuple(f"{n}.{s.name}" for n in added if not (position_only(n) or get_effect(n).rules.general_candidate)
+                 for s in get_effect(n).params if s.shape)
     if not free:
         return pick
     for _ in range(2):

@@ -363,7 +363,10 @@ class Rules:
     that its extra parameters start where the simpler law ends (a fit from its own guess can end in a
     basin worse than the simpler law it contains), and it is named only where they pay on held-out data.
     nested_starts(params, signals) -> [params]: the starts of that fit, from the simpler effect's fitted
-    parameters and the signals the effect reads (Signals: v, load)."""
+    parameters and the signals the effect reads (Signals: v, load).
+    general_candidate: its general form (ParamSpec.shape) is a candidate of its own beside the plain one,
+    not only a refinement once the plain form is named (a stretch under a load read beyond the sheath's
+    friction: the plain form cannot pay there)."""
 
     channel: str = ""
     primary: tuple[str, ...] = ()
@@ -385,6 +388,7 @@ class Rules:
     also_known_as: tuple[str, ...] = ()
     extends: str = ""
     nested_starts: Callable[[Mapping[str, float], Signals], list] | None = None
+    general_candidate: bool = False
 
 
 @dataclass(frozen=True)
