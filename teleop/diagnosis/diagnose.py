@@ -285,8 +285,8 @@ def exact_rate(d: LinkData, fit_idx: slice, hold_idx: slice, baseline: tuple, se
 
 
 def _drive_rate(d: LinkData) -> str:
-    """How the link's drive rate was taken (links.clean_motion)."""
-    if not is_exact(d.x):
+    """How the link's drive rate was taken (links.clean_motion; a noisy drive's turns: links.located_rate)."""
+    if d.v is not None or not is_exact(d.x):
         return "central, smoothed"
     return "backward (exact drive)" if d.backward else "central (exact drive)"
 
@@ -311,7 +311,7 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
             without = simulation_baseline(plain, fit_idx, hold_idx, tuple(baseline), seed)
             if without.rmse_hold <= with_c.rmse_hold:
                 d = plain
-        if link.kind == "force" and link.drive and is_exact(d.x):
+        if link.kind == "force" and link.drive and d.v is None and is_exact(d.x):   # d.v: a noisy drive
             d = exact_rate(d, fit_idx, hold_idx, tuple(baseline), seed)
         res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed,
                                         baseline=tuple(baseline))

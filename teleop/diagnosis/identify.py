@@ -376,6 +376,16 @@ def delay_fit(d: LinkData, fit_idx: slice, hold_idx: slice, base: LinkModel | No
     return tau, rms((d.y - (g * us + c))[hold_idx])
 
 
+TIE = 1e-4   # simulation_baseline: fits whose fit-part scores differ by less than this fraction tie (the
+             # fit part cannot tell them apart: their optimisers stopped at its noise)
+
+
+def _at_limits(m: LinkModel) -> int:
+    """The number of m's effect parameters at an end of their range (within 1e-3 of it in unit space)."""
+    return sum(1 for n, p in m.effects for s in get_effect(n).params
+               if s.name in p and min(s.to_unit(s.clip(p[s.name])), 1.0 - s.to_unit(s.clip(p[s.name]))) < 1e-3)
+
+
 def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tuple = (), seed: int = 0) -> Fit:
     """The baseline: the ideal link with the baseline effects `names` that this link's channels allow
     (e.g. the sheath's capstan friction over the recorded bend), fitted jointly with gain and offset."""
@@ -408,7 +418,10 @@ def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tup
                 pass
     if not fits:
         return base
-    fit = min(fits, key=lambda f: f.rmse_fit)
+    low = min(f.rmse_fit for f in fits)
+    # among fits the fit part cannot tell apart, the one with more parameters at their limits (the limit
+    # law: a stiff stick whose transitions the fit part never sees cross late is the instant switch)
+    fit = max((f for f in fits if f.rmse_fit <= low * (1.0 + TIE)), key=lambda f: _at_limits(f.model))
     m = fit.model
     return Fit(LinkModel(m.link, m.gain, m.offset, m.direction, m.load_sign, m.effects, len(m.effects)),
                fit.stderr, fit.rmse_fit, fit.rmse_hold, fit.k, fit.n_eff, fit.at_bound)

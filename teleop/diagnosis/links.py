@@ -6,11 +6,13 @@ teleop.core.physics.links, shared with the simulation and the estimator.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from teleop.core.errors import InputError
 from teleop.core.physics.base import REGISTRY, get_effect
-from teleop.core.physics.links import Link, LinkData, LinkModel, is_exact, noise_sigma
+from teleop.core.physics.links import Link, LinkData, LinkModel, clean_motion, is_exact, noise_sigma
 from teleop.io.recording_io import Recording
 
 # width [s] of the zero-phase moving average on the recorded inputs (drive position, load, indentation):
@@ -91,6 +93,136 @@ def smooth(x: np.ndarray, width: int) -> np.ndarray:
     return out
 
 
+TURN_HYSTERESIS = 4.0   # a noisy drive turns once it is back this many of its smoothed noise's sigmas from an extreme
+TURN_MAX_S = 0.15       # widest half window [s] of a turn's local fit
+TURN_LACK = 9.2         # lack of fit (chi-square, 2 dof, 1 %) that ends the growth of a turn's window
+TURN_REST = 3.0         # a sample within this many of its turn's standard errors is at rest there,
+REST_MAX = 0.05         # and within this fraction of a sample of it
+
+
+def _turn_extremes(xs: np.ndarray, h: float) -> tuple[np.ndarray, float]:
+    """(indices of the extremes of xs at which it turns, the direction (+1, -1) before the first): the last
+    extreme before xs comes back by more than h (a play of half-width h on the drive: the smoothed noise's
+    flicker about a slow turn is no turn)."""
+    n = xs.shape[0]
+    s = 1.0 if xs[min(n - 1, 50)] >= xs[0] else -1.0
+    first, ext, ie, out = s, float(xs[0]) if n else 0.0, 0, []
+    for i, xi in enumerate(xs.tolist()):
+        if s * (xi - ext) > 0.0:
+            ext, ie = xi, i
+        elif s * (ext - xi) > h:
+            if not out:
+                first = s
+            out.append(ie)
+            s, ext, ie = -s, xi, i
+    return np.asarray(out, dtype=int), first
+
+
+def _fit_turn(x: np.ndarray, tau: np.ndarray, deg: int) -> tuple[np.ndarray, float]:
+    """(polynomial coefficients in tau, residual sum of squares) of x (m,) on tau (m,)."""
+    p = np.polynomial.polynomial.polyfit(tau, x, deg)
+    r = np.polynomial.polynomial.polyval(tau, p) - x
+    return p, float(np.dot(r, r))
+
+
+def _vertex(p: np.ndarray) -> float:
+    """The stationary point of polynomial p (coefficients, increasing powers) nearest 0, or NaN."""
+    r = np.roots(np.polynomial.polynomial.polyder(p)[::-1])
+    r = r[np.abs(r.imag) < 1e-12].real
+    return float(r[np.argmin(np.abs(r))]) if r.size else math.nan
+
+
+def _window(t: np.ndarray, tc: float, W: int) -> tuple[slice, np.ndarray]:
+    """(the samples within W of the time tc, their times from tc in units of W samples)."""
+    dt = float(t[1] - t[0])
+    c = int(round((tc - t[0]) / dt))
+    sl = slice(max(c - W, 0), min(c + W + 1, t.size))
+    return sl, (t[sl] - tc) / (W * dt)
+
+
+def _locate(x: np.ndarray, t: np.ndarray, tc: float, W: int, deg: int, sigma: float) -> tuple[float, float]:
+    """(time [s] of the stationary point of a degree-deg polynomial fitted to x within W samples of it, its
+    standard error [s]), starting from tc and re-centred once; (NaN, inf) where none lies in the window."""
+    dt = float(t[1] - t[0])
+    for _ in range(2):
+        sl, tau = _window(t, tc, W)
+        r = _vertex(_fit_turn(x[sl], tau, deg)[0])
+        if not abs(r) < 0.5:
+            return math.nan, math.inf
+        tc += r * W * dt
+    # the standard error: the fitted slope's at the turn over the curvature
+    sl, tau = _window(t, tc, W)
+    X = np.vander(tau, deg + 1, increasing=True)
+    p = _fit_turn(x[sl], tau, deg)[0]
+    se = sigma * math.sqrt(max(float(np.linalg.pinv(X.T @ X)[1, 1]), 0.0))
+    return tc, se / max(abs(2.0 * p[2]), 1e-300) * W * dt
+
+
+def turn_times(x: np.ndarray, t: np.ndarray, xs: np.ndarray, sigma: float,
+               width: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """(times [s] of a noisy drive's turns, each located between samples; their standard errors [s]; the
+    direction before the first). The turns are the extremes of the smoothed drive xs that it leaves by
+    TURN_HYSTERESIS of its noise (sigma / sqrt(width), sigma x's); each is located on
+    the recorded drive x by the stationary point of a local polynomial, whose half window grows (up to
+    TURN_MAX_S and half the way to the next turns) while a cubic still fits it (against a quintic: TURN_LACK).
+    Where the cubic's own term is within the noise the turn is symmetric and a parabola over twice that window
+    locates it (a cubic's third-order term costs the vertex 2.5x its precision). An instant switch at a turn
+    costs the whole friction band at each sample put on the wrong side, so the turn must be placed to a small
+    fraction of a sample, which the smoothed rate's sign does not do (its moving average and central
+    difference leave the turn's time to within about a quarter of a sample)."""
+    ext, first = _turn_extremes(xs, TURN_HYSTERESIS * sigma / math.sqrt(max(width, 1)))
+    dt = float(np.median(np.diff(t)))
+    out, err = np.empty(ext.size), np.zeros(ext.size)
+    for j, e in enumerate(ext):
+        gap = min(e - (ext[j - 1] if j else 0), (ext[j + 1] if j + 1 < ext.size else t.size - 1) - e)
+        cap = int(min(0.5 * gap, TURN_MAX_S / dt))
+        out[j], err[j] = t[e], dt   # where it cannot be located: at the extreme, to within a sample
+        if cap < 4:
+            continue
+        W = None
+        for w in np.unique(np.geomspace(4, cap, 10).astype(int)):
+            sl, tau = _window(t, float(t[e]), int(w))
+            if W is not None and (_fit_turn(x[sl], tau, 3)[1] - _fit_turn(x[sl], tau, 5)[1]) / (
+                    2.0 * sigma * sigma) > TURN_LACK:
+                break
+            W = int(w)
+        tc, sd = _locate(x, t, float(t[e]), W, 3, sigma)
+        if not math.isfinite(tc):
+            continue
+        # a parabola over twice the window where the cubic's term is within 3 standard errors there (centred
+        # on the turn: off it, a quartic term shows as a cubic one)
+        W2 = min(2 * W, cap)
+        sl, tau = _window(t, tc, W2)
+        X = np.vander(tau, 4, increasing=True)
+        p3 = _fit_turn(x[sl], tau, 3)[0][3]
+        if abs(p3) <= 3.0 * sigma * math.sqrt(max(float(np.linalg.pinv(X.T @ X)[3, 3]), 0.0)):
+            t2, sd2 = _locate(x, t, tc, W2, 2, sigma)
+            if math.isfinite(t2):
+                tc, sd = t2, sd2
+        out[j], err[j] = tc, sd
+    return out, err, first
+
+
+def located_rate(x: np.ndarray, t: np.ndarray, xs: np.ndarray, width: int) -> np.ndarray:
+    """(n,) the rate of a noisy drive x (n,) (smoothed: xs, `smooth` of width) with its direction switched at
+    its located turns (`turn_times`): the smoothed rate's magnitude, 0 where links.clean_motion finds a stop,
+    and between turns the sign of the stretch (a sample at t after a turn at t0 < t moves the new way). A
+    sample within TURN_REST standard errors of a turn (and within REST_MAX of a sample) is at rest (0: the
+    drive's rate there is zero within what the recording resolves, and the catalogue's rate laws hold their
+    state)."""
+    _, vc = clean_motion(xs, t)
+    turns, err, first = turn_times(x, t, xs, noise_sigma(x), width)
+    if not turns.size:
+        return vc
+    leg = np.searchsorted(turns, t, side="left")   # the stretch each sample lies in (after leg turns)
+    sign = np.where(leg % 2 == 0, first, -first)
+    near = np.clip(np.searchsorted(turns, t), 1, turns.size) - 1
+    near = np.where(np.abs(turns[np.minimum(near + 1, turns.size - 1)] - t) < np.abs(turns[near] - t),
+                    np.minimum(near + 1, turns.size - 1), near)
+    rest = np.abs(t - turns[near]) <= np.minimum(TURN_REST * err[near], REST_MAX * float(np.median(np.diff(t))))
+    return np.where((vc == 0.0) | rest, 0.0, sign * np.abs(vc))
+
+
 def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_input: bool = False) -> LinkData:
     """The arrays of `link` from `rec`; inputs (not the output) are smoothed (see smooth_width), except
     the link's input itself with raw_input (a play operator's dead band filters the input's noise on its
@@ -111,11 +243,14 @@ def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_i
         return smooth(ch[name], w)
 
     x = sm(link.drive) if link.drive and link.kind != "contact" else None
+    v = None
+    if x is not None and widths[-1] > 1:   # a noisy drive: its turns located between samples
+        v = located_rate(ch[link.drive], rec.t, x, widths[-1])
     u = ch[link.input] if raw_input else sm(link.input)
     load = sm(link.load) if link.load else None
     temp = sm("temperature") if "temperature" in ch else None
     return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"), max(widths) * dt,
-                    known_params(rec))
+                    known_params(rec), v=v)
 
 
 def known_params(rec: Recording) -> dict:

@@ -149,20 +149,39 @@ def forward_step(x_prev, f, x, t_tip, mu_theta, k):
 
 
 # ------------------------------------------------------------------ the law on a recorded drive (the catalogue's)
-#: the catalogue's capstan_friction kernel: its constants are the sheath's, then PRELOAD [N] and INSTANT [N/m]
-#: (the stick stiffness from which on a reversal is a plain switch); its state the sheath's rows, then T_PREV
-PRELOAD, INSTANT, N_RATE_CONST = N_CONST, N_CONST + 1, N_CONST + 2
+#: the catalogue's capstan_friction kernel: its constants are the sheath's, then PRELOAD [N], INSTANT [N/m]
+#: (the stick stiffness from which on a reversal is a plain switch) and STICK_N (the transitions' exponent,
+#: `stick_transition`); its state the sheath's rows, then T_PREV
+PRELOAD, INSTANT, STICK_N, N_RATE_CONST = N_CONST, N_CONST + 1, N_CONST + 2, N_CONST + 3
 T_PREV, N_RATE_STATE = N_STATE, N_STATE + 1
 
 
 @njit
-def rate_play_step(f, dx, s, lead, F_tip, mu_theta, k, instant):
+def stick_transition(f, travel, s, lo, hi, k, n):
+    """Motor force [N] after a travel [m] (>= 0) in the direction s (+1, -1) from f [N] across the band
+    [lo, hi] [N]: the part u of the band crossed from the line the cable left grows as u = (delta /
+    delta_c)^n with the travel delta since it left it, delta_c = (hi - lo) / k the travel across the whole
+    band (k [N/m] the transition's mean stiffness). n = 1: the linear stick, clamp(f + s k travel, lo, hi);
+    n = 1/2: the square-root transition of a friction distributed along the sheath (the stuck part of the
+    cable grows with the tension change, so the travel grows with its square; Kaneko et al. 1991, Agrawal et
+    al. 2010). Exact for any travel: u^(1 / n) advances by travel / delta_c."""
+    if n == 1.0 or hi <= lo:
+        return clamp(f + s * k * travel, lo, hi)
+    band = hi - lo
+    u = clamp((f - lo) / band if s > 0.0 else (hi - f) / band, 0.0, 1.0)
+    u = min(u ** (1.0 / n) + k * travel / band, 1.0) ** n
+    return lo + band * u if s > 0.0 else hi - band * u
+
+
+@njit
+def rate_play_step(f, dx, s, lead, F_tip, mu_theta, k, instant, n):
     """Motor force [N] after a sample of a recorded drive: the forward law's clamp(f + k dx) into the band of
     the tip force F_tip [N], its direction taken from the drive's rate sign s (+1, -1; 0: at rest, f held
     in the band) rather than from the travel dx [m] since the last sample. They differ for a sample after a
     reversal the rate places inside the last interval (a central difference sees the turn half a sample
     before a backward one): then the travel since the turn is `lead` [m] (a fraction of |v| dt) in the new
-    direction. k >= instant [N/m] is the limit of an instant switch: the band's side of s."""
+    direction. k >= instant [N/m] is the limit of an instant switch: the band's side of s. The transition
+    across the band: `stick_transition` of exponent n (1: linear)."""
     lo, hi = capstan_band(F_tip, mu_theta)
     if s == 0.0:
         return clamp(f, lo, hi)
@@ -170,16 +189,16 @@ def rate_play_step(f, dx, s, lead, F_tip, mu_theta, k, instant):
         return hi if s > 0.0 else lo
     if dx * s <= 0.0:
         dx = s * lead
-    return clamp(f + k * dx, lo, hi)
+    return stick_transition(f, dx * s, s, lo, hi, k, n)
 
 
 @njit
 def capstan_rate_step(st, u, c):
     """The catalogue's capstan_friction step: u = (t [s], x [m], v [m/s], load [N], theta [rad]) one sample of
-    a recorded drive and its tip load; c (N_RATE_CONST,) the sheath's constants, PRELOAD, INSTANT; st
-    (N_RATE_STATE,) one cable's state. Motor force [N] of the sheath's law (`rate_play_step`) on the tension
-    load + preload, read from the preload. The first sample starts on the tip tension (at once on the side
-    of the motion for an instant switch)."""
+    a recorded drive and its tip load; c (N_RATE_CONST,) the sheath's constants, PRELOAD, INSTANT, STICK_N;
+    st (N_RATE_STATE,) one cable's state. Motor force [N] of the sheath's law (`rate_play_step`) on
+    the tension load + preload, read from the preload. The first sample starts on the tip tension (at once on
+    the side of the motion for an instant switch)."""
     t, x, v, load, theta = u[0], u[1], u[2], u[3], u[4]
     P = c[PRELOAD]
     mt = c[MU] * theta
@@ -187,10 +206,10 @@ def capstan_rate_step(st, u, c):
     if st[X] != st[X]:
         f = start_on_tip(load + P, mt, c[STICK_K])
         if c[STICK_K] >= c[INSTANT] and s != 0.0:
-            f = rate_play_step(f, 0.0, s, 0.0, load + P, mt, c[STICK_K], c[INSTANT])
+            f = rate_play_step(f, 0.0, s, 0.0, load + P, mt, c[STICK_K], c[INSTANT], c[STICK_N])
     else:
         lead = 0.125 * abs(v) * (t - st[T_PREV])   # a quadratic turn's travel since: |v| dt / 8 on average
-        f = rate_play_step(st[F], x - st[X], s, lead, load + P, mt, c[STICK_K], c[INSTANT])
+        f = rate_play_step(st[F], x - st[X], s, lead, load + P, mt, c[STICK_K], c[INSTANT], c[STICK_N])
     st[F], st[X], st[T_PREV] = f, x, t
     return f - P
 

@@ -23,7 +23,7 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.kernels.sheath import (INSTANT, N_RATE_CONST, PRELOAD, STICK_K, STIFF_STICK_K, Sheath,
+from teleop.core.kernels.sheath import (INSTANT, N_RATE_CONST, PRELOAD, STICK_K, STICK_N, STIFF_STICK_K, Sheath,
                                         capstan_band_loop, capstan_rate_run, capstan_rate_step, capstan_tip_run,
                                         motor_force_run, new_state)
 from teleop.core.kernels.jit import broadcast_call
@@ -97,11 +97,11 @@ def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
 def _pack(p: Mapping[str, float]) -> np.ndarray:
     """The step kernel's parameters (kernels.sheath.capstan_rate_step): the sheath's kernel constants for
     friction mu [-] and stick stiffness k [N/m] (the wrap comes with the signals), then the preload [N] and
-    the stick stiffness of an instant switch (k's fit bound)."""
+    the stick stiffness of an instant switch (k's fit bound) and the transitions' exponent n."""
     c = np.empty(N_RATE_CONST)
     c[:PRELOAD] = Sheath(mu=float(p["mu"]), stick_k=float(p["k"])).constants()
     c[STICK_K] = stick_stiffness(float(p["k"]))
-    c[PRELOAD], c[INSTANT] = p.get("preload", 0.0), math.inf
+    c[PRELOAD], c[INSTANT], c[STICK_N] = p.get("preload", 0.0), math.inf, p.get("n", 1.0)
     return c
 
 
@@ -164,6 +164,9 @@ PARAMS = (
     ParamSpec("preload", "N", 0.0, 50.0, 0.0, "pretension the cable carries beside the load (an antagonistic "
               "pair's, or a load sensor zeroed under tension): the sheath grips load + preload, the motor "
               "force is read from the preload (general form; 0: the plain law)", shape=True),
+    ParamSpec("n", "1", 0.2, 2.0, 1.0, "exponent of the stick transitions: the part of the band crossed grows "
+              "as (travel / travel across it)^n (1: a linear stick; 1/2: a friction distributed along the "
+              "sheath; kernel sheath.stick_transition)"),
 )
 
 
@@ -234,10 +237,13 @@ def _baseline_starts(rec, index, gain, offset, direction) -> list:
     out = []
     for g_s, c_s, mu_theta, pre in starts:
         band = 2.0 * float(np.mean(np.abs(g_s * rec.u + pre))) * math.sinh(max(mu_theta, 0.02))
-        p0 = {"mu": min(mu_theta / th, 1.4), "theta": PARAMS[1].default, "preload": float(pre)}
-        # a stick crossing the band over 5 % of the travel (an instant switch is k's upper bound, reached
-        # from there where the data asks for it)
+        p0 = {"mu": min(mu_theta / th, 1.4), "theta": PARAMS[1].default, "preload": float(pre),
+              "n": 0.5}
+        # a stick crossing the band over 5 % of the travel on a distributed friction's curve (the linear
+        # stick is the baseline's plain start), and the instant switch (k's upper bound: from a finite start a
+        # fit stalls short of it where a few samples at the turns still cross the band late)
         out.append((direction, float(g_s), float(c_s), {**p0, "k": max(band / (0.05 * span), 1.0)}))
+        out.append((direction, float(g_s), float(c_s), {**p0, "k": K_INSTANT}))
     return out
 
 
