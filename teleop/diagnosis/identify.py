@@ -526,7 +526,9 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
         cands = [f for f in cands if not load_alike(d, current, f, hold_idx)]
         if not cands:
             break
-        pick = _pick(cands, d)
+        # parsimony among the candidates that pay: a simpler one within PARSIMONY that does not pay is no
+        # equal of one that does (a viscous friction 6 % behind a Dahl that reaches the noise floor)
+        pick = _pick([f for f in cands if _pays(f, current, floor)], d) or _pick(cands, d)
         if round_ > 0:
             # the screen holds the chain's effects as they were fitted, and an effect fitted first absorbs
             # what it can of the next (a Coulomb friction takes the steady part of a Dahl's, a thermal drift

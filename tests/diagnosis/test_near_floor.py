@@ -57,3 +57,13 @@ def test_a_stretch_without_the_tip_force_sensor_is_named(tmp_path):
     assert row["named"] == "cable_compliance", row["all_named"]
     assert row["params_ok"], row["param_errors"]
     assert row["improvement"] >= 2.0
+
+
+def test_parsimony_among_the_candidates_that_pay(tmp_path):
+    """A Dahl friction the capstan's mu had mostly taken (literature ranges, noise 3 % of full scale): it
+    takes the chain from 1.21x the residual's white noise to 1.07x; a viscous friction 6 % behind it held out
+    (fewer parameters, within PARSIMONY) does not pay, and no longer vetoes it."""
+    case = make_case(5, "dahl_hysteresis", "rig", 1, GenConfig(None, 10.0, 1.0, "literature"))
+    row = run_case(case, tmp_path)
+    assert row["named"] == "dahl_hysteresis", row["all_named"]
+    assert row["params_ok"], row["param_errors"]
