@@ -34,6 +34,8 @@ Arrays of c cables (the TendonSheath's, written in place):
 How the cables share a step: they run in lockstep, node by node (the Newton sweeps' recurrences are chains of
 dependent divisions; c independent chains side by side keep the processor busy), each cable iterating until
 its own convergence: a cable's numbers do not depend on the others'.
+Compiled with IEEE division (jit.njit ieee_division: no zero test per division in the Newton sweeps; every
+divisor here is nonzero by construction, and a non-finite tension would reach the loop's finiteness checks).
 """
 
 from __future__ import annotations
@@ -84,7 +86,7 @@ O_ROWS = 4
 STRIBECK_SPAN = 7.5  # g(v) = mu_c past |v| = 7.5 v_s (the peak's share exp(-56) is below rounding)
 
 
-@njit
+@njit(ieee_division=True)
 def stribeck_curve(v, mu_c, mu_s, v_s):
     """g(v) [-] at speed v [m/s]."""
     if mu_s == mu_c or v_s <= 0.0:
@@ -95,7 +97,7 @@ def stribeck_curve(v, mu_c, mu_s, v_s):
     return mu_c + (mu_s - mu_c) * math.exp(-r * r)
 
 
-@njit
+@njit(ieee_division=True)
 def bristle(z, du, izs):
     """(z', dz'/du): the LuGre state after travel du [m] by backward Euler, izs = sigma0 / g = 1 / zs [1/m]
     (0: no friction)."""
@@ -112,7 +114,7 @@ def bristle(z, du, izs):
     return zn, dz
 
 
-@njit
+@njit(ieee_division=True)
 def taut(t0, k, stretch):
     """(T, dT/dstretch) of an element [N, N/m]: t0 + k stretch, 0 when slack."""
     s = t0 + k * stretch
@@ -121,7 +123,7 @@ def taut(t0, k, stretch):
     return 0.0, 0.0
 
 
-@njit
+@njit(ieee_division=True)
 def node_tension(Tl, Tr, bl, br):
     """Tension [N] at a node between its proximal and distal elements (tensions Tl, Tr [N], bends bl, br
     [rad]). The node's friction comes from the bends of its two half elements, so the tension there lies
@@ -137,7 +139,7 @@ def node_tension(Tl, Tr, bl, br):
     return lo * (hi / lo) ** (br / (bl + br))
 
 
-@njit
+@njit(ieee_division=True)
 def node_tension_rows(T, j, bl, br, out):
     """out (m,) = node_tension of node j of each row of element tensions T (m, N) [N] with bends bl, br
     [rad] of elements j - 1 and j (node 0: T[:, 0])."""
@@ -145,7 +147,7 @@ def node_tension_rows(T, j, bl, br, out):
         out[r] = T[r, 0] if j == 0 else node_tension(T[r, j - 1], T[r, j], bl, br)
 
 
-@njit
+@njit(ieee_division=True)
 def cables_step(S, cab, p, h):
     """One backward-Euler step h [s] of every cable: cab[:, C_DU0] the motor's travel over the step [m],
     cab[:, C_A] f_ext [N] (MODE_SPRING) or the tip's travel over the step [m] (MODE_POSITION), S[S_B] the
@@ -281,7 +283,7 @@ def cables_step(S, cab, p, h):
             u[c, i] += x
 
 
-@njit
+@njit(ieee_division=True)
 def step(S, cab, p, x_in, tip_in, theta_in, T, out):
     """One tick of c cables, one call: x_in (c,) the motor input, motor travel x = x0 + s x_in [m] at the
     tick's end (cab's C_X0, C_XS); tip_in (c,) f_ext [N] or tip travel [m] at the tick's end (by p[P_MODE]);
@@ -329,7 +331,7 @@ def step(S, cab, p, x_in, tip_in, theta_in, T, out):
                 out[O_ROWS + q, c] = node_tension(R[c, j - 1], R[c, j], b[c, j - 1], b[c, j])
 
 
-@njit
+@njit(ieee_division=True)
 def run(S, cab, p, X, TIP, THETA, OUT, TT):
     """`step` for each tick m of X, TIP, THETA (m, c): OUT (m, O_ROWS + taps, c); TT (m, c, N) the element
     tensions of every tick, or (1, c, N) to keep the last tick's only."""

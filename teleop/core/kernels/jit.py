@@ -92,22 +92,31 @@ if _numba is not None:
 _warned = []
 
 
-def njit(fn):
+def njit(fn=None, *, ieee_division: bool = False):
     """Compile `fn` with numba (nopython, cached on disk, no GIL held); without numba return it as is.
+
+    ieee_division: a float division by zero gives inf or nan as in numpy (numba's error_model "numpy")
+    instead of raising ZeroDivisionError as Python does; the kernel's code then carries no zero test per
+    division (the same results for every nonzero divisor). For kernels whose divisors are never zero and
+    whose callers check the outputs' finiteness anyway. `@njit(ieee_division=True)` (compiled only; the
+    Python fallback raises as Python does).
 
     With no writable cache location at all (read-only package, unwritable NUMBA_CACHE_DIR and home) numba
     refuses `cache=True`; the kernel then compiles in memory at its first call (one warning line)."""
+    if fn is None:
+        return lambda f: njit(f, ieee_division=ieee_division)
     if _numba is None:
         fn.py_func = fn
         return fn
+    opts = {"nogil": True, "error_model": "numpy"} if ieee_division else {"nogil": True}
     try:
-        return _numba.njit(cache=True, nogil=True)(fn)
+        return _numba.njit(cache=True, **opts)(fn)
     except RuntimeError as exc:  # "cannot cache function ...: no locator available"
         if not _warned:
             print(f"teleop: warning: numba cache unavailable ({exc}); set NUMBA_CACHE_DIR to a writable "
                   "directory to keep compiled kernels between runs", file=sys.stderr)
             _warned.append(True)
-        return _numba.njit(nogil=True)(fn)
+        return _numba.njit(**opts)(fn)
 
 
 def broadcast_call(loop, *args):
