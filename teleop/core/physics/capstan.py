@@ -101,9 +101,14 @@ def _pack(p: Mapping[str, float]) -> np.ndarray:
     c = np.empty(N_RATE_CONST)
     c[:PRELOAD] = Sheath(mu=float(p["mu"]), stick_k=float(p["k"])).constants()
     c[STICK_K] = stick_stiffness(float(p["k"]))
-    c[PRELOAD], c[INSTANT], c[STICK_N] = p.get("preload", 0.0), math.inf, p.get("n", 1.0)
+    n = float(p.get("n", 1.0))
+    c[PRELOAD], c[INSTANT], c[STICK_N] = p.get("preload", 0.0), math.inf, 1.0 if abs(n - 1.0) < N_LINEAR else n
     return c
 
+
+#: the transitions' exponent n within this of 1 is the linear stick itself (a fit of a linear stick's
+#: recording ends next to 1, not on it, and the plain law is then reproduced to the recording's precision)
+N_LINEAR = 1e-3
 
 #: the stick stiffness [N/m] of an instant switch, the fit's upper bound on k: on sampled data a stiff but
 #: finite stick still crosses the band a sample late at a slow turn, where the motor moves least. Over k's
