@@ -397,22 +397,26 @@ class SimRobot(ContextDevice):
         p, g = self.params, self.geom
         # `substeps` physics steps toward the commanded pose: tip (3,) [m], contact force (fx, fy, fz) [N] on the tip
         tip, F = self.world.advance(self._target if self._terms is not None else self._pose_terms()[1], p.substeps)
-        x = -self.L_cmd  # motor position: hauling in (shortening) is +
-        if self._rich is not None and self._play is not None:  # the cable moves with its realized length
-            x = -self._L_real
-        n = len(x)
-        t_tip, t_fsr, f, steps, counts = np.empty(n), np.empty(n), np.empty(6), np.empty(n, np.int64), \
-            np.empty(n, np.int64)
+        n = len(self.L_cmd)
+        t_tip, f, steps, counts = np.empty(n), np.empty(6), np.empty(n, np.int64), np.empty(n, np.int64)
         noise, k = self._noise_row()  # this reading's ADC noise [counts]: noise[k]
         # nothing acts between the lumped sheath and its FSR
         direct = self._added is None and self._rich is None and self._cables is None
         fused = self._fused
         if fused is not None:  # the distributed cable and its FSRs in the same call (kernel reading_cables)
             out = np.empty((fused[-1], n))  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
-            status = reading_cables(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
-                                    self._cap, f, t_tip, t_fsr, steps, self.L_cmd if self._play is None else
-                                    self._L_real, *fused[:4], out, TAP_FSR, *self._lag_args, noise, k, counts)
-        else:
+            status = reading_cables(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f,
+                                    t_tip, steps, self.L_cmd if self._play is None else self._L_real, *fused[:4], out,
+                                    TAP_FSR, *self._lag_args, noise, k, counts)
+            if status == KT.OK and self._rich is None:  # the usual case: no motor position, no lumped sheath
+                self._cables.sheath.t += self._dt
+                return self._reading(counts, steps, f, tip, t_tip, out[TAP_FSR], out[TAP_FBG],
+                                     {"t_motor": out[O_MOTOR]})
+        x = -self.L_cmd  # motor position: hauling in (shortening) is +
+        if self._rich is not None and self._play is not None:  # the cable moves with its realized length
+            x = -self._L_real
+        t_fsr = np.empty(n)
+        if fused is None:
             # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable
             # chain and, when direct, the FSRs (lag, conductance, ADC: FsrBranchLag.counts)
             status = KS.reading_counts(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
@@ -437,6 +441,11 @@ class SimRobot(ContextDevice):
             t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + self._dt])[0]
         if not counted:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
             fsr_counts(t_fsr, *self._lag_args, noise[k], counts)
+        return self._reading(counts, steps, f, tip, t_tip, t_fsr, t_fbg, extras)
+
+    def _reading(self, counts, steps, f, tip, t_tip, t_fsr, t_fbg, extras: dict) -> RobotReading:
+        """The reading's record (read's end): the distal FBGs' wavelengths from t_fbg, the clock and sequence
+        advanced one reading."""
         fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + self._dt)  # distal FBGs (sim_sensors)
         self.t += self._dt
         self.seq += 1

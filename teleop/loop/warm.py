@@ -211,9 +211,8 @@ def _cables(s) -> None:
     cables.step(np.zeros(n), np.full(n, P), np.zeros(n))
     cables.run(np.zeros((2, n)), np.full((2, n), P), np.zeros((2, n)))
     S, cab, p, T, rows = cables.kernel_args()  # its reading in one call (scenes.sim_robot_kernels)
-    reading_cables(s.tip, (0.0, 0.0, 0.0), s.A, s.theta, -s.L, s.L, s.L, s.kc, SH.new_state(n), np.empty(6),
-                   np.empty(n), np.empty(n), np.empty(n, dtype=np.int64), s.L, S, cab, p, T, np.empty((rows, n)),
-                   rows - 1,
+    reading_cables(s.tip, (0.0, 0.0, 0.0), s.A, s.theta, s.L, s.L, s.kc, np.empty(6), np.empty(n),
+                   np.empty(n, dtype=np.int64), s.L, S, cab, p, T, np.empty((rows, n)), rows - 1,
                    *FsrBranchLag(default_fsr_calibration(), n).kernel_args(), np.zeros((1, n)), 0,
                    np.empty(n, dtype=np.int64))
     lag = FsrBranchLag(default_fsr_calibration(), n)
@@ -262,10 +261,9 @@ def _tap(s) -> None:
                 np.zeros(3), np.eye(3), 1, True, True, np.zeros(6), L, True, 0.0, 0, c6, c6, L, 1, 0, True, L,
                 np.zeros(6), np.zeros(6), 0.0, 0.0, 0.0, 0.0, np.zeros(3))
     for j in (0, -1):  # teleop bench sim's log: a tick with a reading and one without
-        sim_log_row(0, np.zeros(7, dtype=np.int64), np.zeros((1, 7), dtype=np.int64), 0, 0, 0, 0,
-                    np.zeros((1, 4), dtype=np.int64), np.zeros(3), np.zeros((1, 3)), np.zeros(3), np.zeros((1, 3)), j,
-                    L, np.zeros((1, n)), np.zeros(n, dtype=np.int64), np.zeros((1, n), dtype=np.int64), np.zeros(6),
-                    np.zeros(1))
+        sim_log_row(0, 0, np.zeros(7, dtype=np.int64), 0, 0, 0, 0, np.zeros((1, 12), dtype=np.int64), np.zeros(3),
+                    np.zeros(3), np.zeros((1, 6)), j, L, np.zeros(n, dtype=np.int64), np.zeros(6),
+                    np.zeros((1, n + 1)), np.zeros((1, n), dtype=np.int64))
 
 
 def _around(s) -> None:

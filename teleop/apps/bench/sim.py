@@ -207,15 +207,16 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
     kin, phys, solver, rd = CallTimer(), CallTimer(), CallTimer(), CallTimer()
     solver_timed = False
     n_read = -(-n // params.robot_every)
-    L_log = np.zeros((n_read, 6))
+    Lf_log = np.zeros((n_read, 7))  # a reading's commanded lengths [m] and contact force along -z [N]
+    L_log, f_truth = Lf_log[:, :6], Lf_log[:, 6]
     counts_log = np.zeros((n_read, 6), dtype=np.int64)
-    f_truth = np.zeros(n_read)
-    p_log = np.zeros((n, 3))
-    F_log = np.zeros((n, 3))
+    pF_log = np.zeros((n, 6))  # a tick's stylus position [m] and force [N]
+    p_log, F_log = pF_log[:, :3], pF_log[:, 3:]
     enabled = 0
-    stage_ns = np.zeros((n, len(LOOP_STAGES)), dtype=np.int64)
-    sub_ns = np.zeros((n, 4), dtype=np.int64)  # cumulative kinematics, physics, stepSimulation, read [ns]
-    tick_ns = np.zeros(n, dtype=np.int64)
+    # a tick's timers [ns]: the loop's stages, the robot's cumulative kinematics, physics, stepSimulation and read,
+    # the tick (one array: the log's kernel call checks each array argument's type)
+    ns_log = np.zeros((n, len(LOOP_STAGES) + 5), dtype=np.int64)
+    stage_ns, sub_ns, tick_ns = ns_log[:, :len(LOOP_STAGES)], ns_log[:, len(LOOP_STAGES):-1], ns_log[:, -1]
     with robot, stylus:
         if stages:
             robot.command_lengths = kin.wrap(robot.command_lengths)
@@ -236,16 +237,16 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                 clock_t[0] = (k + 1) * dt
                 t0 = pc()
                 x = tp.tick(clock_t[0])
-                tick_ns[k] = pc() - t0
+                t1 = pc()
                 # the tick's row of every log in one compiled call (kernel tap.sim_log_row)
                 r = x.reading
                 if r is not None:
-                    log_row(k, tp.stage_ns, stage_ns, ka[0], pa[0], sa[0], ra[0], sub_ns, stylus.p, p_log, x.F,
-                            F_log, j, r.commanded_lengths, L_log, r.fsr_counts, counts_log, r.wrench_truth, f_truth)
+                    log_row(k, t1 - t0, tp.stage_ns, ka[0], pa[0], sa[0], ra[0], ns_log, stylus.p, x.F, pF_log, j,
+                            r.commanded_lengths, r.fsr_counts, r.wrench_truth, Lf_log, counts_log)
                     j += 1
                 else:
-                    log_row(k, tp.stage_ns, stage_ns, ka[0], pa[0], sa[0], ra[0], sub_ns, stylus.p, p_log, x.F,
-                            F_log, -1, no_L, L_log, no_counts, counts_log, no_L, f_truth)
+                    log_row(k, t1 - t0, tp.stage_ns, ka[0], pa[0], sa[0], ra[0], ns_log, stylus.p, x.F, pF_log, -1,
+                            no_L, no_counts, no_L, Lf_log, counts_log)
                 enabled += tp.state == State.ENABLED
             wall_ns, cpu = pc() - wall0, time.process_time() - cpu0
         finally:
@@ -298,8 +299,8 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                                  "ratio": round(m["wall_s"] / max(wall, 1e-9), 4),
                                  "ratio_cpu": round(m["cpu_s"] / max(cpu, 1e-9), 4)}
     if batch:
-        out["batch"] = bench_batch(L_log[:j], counts_log[:j], pad, robot_seed, substeps, plant, cable_params,
-                                   geometry)
+        out["batch"] = bench_batch(np.ascontiguousarray(L_log[:j]), counts_log[:j], pad, robot_seed, substeps, plant,
+                                   cable_params, geometry)
     return out
 
 

@@ -8,6 +8,7 @@ the cable chain tip tensions -> FSR-side tensions, built from the shared kernels
     reading: one reading after the physics steps (contact wrench, motor steps, cable_sensor) in one call:
         every kernel call pays for its argument handling, and several per reading added up in the
         closed-loop simulation's tick
+    reading_tips: reading up to the tip tensions (balance_tensions), for a cable other than the lumped sheath
     reading_counts: reading and, with nothing between the cable and its FSR, the FSRs' ADC counts
         (sensor.fsr_counts) in the same call
 """
@@ -66,14 +67,22 @@ def cable_sensor(f, A, theta, x, t_min, t_max, c, cap, t_tip, t_fsr):
     t_fsr (n,) [N] through each cable's sheath (wrap theta (n,) [rad]) at motor positions x (n,) [m]; c the
     sheath's constants (at the head of the array), cap (sheath.N_STATE, n) its state. Returns tension.OK, or
     the tension kernel's status (-1: A is not of rank n - 1), and then changes nothing."""
-    LU, p, q, nv, ok = null1_terms(A)
-    if not ok:
-        return -1
-    status = null1_tensions(LU, p, q, A, nv, f, t_min, t_max, c[SH.PRETENSION], t_tip)[0]
+    status = balance_tensions(f, A, t_min, t_max, c[SH.PRETENSION], t_tip)
     if status != OK:
         return status
     SH.motor_forces(cap, x, t_tip, theta, c, t_fsr)
     return OK
+
+
+@njit
+def balance_tensions(f, A, t_min, t_max, pretension, t_tip):
+    """Tip tensions t_tip (n,) [N] balancing the wrench f (6,) at A (A t + f = 0, the one-dimensional null
+    space closest to `pretension` [N], within [t_min, t_max] [N]). Returns tension.OK, or the tension kernel's
+    status (-1: A is not of rank n - 1)."""
+    LU, p, q, nv, ok = null1_terms(A)
+    if not ok:
+        return -1
+    return null1_tensions(LU, p, q, A, nv, f, t_min, t_max, pretension, t_tip)[0]
 
 
 @njit
@@ -132,9 +141,21 @@ def reading(o, F, A, theta, x, L_home, L, c, cap, f, t_tip, t_fsr, steps):
     cable chain (cable_sensor: t_tip, t_fsr (n,) [N] at A, wraps theta, motor positions x, sheath state
     cap). c (N_READING_CONST,): the constants named above. Returns cable_sensor's status (f and steps are
     written whatever it is)."""
+    status = reading_tips(o, F, A, L_home, L, c, f, t_tip, steps)
+    if status != OK:
+        return status
+    SH.motor_forces(cap, x, t_tip, theta, c, t_fsr)
+    return OK
+
+
+@njit
+def reading_tips(o, F, A, L_home, L, c, f, t_tip, steps):
+    """`reading` up to the tip tensions (f, steps, t_tip; no sheath): for a robot whose cable is another
+    model than the lumped sheath (scenes.sim_robot_kernels.reading_cables). Returns balance_tensions' status
+    (f and steps are written whatever it is)."""
     contact_moment(o, F, f)
     position_steps(L_home, L, c[STEPS_PER_M], steps)
-    return cable_sensor(f, A, theta, x, c[T_MIN], c[T_MAX], c, cap, t_tip, t_fsr)
+    return balance_tensions(f, A, c[T_MIN], c[T_MAX], c[SH.PRETENSION], t_tip)
 
 
 @njit

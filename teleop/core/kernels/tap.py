@@ -94,19 +94,23 @@ def tap_row(row, o, w, k, t, state, lateness_ns, tick_ns, stage_ns, has_sample, 
 
 
 @njit
-def sim_log_row(k, stage_ns, stage_log, sub0, sub1, sub2, sub3, sub_log, p, p_log, F, F_log, j, L, L_log, counts,
-                counts_log, wrench, f_truth):
-    """teleop bench sim's log of tick k: stage_log[k] = stage_ns, sub_log[k] = (sub0, sub1, sub2, sub3) (the
-    robot's cumulative timers [ns]), p_log[k] = p, F_log[k] = F; when j >= 0 (a reading this tick, its row j):
-    L_log[j] = L, counts_log[j] = counts, f_truth[j] = -wrench[2] (the contact force along -z [N])."""
-    for i in range(stage_ns.shape[0]):
-        stage_log[k, i] = stage_ns[i]
-    sub_log[k, 0], sub_log[k, 1], sub_log[k, 2], sub_log[k, 3] = sub0, sub1, sub2, sub3
+def sim_log_row(k, tick_ns, stage_ns, sub0, sub1, sub2, sub3, ns_log, p, F, pF_log, j, L, counts, wrench, Lf_log,
+                counts_log):
+    """teleop bench sim's log of tick k, its timers [ns] and trajectory: ns_log[k] = (stage_ns (s,), sub0, sub1,
+    sub2, sub3 (the robot's cumulative timers), tick_ns), pF_log[k] = (p (3,), F (3,)); when j >= 0 (a reading
+    this tick, its row j): Lf_log[j] = (L (n,), -wrench[2] (the contact force along -z [N])), counts_log[j] =
+    counts (n,). One array per kind and dtype: every array argument costs the call its type check."""
+    s = stage_ns.shape[0]
+    for i in range(s):
+        ns_log[k, i] = stage_ns[i]
+    ns_log[k, s], ns_log[k, s + 1], ns_log[k, s + 2], ns_log[k, s + 3], ns_log[k, s + 4] = sub0, sub1, sub2, sub3, \
+        tick_ns
     for i in range(3):
-        p_log[k, i] = p[i]
-        F_log[k, i] = F[i]
+        pF_log[k, i] = p[i]
+        pF_log[k, 3 + i] = F[i]
     if j >= 0:
-        for i in range(L.shape[0]):
-            L_log[j, i] = L[i]
+        n = L.shape[0]
+        for i in range(n):
+            Lf_log[j, i] = L[i]
             counts_log[j, i] = counts[i]
-        f_truth[j] = -wrench[2]
+        Lf_log[j, n] = -wrench[2]

@@ -111,3 +111,22 @@ def test_kernel_caches_are_stamped_with_every_kernel_source(tmp_path):
         assert jit._kernels_stamp() != before
     finally:
         jit._KERNEL_DIR = old
+
+
+def _ratio(a, b):
+    return a / b
+
+
+def _ratio_ieee(a, b):  # a function of its own: numba's disk cache keys a kernel by its source, not its options
+    return a / b
+
+
+@pytest.mark.skipif(not jit.COMPILED, reason="numba not installed (or TELEOP_NO_JIT)")
+def test_ieee_division_gives_inf_where_the_default_raises():
+    """njit(ieee_division=True) (the distributed cable's kernels): a division by zero gives inf or nan, as
+    numpy does; the default kernel raises as Python does; a nonzero divisor gives the same number."""
+    ieee, plain = jit.njit(ieee_division=True)(_ratio_ieee), jit.njit(_ratio)
+    assert ieee(1.0, 0.0) == float("inf") and ieee(0.0, 0.0) != ieee(0.0, 0.0)
+    with pytest.raises(ZeroDivisionError):
+        plain(1.0, 0.0)
+    assert ieee(1.0, 3.0) == plain(1.0, 3.0) == 1.0 / 3.0
