@@ -30,6 +30,7 @@ import numpy as np
 from devices.base import ContextDevice, RobotReading, RobotSpec
 from scenes import pads as pads_mod
 from scenes.pads import Pad, z_test_pad
+from scenes.fsr_sensor import FsrSensor, FsrSensorParams
 from scenes.pose_follow import PoseFollower
 from scenes.pulley_transmission import PulleyTransmission, PulleyTransmissionParams
 from scenes.rich_plant import PLANTS as RICH_PLANTS
@@ -106,6 +107,11 @@ class SimRobotParams:
             length; the pose follows the six realized lengths by least squares (equally stiff cables in
             pretension pull toward their lengths; a cable with slack on one side of its play is the one
             the others move). The motor's step count still reports the commanded length.
+        fsr: the FSR alone (scenes.fsr_sensor.FsrSensor: its own hysteresis, the datasheet's, on the
+            calibration's loading branch; its noise_counts unused: the robot's ADC noise above) in place of
+            the calibration's whole branch gap as the FSR's play (teleop.core.sensors.FsrBranchLag, which also
+            holds the calibration rig's friction); with_named_plant sets it for the distributed plant, whose
+            estimators use the calibration fitted on that plant (scenes.fsr_lab.plant_fsr_calibration).
     """
 
     geometry: Geometry = field(default_factory=default_geometry)
@@ -122,6 +128,7 @@ class SimRobotParams:
     capstan_k: float = SH.Sheath.stick_k
     noise_counts: float = 1.0
     backlash: float = 0.0
+    fsr: FsrSensorParams | None = None
 
     def __post_init__(self):
         g = self.geometry
@@ -324,6 +331,7 @@ class SimRobot(ContextDevice):
         self._fbg = FbgArray(p.sensor, n, self.seed, cable=p.fbg_cable) if p.sensor != "fsr" else None
         self._lag = FsrBranchLag(self.cal, n)
         self._lag_args = self._lag.kernel_args()  # its state (written in place) and constants, for kernel reading_counts
+        self._fsr = None if p.fsr is None else FsrSensor(n, self.seed, p.fsr, self.cal)  # the FSR alone (params.fsr)
         self._no_noise = np.zeros((1, n))
         self._added = _AddedEffects(self.model, n) if self.model is not None else None
         self._rich = RichPlant(p.plant, n) if p.plant is not None else None
@@ -408,7 +416,8 @@ class SimRobot(ContextDevice):
             status = reading_cables(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f,
                                     t_tip, steps, self.L_cmd if self._play is None else self._L_real, *fused[:4], out,
                                     TAP_FSR, *self._lag_args, noise, k, counts)
-            if status == KT.OK and self._rich is None:  # the usual case: no motor position, no lumped sheath
+            if status == KT.OK and self._rich is None and self._fsr is None:  # the usual case: no motor position,
+                # no lumped sheath, the FSRs' counts from the call
                 self._cables.sheath.t += self._dt
                 return self._reading(counts, steps, f, tip, t_tip, out[TAP_FSR], out[TAP_FBG],
                                      {"t_motor": out[O_MOTOR]})
@@ -426,7 +435,8 @@ class SimRobot(ContextDevice):
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
             SH.motor_forces(self._cap, x, t_tip, self._theta, self._kc, t_fsr)
         t_fbg, extras = t_tip, {}
-        counted = status == KT.OK and (direct or fused is not None)  # the FSRs' counts came with the kernel call
+        # the FSRs' counts came with the kernel call (not those of the FSR alone, params.fsr)
+        counted = status == KT.OK and (direct or fused is not None) and self._fsr is None
         if fused is not None and status == KT.OK:  # the cable's tick was in the call: its output rows
             self._cables.sheath.t += self._dt
             t_fsr, t_fbg = out[TAP_FSR], out[TAP_FBG]
@@ -439,7 +449,9 @@ class SimRobot(ContextDevice):
             t_fsr = self._added.forces(t_fsr, x, self.t + self._dt)
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + self._dt])[0]
-        if not counted:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
+        if self._fsr is not None:  # the FSR alone: its hysteresis on ln G, then the divider and ADC (as run())
+            counts = counts_from(np.exp(self._fsr.log_conductance(t_fsr[None])[0]), self.cal, noise[k])
+        elif not counted:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
             fsr_counts(t_fsr, *self._lag_args, noise[k], counts)
         return self._reading(counts, steps, f, tip, t_tip, t_fsr, t_fbg, extras)
 
@@ -522,9 +534,11 @@ class SimRobot(ContextDevice):
                                np.ascontiguousarray(theta[:, i]), self._kc, self._cap, i, t_fsr[:, i])
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr, x, self.t + p.dt * np.arange(1, n + 1))
-        u = self._lag.run(t_fsr)
         noise = self._noise_rows(n) if p.noise_counts > 0 else np.zeros((n, 6))
-        counts = counts_from(fsr_conductance(u, self.cal), self.cal, noise)
+        if self._fsr is not None:  # the FSR alone (params.fsr): its hysteresis on ln G
+            counts = counts_from(np.exp(self._fsr.log_conductance(t_fsr)), self.cal, noise)
+        else:  # the calibration's branch gap as the FSR's play
+            counts = counts_from(fsr_conductance(self._lag.run(t_fsr), self.cal), self.cal, noise)
         t = self.t + p.dt * np.arange(1, n + 1)
         fbg = np.empty((n, 0, 6)) if self._fbg is None else self._fbg.run(t_fbg, t)
         self.t = float(t[-1])
@@ -652,13 +666,13 @@ def with_named_plant(sim: SimRobotParams, plant: str, seed: int, cable_params=No
         raise InputError(f"unknown plant '{plant}' (expected one of: {', '.join(PLANTS)})")
     if plant == "pulley":
         pulley = PulleyTransmissionParams.from_toml(cable_params) if cable_params else PulleyTransmissionParams()
-        return replace(with_plant(sim, None), cable=None, pulley=pulley)
+        return replace(with_plant(sim, None), cable=None, pulley=pulley, fsr=None)
     if plant != "distributed":
         if cable_params is not None:
             raise InputError("cable parameters (cable_params) belong to the distributed plant")
-        return replace(with_plant(sim, plant_params(plant, seed)), cable=None, pulley=None)
+        return replace(with_plant(sim, plant_params(plant, seed)), cable=None, pulley=None, fsr=None)
     cable = TendonSheathParams() if cable_params is None else TendonSheathParams.from_toml(cable_params)
-    return replace(with_plant(sim, None), cable=cable, pulley=None)
+    return replace(with_plant(sim, None), cable=cable, pulley=None, fsr=FsrSensorParams())
 
 
 def from_url(parsed, options: dict) -> SimRobot:

@@ -22,6 +22,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from scenes import pads
+from scenes.fsr_lab import plant_fsr_calibration
 from scenes.materials import ATTRIBUTION
 from scenes.pads import SCAN_COLS, SCAN_ROWS, letter_mask
 from scenes.rich_plant import RichPlant
@@ -424,6 +425,9 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     sessions = sessions_for(test, params, limit, sim.tip_stiffness, sim.world.tip_radius)
 
     sim = replace(sim, sensor=params.sensor)  # the robot's sensor kind (scenes.sim_sensors)
+    # the FSR calibration the estimators convert with: on the distributed plant the one fitted on a simulated
+    # calibration platform of that plant and its FSR alone (scenes.fsr_lab), else the built-in one
+    fsr_cal = plant_fsr_calibration(sim)
     t_wall, t_cpu = time.perf_counter(), time.process_time()
     ss = np.random.SeedSequence(int(seed))
     seeds = ss.generate_state(2 * len(sessions))
@@ -458,17 +462,20 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
                     parts.append(robot.run(_tips2lengths(seg, tool, geom), progress=bar.update))
             poke_trace = concat_traces(parts)
             # the seed's step 3 fit on the no-load runs (single-compensated, unfiltered wrench)
-            single = estimate(fit_trace, geom, dt, names=("single",), kalman=False, progress=bar.update)["single"]
+            single = estimate(fit_trace, geom, dt, names=("single",), kalman=False, progress=bar.update,
+                              cal=fsr_cal)["single"]
             fits = tuple(fit_turn_compensation(fit_trace.t[a:b], fit_trace.poses[a:b], single[a:b], axis=axis,
                                                deadband=params.turn_deadband, level_tail=params.turn_level_tail)
                          for axis, (a, b) in spans.items())
             dyn = None
             if params.fit_dynamic:  # the project's estimator calibrated on the same no-load runs
                 a, b = min(v[0] for v in spans.values()), max(v[1] for v in spans.values())
-                dyn = fit_dynamic_params(geom, fit_trace.poses[a:b], fsr_tensions(slice_trace(fit_trace, a, b)), dt)
-            w = estimate(poke_trace, geom, dt, turn=TurnCompensation(axes=fits), progress=bar.update, dynamic=dyn)
+                dyn = fit_dynamic_params(geom, fit_trace.poses[a:b],
+                                         fsr_tensions(slice_trace(fit_trace, a, b), fsr_cal), dt)
+            w = estimate(poke_trace, geom, dt, turn=TurnCompensation(axes=fits), progress=bar.update, dynamic=dyn,
+                         cal=fsr_cal)
             if no_load:  # seed 000 Fig 13 at robot level: the wrench of the run the turn polynomials are fitted on
-                w_fit = estimate(fit_trace, geom, dt, turn=TurnCompensation(axes=fits), dynamic=dyn)
+                w_fit = estimate(fit_trace, geom, dt, turn=TurnCompensation(axes=fits), dynamic=dyn, cal=fsr_cal)
                 extra_no_load[s.name] = {"xyz"[axis]: no_load_errors(w_fit, fit_trace.poses, a, b, axis,
                                                                       fits[i].duration, dt)
                                          for i, (axis, (a, b)) in enumerate(spans.items())}
@@ -507,7 +514,9 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     extra["calibration"] = calib
     if no_load:
         extra["no_load"] = extra_no_load
-    extra["plant"] = {"name": plant, **({} if sim.plant is None else RichPlant(sim.plant).describe()),
+    fsr_kind = "alone (scenes.fsr_sensor), calibrated on the plant (scenes.fsr_lab)" if sim.fsr is not None else \
+        "branch lag of the built-in calibration"
+    extra["plant"] = {"name": plant, "fsr": fsr_kind, **({} if sim.plant is None else RichPlant(sim.plant).describe()),
                       **({} if sim.cable is None else {"cable": asdict(sim.cable)})}
     pdict = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(params).items()}
     pdict.update({"reading_rate_hz": _num(1.0 / dt), "physics_dt_s": sim.world.dt, "pretension_N": sim.pretension,

@@ -39,6 +39,7 @@ import numpy as np
 
 from devices.base import DeviceError
 from devices.simulated import Script, SimulatedStylus
+from scenes.fsr_lab import plant_fsr_calibration
 from scenes.materials import ATTRIBUTION, contact_stiffness, get_material
 from scenes.pads import BLIND_LABELS, BLIND_MATERIALS, blind_area_centres, blind_test_pad
 from scenes.sensor_identification import identify_one_sensor_on
@@ -173,9 +174,9 @@ def rig_dict(options: RigOptions) -> dict:
 def _sensor_estimator(geom, o, robot_params, name: str, noise):
     """The estimator of the rig's sensor kind (teleop.core.estimation.sensor_reading.make_estimator); for "one" the
     eq 7 model is identified once on the simulated robot (scenes.sensor_identification.identify_one_sensor_on)."""
-    kw = {}
+    kw = {"cal": plant_fsr_calibration(robot_params)}  # the FSR calibration of the robot's plant (scenes.fsr_lab)
     if o.sensor == "one":
-        kw = {"model": identify_one_sensor_on(robot_params, 0, 0), "cable": 0}
+        kw.update(model=identify_one_sensor_on(robot_params, 0, 0), cable=0)
     return make_estimator(geom, o.sensor, name, kalman=noise, **kw)
 
 
