@@ -95,7 +95,16 @@ def _dahl_guess(s: Signals, y: np.ndarray) -> dict:
     dx, dF = np.diff(s.x), np.diff(f)
     m = np.abs(dx) > 1e-12
     sigma = float(np.percentile(np.abs(dF[m] / dx[m]), 90)) if m.sum() > 10 else 1e4
+    # ... but no steeper than a transition over DAHL_MIN_TRANSITION of the travel: on a residual whose noise
+    # is comparable to the friction, sample-to-sample slopes are the noise's (a near-step start from which
+    # the fit ends at the Coulomb limit)
+    span = float(np.ptp(s.x))
+    if span > 0 and Fc > 0:
+        sigma = min(sigma, Fc / (DAHL_MIN_TRANSITION * span))
     return {"Fc": Fc, "sigma": sigma}
+
+
+DAHL_MIN_TRANSITION = 0.05   # the Dahl guess's shortest transition Fc / sigma, as a fraction of the travel
 
 
 _FC = ParamSpec("Fc", "N", 0.0, 50.0, 0.2, "Coulomb (kinetic) friction force")
