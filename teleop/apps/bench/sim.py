@@ -228,6 +228,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
         ka, pa, sa, ra = kin.acc, phys.acc, solver.acc, rd.acc  # the robot's timers [ns]: acc[0]
         dt = params.dt
         pc = time.perf_counter_ns
+        enabled_state = State.ENABLED  # a local: the member's lookup on its class costs ~0.17 us
         j = 0
         gc.collect()
         gc.disable()
@@ -247,7 +248,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                 else:
                     log_row(k, t1 - t0, tp.stage_ns, ka[0], pa[0], sa[0], ra[0], ns_log, stylus.p, x.F, pF_log, -1,
                             no_L, no_counts, no_L, Lf_log, counts_log)
-                enabled += tp.state == State.ENABLED
+                enabled += tp.state == enabled_state
             wall_ns, cpu = pc() - wall0, time.process_time() - cpu0
         finally:
             gc.enable()
