@@ -152,6 +152,9 @@ def _numeric(a) -> bool:
 
 
 _ND = np.ndarray
+# numpy's float64 and int64 dtypes: an array's dtype is one of these objects in the usual case, told by identity
+# (`is`, ~20 ns) before its kind (~70 ns: the checks below run six times a tick)
+_F64, _I64 = np.dtype(np.float64), np.dtype(np.int64)
 
 
 def is_finite_sample(sample) -> bool:
@@ -159,7 +162,8 @@ def is_finite_sample(sample) -> bool:
     cp, cv, R = sample.measured_cp, sample.measured_cv, sample.orientation
     # numeric arrays and a float time: one compiled call (_numeric written out: this runs every tick)
     if type(cp) is _ND and type(cv) is _ND and type(R) is _ND and type(sample.t) is float \
-            and cp.dtype.kind in "fiu" and cv.dtype.kind in "fiu" and R.dtype.kind in "fiu":
+            and (cp.dtype is _F64 or cp.dtype.kind in "fiu") and (cv.dtype is _F64 or cv.dtype.kind in "fiu") \
+            and (R.dtype is _F64 or R.dtype.kind in "fiu"):
         return KS.all_finite3(cp, cv, R, sample.t)
     return (_all_finite(cp) and _all_finite(cv) and _all_finite(np.ravel(R)) and math.isfinite(sample.t))
 
@@ -168,6 +172,7 @@ def is_finite_reading(reading) -> bool:
     """True when a RobotReading's numbers are all finite."""
     c, s, L = reading.fsr_counts, reading.position_steps, reading.commanded_lengths
     if type(c) is _ND and type(s) is _ND and type(L) is _ND and type(reading.t) is float \
-            and c.dtype.kind in "fiu" and s.dtype.kind in "fiu" and L.dtype.kind in "fiu":  # as is_finite_sample
+            and (c.dtype is _I64 or c.dtype.kind in "fiu") and (s.dtype is _I64 or s.dtype.kind in "fiu") \
+            and (L.dtype is _F64 or L.dtype.kind in "fiu"):  # as is_finite_sample
         return KS.all_finite3(c, s, L, reading.t)
     return (_all_finite(c) and _all_finite(s) and _all_finite(L) and math.isfinite(reading.t))
