@@ -45,7 +45,7 @@ from teleop.core.kinematics import FREE_AXIAL, check_lengths, lengths2pose, pose
     structure_matrix
 from teleop.core.mapping import MappingParams
 from teleop.core.rendering import Renderer, engage_count
-from teleop.core.sensors import FsrBranchLag, default_fsr_calibration
+from teleop.core.sensors import FsrBranchLag, adc_counts, default_fsr_calibration
 from teleop.core.tension import TensionSolver
 from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample, tension_monitors
 
@@ -218,6 +218,8 @@ def _cables(s) -> None:
     lag = FsrBranchLag(default_fsr_calibration(), n)
     for _ in range(2):  # the first reading, then the lag
         lag.counts(np.full(n, P), np.zeros(n))
+    cal = default_fsr_calibration()  # the distributed robot's FSR alone (SimRobotParams.fsr): divider and ADC
+    adc_counts(cal.conductance2counts(np.full(n, 1e-5)), cal.adc_max)
 
 
 def _safety(s) -> None:
