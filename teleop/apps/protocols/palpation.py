@@ -514,9 +514,8 @@ def run_test(test: str, profile: str = "uniform", seed: int = 0, params: Palpati
     extra["calibration"] = calib
     if no_load:
         extra["no_load"] = extra_no_load
-    fsr_kind = "alone (scenes.fsr_sensor), calibrated on the plant (scenes.fsr_lab)" if sim.fsr is not None else \
-        "branch lag of the built-in calibration"
-    extra["plant"] = {"name": plant, "fsr": fsr_kind, **({} if sim.plant is None else RichPlant(sim.plant).describe()),
+    fsr_kind = {} if sim.fsr is None else {"fsr": "alone (scenes.fsr_sensor), calibrated on the plant (scenes.fsr_lab)"}
+    extra["plant"] = {"name": plant, **fsr_kind, **({} if sim.plant is None else RichPlant(sim.plant).describe()),
                       **({} if sim.cable is None else {"cable": asdict(sim.cable)})}
     pdict = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(params).items()}
     pdict.update({"reading_rate_hz": _num(1.0 / dt), "physics_dt_s": sim.world.dt, "pretension_N": sim.pretension,
