@@ -22,6 +22,10 @@ is checked against. The sensor's true loading curve is the built-in calibration'
 `sim` use: this lab calibration when its FSRs are the sensor alone (`sim.fsr` set, the distributed plant),
 else the built-in one (whose branch gap is the robot's FsrBranchLag). One lab calibrates once: the platform's
 ADC noise is seeded by LAB_SEED whatever the run's seed; computed once per (cable, sensor) in a process.
+
+`python -m scenes.fsr_lab F.csv` writes the platform's rows (default cable and FSR) for
+`teleop calibrate fsr F.csv --out cal.toml`, whose file `teleop session --fsr-calibration` takes (a session on
+`sim://robot?plant=distributed` converts with the built-in calibration otherwise).
 """
 
 from __future__ import annotations
@@ -88,3 +92,13 @@ def plant_fsr_calibration(sim, seed: int = LAB_SEED) -> FsrCalibration:
     if getattr(sim, "fsr", None) is None or sim.cable is None:
         return default_fsr_calibration()
     return lab_fit(sim.cable, sim.fsr, int(seed)).cal
+
+
+if __name__ == "__main__":  # pragma: no cover - `python -m scenes.fsr_lab CSV`: the platform's rows for `teleop calibrate fsr`
+    import sys
+
+    from teleop.io.calibration_csv import write_fsr_calibration_csv
+
+    if len(sys.argv) != 2:
+        sys.exit("usage: python -m scenes.fsr_lab CSV  (the default distributed cable and FSR, LAB_SEED)")
+    print(write_fsr_calibration_csv(sys.argv[1], calibration_run(TendonSheathParams(), FsrSensorParams(), LAB_SEED)))
