@@ -94,7 +94,7 @@ def plant_fsr_calibration(sim, seed: int = LAB_SEED) -> FsrCalibration:
     return lab_fit(sim.cable, sim.fsr, int(seed)).cal
 
 
-if __name__ == "__main__":  # pragma: no cover - `python -m scenes.fsr_lab CSV`: the platform's rows for `teleop calibrate fsr`
+if __name__ == "__main__":  # pragma: no cover - `python -m scenes.fsr_lab CSV` (module docstring)
     import sys
 
     from teleop.io.calibration_csv import write_fsr_calibration_csv
