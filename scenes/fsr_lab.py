@@ -39,6 +39,7 @@ from scenes.sim_robot import DistributedCables
 from scenes.tendon_sheath import TendonSheathParams
 from teleop.core.calibration.fsr import FsrFit, fit_fsr
 from teleop.core.sensors import G, LOADING, UNLOADING, FsrCalibration, FsrCalibrationData, default_fsr_calibration
+from teleop.io.calibration_csv import write_fsr_calibration_csv
 
 STEP_G, TOP_G = 50.0, 650.0    # [g] the weights' step and the heaviest (seed 000 Fig 7's range)
 REPEATS = 3                    # loading and unloading passes (seed 000 §2.2)
@@ -95,9 +96,7 @@ def plant_fsr_calibration(sim, seed: int = LAB_SEED) -> FsrCalibration:
 
 
 if __name__ == "__main__":  # pragma: no cover - `python -m scenes.fsr_lab CSV` (module docstring)
-    import sys
-
-    from teleop.io.calibration_csv import write_fsr_calibration_csv
+    import sys  # the command line of this module only
 
     if len(sys.argv) != 2:
         sys.exit("usage: python -m scenes.fsr_lab CSV  (the default distributed cable and FSR, LAB_SEED)")
