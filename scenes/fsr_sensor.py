@@ -35,8 +35,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scenes.fsr_sensor_kernels import counts_rows, log_conductance_rows
 from teleop.core.errors import InputError
-from teleop.core.sensors import LOADING, FsrCalibration, default_fsr_calibration
+from teleop.core.sensors import FsrCalibration, default_fsr_calibration
 
 #: Interlink FSR 400 Series Data Sheet: hysteresis (R_F+ - R_F-)/R_F+ = +10 % average (at 1000 g)
 INTERLINK_HYSTERESIS = 0.10
@@ -76,7 +77,8 @@ class FsrSensor:
     """n FSRs, each with its own hysteresis state and the one seeded noise stream.
 
     `run` takes (m, n) tensions [N] and returns (m, n) ADC counts (int64), continuing the state; `log_conductance`
-    is the hysteresis alone (no divider, no noise)."""
+    is the hysteresis alone (no divider, no noise); `counts_into` the counts with a caller's noise (the simulated
+    robot's ADC stream). All three step the same state through the kernels of scenes.fsr_sensor_kernels."""
 
     def __init__(self, n: int = 1, seed: int = 0, params: FsrSensorParams = FsrSensorParams(),
                  cal: FsrCalibration | None = None):
@@ -84,25 +86,34 @@ class FsrSensor:
         self.params = params
         self.cal = default_fsr_calibration() if cal is None else cal
         self.rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(0xF5A,)))
-        self._w = params.widths()[:, None]              # (plays, 1)
+        self._w = np.ascontiguousarray(params.widths())  # (plays,)
+        self._c = np.asarray(self.cal.loading, dtype=float)  # the loading branch's coefficients
         self.y = None                                   # (plays, n) play outputs [ln S]; None: nothing read yet
 
     def reset(self) -> None:
         self.y = None
 
+    def _state(self) -> bool:
+        """True (and the plays allocated) if nothing was read yet."""
+        if self.y is None:
+            self.y = np.empty((self._w.shape[0], self.n))
+            return True
+        return False
+
     def log_conductance(self, T) -> np.ndarray:
         """(m, n) ln G [ln S] the sensors read for tensions T (m, n) [N]: the loading branch, then the plays."""
-        T = np.asarray(T, dtype=float).reshape(-1, self.n)
-        g = np.maximum(self.cal.reading(np.maximum(T, 0.0), LOADING), 1e-12)
-        x = np.log(g)
-        out = np.empty_like(x)
-        y = np.broadcast_to(x[0], (self._w.shape[0], self.n)).copy() if self.y is None else self.y
-        w = self._w
-        for k in range(x.shape[0]):
-            y = np.minimum(np.maximum(y, x[k]), x[k] + w)
-            out[k] = y.mean(axis=0)
-        self.y = y
+        T = np.ascontiguousarray(np.asarray(T, dtype=float).reshape(-1, self.n))
+        out = np.empty(T.shape)
+        first = self._state()
+        log_conductance_rows(T, self._c, self.y, self._w, first, out)
         return out
+
+    def counts_into(self, T, noise, counts) -> None:
+        """counts (m, n) int64 (written) for tensions T (m, n) [N] and ADC noise (m, n) [counts], C-contiguous
+        float arrays: the divider and the 10-bit ADC of the calibration after `log_conductance`."""
+        first = self._state()
+        counts_rows(T, self._c, self.y, self._w, first, float(self.cal.r_divider), float(self.cal.adc_max), noise,
+                    counts)
 
     def run(self, T) -> np.ndarray:
         """(m, n) int64 ADC counts for tensions T (m, n) [N] (a 1-D T is one cable's series when n = 1)."""

@@ -450,7 +450,7 @@ class SimRobot(ContextDevice):
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr[None], x[None], [self.t + self._dt])[0]
         if self._fsr is not None:  # the FSR alone: its hysteresis on ln G, then the divider and ADC (as run())
-            counts = counts_from(np.exp(self._fsr.log_conductance(t_fsr[None])[0]), self.cal, noise[k])
+            self._fsr.counts_into(t_fsr[None], noise[k:k + 1], counts[None])
         elif not counted:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
             fsr_counts(t_fsr, *self._lag_args, noise[k], counts)
         return self._reading(counts, steps, f, tip, t_tip, t_fsr, t_fbg, extras)
@@ -535,8 +535,9 @@ class SimRobot(ContextDevice):
         if self._rich is not None:
             t_fsr = self._rich.forces(t_fsr, x, self.t + p.dt * np.arange(1, n + 1))
         noise = self._noise_rows(n) if p.noise_counts > 0 else np.zeros((n, 6))
-        if self._fsr is not None:  # the FSR alone (params.fsr): its hysteresis on ln G
-            counts = counts_from(np.exp(self._fsr.log_conductance(t_fsr)), self.cal, noise)
+        if self._fsr is not None:  # the FSR alone (params.fsr): its hysteresis on ln G, the divider and ADC
+            counts = np.empty(t_fsr.shape, dtype=np.int64)
+            self._fsr.counts_into(np.ascontiguousarray(t_fsr), np.ascontiguousarray(noise), counts)
         else:  # the calibration's branch gap as the FSR's play
             counts = counts_from(fsr_conductance(self._lag.run(t_fsr), self.cal), self.cal, noise)
         t = self.t + p.dt * np.arange(1, n + 1)

@@ -21,7 +21,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from scenes import tendon_sheath_kernels
+from scenes import fsr_sensor_kernels, tendon_sheath_kernels
+from scenes.fsr_sensor import FsrSensor
 from scenes.sim_robot import DistributedCables
 from scenes.sim_robot_kernels import reading_cables
 from scenes.tendon_sheath import TendonSheathParams
@@ -45,13 +46,13 @@ from teleop.core.kinematics import FREE_AXIAL, check_lengths, lengths2pose, pose
     structure_matrix
 from teleop.core.mapping import MappingParams
 from teleop.core.rendering import Renderer, engage_count
-from teleop.core.sensors import FsrBranchLag, adc_counts, default_fsr_calibration
+from teleop.core.sensors import FsrBranchLag, default_fsr_calibration
 from teleop.core.tension import TensionSolver
 from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_finite_sample, tension_monitors
 
 _done = []  # [True] once warmed (the argument types do not depend on the geometry's values)
 _MODULES = (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sheath, sim, tap, tension,
-            ufuncs, tendon_sheath_kernels)
+            ufuncs, tendon_sheath_kernels, fsr_sensor_kernels)
 
 
 def kernels() -> list:
@@ -218,8 +219,10 @@ def _cables(s) -> None:
     lag = FsrBranchLag(default_fsr_calibration(), n)
     for _ in range(2):  # the first reading, then the lag
         lag.counts(np.full(n, P), np.zeros(n))
-    cal = default_fsr_calibration()  # the distributed robot's FSR alone (SimRobotParams.fsr): divider and ADC
-    adc_counts(cal.conductance2counts(np.full(n, 1e-5)), cal.adc_max)
+    cal = default_fsr_calibration()  # the distributed robot's FSR alone (SimRobotParams.fsr): a reading, a batch
+    sensor_alone = FsrSensor(n, 0, cal=cal)
+    sensor_alone.counts_into(np.full((1, n), P), np.zeros((1, n)), np.empty((1, n), dtype=np.int64))
+    sensor_alone.log_conductance(np.full((2, n), P))
 
 
 def _safety(s) -> None:
