@@ -88,17 +88,23 @@ class FsrSensor:
         self.rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(0xF5A,)))
         self._w = np.ascontiguousarray(params.widths())  # (plays,)
         self._c = np.asarray(self.cal.loading, dtype=float)  # the loading branch's coefficients
-        self.y = None                                   # (plays, n) play outputs [ln S]; None: nothing read yet
+        self.y = np.empty((self._w.shape[0], self.n))  # (plays, n) play outputs [ln S] (set at the first reading)
+        self._fresh = np.ones(1, dtype=np.bool_)  # [True] while nothing was read (a kernel may clear it in place)
 
     def reset(self) -> None:
-        self.y = None
+        self._fresh[0] = True
 
     def _state(self) -> bool:
-        """True (and the plays allocated) if nothing was read yet."""
-        if self.y is None:
-            self.y = np.empty((self._w.shape[0], self.n))
-            return True
-        return False
+        """True if nothing was read yet (and from now on False)."""
+        first = bool(self._fresh[0])
+        self._fresh[0] = False
+        return first
+
+    def kernel_args(self) -> tuple:
+        """(loading coefficients, plays y, widths, fresh flag (1,) bool, r_divider, adc_max): the state (written
+        in place) and constants for a compiled caller of fsr_sensor_kernels.counts_row (scenes.sim_robot_kernels),
+        which sets the plays at the first reading when fresh[0] and then clears it, as these methods do."""
+        return self._c, self.y, self._w, self._fresh, float(self.cal.r_divider), float(self.cal.adc_max)
 
     def log_conductance(self, T) -> np.ndarray:
         """(m, n) ln G [ln S] the sensors read for tensions T (m, n) [N]: the loading branch, then the plays."""

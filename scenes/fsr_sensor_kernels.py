@@ -44,14 +44,22 @@ def log_conductance_rows(T, c, y, w, first, out):
 
 
 @njit
+def counts_row(t, c, y, w, first, r_divider, adc_max, noise, counts):
+    """counts (n,) int64 = adc_round(conductance2counts(exp(ln G)) + noise) for one row of tensions t (n,) [N], ln G
+    the loading branch then the plays y (k, n) (written in place; `first`: set to this row's input), noise (n,)
+    [counts]. The row of counts_rows; the simulated robot's fused reading (scenes.sim_robot_kernels) calls it."""
+    for j in range(t.shape[0]):
+        x = _log_g(c, t[j])
+        if first:
+            for i in range(y.shape[0]):
+                y[i, j] = x
+        g = math.exp(_plays(x, y, w, j))
+        counts[j] = int(adc_round(conductance2counts(g, r_divider, adc_max) + noise[j], adc_max))
+
+
+@njit
 def counts_rows(T, c, y, w, first, r_divider, adc_max, noise, counts):
     """counts (m, n) int64 = adc_round(conductance2counts(exp(ln G)) + noise) for tensions T (m, n) [N], ln G as
-    log_conductance_rows (y written in place), noise (m, n) [counts]."""
+    log_conductance_rows (y written in place), noise (m, n) [counts]: counts_row row by row."""
     for row in range(T.shape[0]):
-        for j in range(T.shape[1]):
-            x = _log_g(c, T[row, j])
-            if first and row == 0:
-                for i in range(y.shape[0]):
-                    y[i, j] = x
-            g = math.exp(_plays(x, y, w, j))
-            counts[row, j] = int(adc_round(conductance2counts(g, r_divider, adc_max) + noise[row, j], adc_max))
+        counts_row(T[row], c, y, w, first and row == 0, r_divider, adc_max, noise[row], counts[row])

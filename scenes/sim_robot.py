@@ -35,7 +35,7 @@ from scenes.pose_follow import PoseFollower
 from scenes.pulley_transmission import PulleyTransmission, PulleyTransmissionParams
 from scenes.rich_plant import PLANTS as RICH_PLANTS
 from scenes.rich_plant import RichPlant, RichPlantParams, plant_params, with_plant
-from scenes.sim_robot_kernels import reading_cables
+from scenes.sim_robot_kernels import reading_cables, reading_cables_fsr
 from scenes.sim_sensors import FBG_FROM_END_M, FbgArray, fbg_cables
 from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams, b_node
 from scenes.tendon_sheath_kernels import O_MOTOR, O_ROWS
@@ -342,6 +342,9 @@ class SimRobot(ContextDevice):
         # the distributed cable with nothing between it and its FSR: one kernel call a reading (reading_cables)
         self._fused = self._cables.kernel_args() if isinstance(self._cables, DistributedCables) and \
             self._added is None else None
+        # ... and its FSR alone with nothing in between (no rich plant): the counts in that call (reading_cables_fsr)
+        self._fused_fsr = self._fsr.kernel_args() if self._fused is not None and self._fsr is not None and \
+            self._rich is None else None
         self._dt = p.dt  # [s] a reading's period (read's: a property call less)
         self.is_open = True
 
@@ -413,11 +416,17 @@ class SimRobot(ContextDevice):
         fused = self._fused
         if fused is not None:  # the distributed cable and its FSRs in the same call (kernel reading_cables)
             out = np.empty((fused[-1], n))  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
-            status = reading_cables(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f,
-                                    t_tip, steps, self.L_cmd if self._play is None else self._L_real, *fused[:4], out,
-                                    TAP_FSR, *self._lag_args, noise, k, counts)
-            if status == KT.OK and self._rich is None and self._fsr is None:  # the usual case: no motor position,
-                # no lumped sheath, the FSRs' counts from the call
+            if self._fused_fsr is not None:  # the FSR alone (params.fsr): its counts in the call
+                status = reading_cables_fsr(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc,
+                                            f, t_tip, steps, self.L_cmd if self._play is None else self._L_real,
+                                            *fused[:4], out, TAP_FSR, *self._fused_fsr, noise, k, counts)
+                done = status == KT.OK
+            else:
+                status = reading_cables(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f,
+                                        t_tip, steps, self.L_cmd if self._play is None else self._L_real, *fused[:4],
+                                        out, TAP_FSR, *self._lag_args, noise, k, counts)
+                done = status == KT.OK and self._rich is None and self._fsr is None
+            if done:  # the usual case: no motor position, no lumped sheath, the FSRs' counts from the call
                 self._cables.sheath.t += self._dt
                 return self._reading(counts, steps, f, tip, t_tip, out[TAP_FSR], out[TAP_FBG],
                                      {"t_motor": out[O_MOTOR]})

@@ -2,7 +2,8 @@
 SimRobot.read with DistributedCables): the reading's kernel up to the tip tensions (teleop.core.kernels.sim
 reading_tips: contact wrench, motor steps, tip tensions; no lumped sheath), the cables' tick
 (scenes.tendon_sheath_kernels.step: all cables and sub-steps, the sensor taps) and the FSRs' counts from the
-tension at their tap (teleop.core.kernels.sensor.fsr_counts), one call a reading. It calls those kernels, so its
+tension at their tap (teleop.core.kernels.sensor.fsr_counts, or with the FSR alone scenes.fsr_sensor_kernels
+.counts_row: reading_cables_fsr), one call a reading. It calls those kernels, so its
 compiled code holds them: its cache is stamped with every kernel source (teleop.core.kernels.jit.OUTER_KERNELS).
 The batch path (SimRobot.run) calls the same cable step (tendon_sheath_kernels.run).
 """
@@ -10,6 +11,7 @@ The batch path (SimRobot.run) calls the same cable step (tendon_sheath_kernels.r
 from __future__ import annotations
 
 from scenes import tendon_sheath_kernels as TK
+from scenes.fsr_sensor_kernels import counts_row
 from teleop.core.kernels.jit import njit
 from teleop.core.kernels.sensor import fsr_counts
 from teleop.core.kernels.sim import reading_tips
@@ -30,4 +32,20 @@ def reading_cables(o, F, A, theta, L_home, L, c, f, t_tip, steps, Lc, S, cab, p,
     if status == OK:
         TK.step(S, cab, p, Lc, t_tip, theta, T, out)
         fsr_counts(out[tap], u, grid, gap, coefs, r_divider, adc_max, noise[i], counts)
+    return status
+
+
+@njit
+def reading_cables_fsr(o, F, A, theta, L_home, L, c, f, t_tip, steps, Lc, S, cab, p, T, out, tap, fc, y, w, fresh,
+                       r_divider, adc_max, noise, i, counts):
+    """reading_cables with the FSR alone (scenes.fsr_sensor.FsrSensor.kernel_args: loading coefficients fc, plays
+    y (k, n) written in place, widths w, fresh (1,) bool: set the plays at this reading, then cleared; divider and
+    ADC): when OK the counts (n,) int64 of the tension at output row `tap` with ADC noise row i of noise (m, n)
+    [counts] (fsr_sensor_kernels.counts_row). Returns reading_tips' status (when not OK only f and steps are
+    written and the sensor's state is untouched)."""
+    status = reading_tips(o, F, A, L_home, L, c, f, t_tip, steps)
+    if status == OK:
+        TK.step(S, cab, p, Lc, t_tip, theta, T, out)
+        counts_row(out[tap], fc, y, w, fresh[0], r_divider, adc_max, noise[i], counts)
+        fresh[0] = False
     return status

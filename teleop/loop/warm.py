@@ -21,10 +21,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from scenes import fsr_sensor_kernels, tendon_sheath_kernels
+from scenes import fsr_sensor_kernels, sim_robot_kernels, tendon_sheath_kernels
 from scenes.fsr_sensor import FsrSensor
 from scenes.sim_robot import DistributedCables
-from scenes.sim_robot_kernels import reading_cables
+from scenes.sim_robot_kernels import reading_cables, reading_cables_fsr
 from scenes.tendon_sheath import TendonSheathParams
 from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
 from teleop.core.estimation.kalman import KalmanNoise
@@ -52,12 +52,12 @@ from teleop.loop.safety import StuckCable, TensionRange, is_finite_reading, is_f
 
 _done = []  # [True] once warmed (the argument types do not depend on the geometry's values)
 _MODULES = (estimate, friction, geometry, kalman, mapping, operator, render, safety, sensor, sheath, sim, tap, tension,
-            ufuncs, tendon_sheath_kernels, fsr_sensor_kernels)
+            ufuncs, tendon_sheath_kernels, fsr_sensor_kernels, sim_robot_kernels)
 
 
 def kernels() -> list:
     """Every compiled kernel (numba dispatcher) of teleop.core.kernels and the simulated robot's distributed
-    cable (scenes.tendon_sheath_kernels)."""
+    cable, its FSR alone and its fused reading (scenes.tendon_sheath_kernels, fsr_sensor_kernels, sim_robot_kernels)."""
     out = []
     for mod in _MODULES:
         out += [v for v in vars(mod).values() if hasattr(v, "py_func") and getattr(v, "__module__", "") == mod.__name__]
@@ -221,6 +221,9 @@ def _cables(s) -> None:
         lag.counts(np.full(n, P), np.zeros(n))
     cal = default_fsr_calibration()  # the distributed robot's FSR alone (SimRobotParams.fsr): a reading, a batch
     sensor_alone = FsrSensor(n, 0, cal=cal)
+    reading_cables_fsr(s.tip, (0.0, 0.0, 0.0), s.A, s.theta, s.L, s.L, s.kc, np.empty(6), np.empty(n),
+                       np.empty(n, dtype=np.int64), s.L, S, cab, p, T, np.empty((rows, n)), rows - 1,
+                       *FsrSensor(n, 0, cal=cal).kernel_args(), np.zeros((1, n)), 0, np.empty(n, dtype=np.int64))
     sensor_alone.counts_into(np.full((1, n), P), np.zeros((1, n)), np.empty((1, n), dtype=np.int64))
     sensor_alone.log_conductance(np.full((2, n), P))
 

@@ -36,7 +36,7 @@ COMPILED = _numba is not None
 _KERNEL_DIR = os.path.dirname(os.path.abspath(__file__))
 _ROOT = os.path.dirname(os.path.dirname(os.path.dirname(_KERNEL_DIR)))  # the project's root (teleop's parent)
 #: kernel modules of the outer layers (paths from the project's root) whose kernels call these: stamped with them
-OUTER_KERNELS = ("scenes/tendon_sheath_kernels.py", "scenes/sim_robot_kernels.py")
+OUTER_KERNELS = ("scenes/tendon_sheath_kernels.py", "scenes/fsr_sensor_kernels.py", "scenes/sim_robot_kernels.py")
 
 
 def _kernel_files() -> list[tuple[str, str]]:
