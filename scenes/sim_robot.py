@@ -343,8 +343,9 @@ class SimRobot(ContextDevice):
         self._fused = self._cables.kernel_args() if isinstance(self._cables, DistributedCables) and \
             self._added is None else None
         # ... and its FSR alone with nothing in between (no rich plant): the counts in that call (reading_cables_fsr)
-        self._fused_fsr = self._fsr.kernel_args() if self._fused is not None and self._fsr is not None and \
-            self._rich is None else None
+        self._fused_fsr = (self._tip_off, self._A, self._theta, self.L_home, self._kc, *self._fused[:4], TAP_FSR,
+                           *self._fsr.kernel_args()) if self._fused is not None and self._fsr is not None and \
+            self._rich is None else None  # reading_cables_fsr's arguments that stay the same objects
         self._dt = p.dt  # [s] a reading's period (read's: a property call less)
         self.is_open = True
 
@@ -417,9 +418,9 @@ class SimRobot(ContextDevice):
         if fused is not None:  # the distributed cable and its FSRs in the same call (kernel reading_cables)
             out = np.empty((fused[-1], n))  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
             if self._fused_fsr is not None:  # the FSR alone (params.fsr): its counts in the call
-                status = reading_cables_fsr(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc,
-                                            f, t_tip, steps, self.L_cmd if self._play is None else self._L_real,
-                                            *fused[:4], out, TAP_FSR, *self._fused_fsr, noise, k, counts)
+                L = self.L_cmd
+                status = reading_cables_fsr(*self._fused_fsr, F, L, L if self._play is None else self._L_real, noise,
+                                            k, f, t_tip, steps, out, counts)
                 done = status == KT.OK
             else:
                 status = reading_cables(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f,

@@ -36,13 +36,14 @@ def reading_cables(o, F, A, theta, L_home, L, c, f, t_tip, steps, Lc, S, cab, p,
 
 
 @njit
-def reading_cables_fsr(o, F, A, theta, L_home, L, c, f, t_tip, steps, Lc, S, cab, p, T, out, tap, fc, y, w, fresh,
-                       r_divider, adc_max, noise, i, counts):
+def reading_cables_fsr(o, A, theta, L_home, c, S, cab, p, T, tap, fc, y, w, fresh, r_divider, adc_max, F, L, Lc, noise,
+                       i, f, t_tip, steps, out, counts):
     """reading_cables with the FSR alone (scenes.fsr_sensor.FsrSensor.kernel_args: loading coefficients fc, plays
     y (k, n) written in place, widths w, fresh (1,) bool: set the plays at this reading, then cleared; divider and
     ADC): when OK the counts (n,) int64 of the tension at output row `tap` with ADC noise row i of noise (m, n)
-    [counts] (fsr_sensor_kernels.counts_row). Returns reading_tips' status (when not OK only f and steps are
-    written and the sensor's state is untouched)."""
+    [counts] (fsr_sensor_kernels.counts_row). The arguments that stay the same objects reading after reading
+    come first (the caller builds them once), those of the reading after F. Returns reading_tips' status (when
+    not OK only f and steps are written and the sensor's state is untouched)."""
     status = reading_tips(o, F, A, L_home, L, c, f, t_tip, steps)
     if status == OK:
         TK.step(S, cab, p, Lc, t_tip, theta, T, out)
