@@ -412,8 +412,6 @@ class SimRobot(ContextDevice):
         n = len(self.L_cmd)
         t_tip, f, steps, counts = np.empty(n), np.empty(6), np.empty(n, np.int64), np.empty(n, np.int64)
         noise, k = self._noise_row()  # this reading's ADC noise [counts]: noise[k]
-        # nothing acts between the lumped sheath and its FSR
-        direct = self._added is None and self._rich is None and self._cables is None
         fused = self._fused
         if fused is not None:  # the distributed cable and its FSRs in the same call (kernel reading_cables)
             out = np.empty((fused[-1], n))  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
@@ -435,6 +433,7 @@ class SimRobot(ContextDevice):
         if self._rich is not None and self._play is not None:  # the cable moves with its realized length
             x = -self._L_real
         t_fsr = np.empty(n)
+        direct = self._added is None and self._rich is None and self._cables is None  # nothing between sheath and FSR
         if fused is None:
             # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable
             # chain and, when direct, the FSRs (lag, conductance, ADC: FsrBranchLag.counts)
