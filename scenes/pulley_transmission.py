@@ -24,11 +24,11 @@ motor). The robot's pose still follows the commanded (or played) lengths; the st
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 
 import numpy as np
 
+from teleop.core.config import load_toml_table
 from teleop.core.errors import InputError
 from teleop.core.kernels.effects import driven_play, driven_play_run
 from teleop.core.physics.pulley import PulleyChain, band_segments, chain_from_layout, chain_tensions, \
@@ -144,14 +144,8 @@ class PulleyTransmissionParams:
     @classmethod
     def from_toml(cls, path, table: str = "pulley_transmission") -> "PulleyTransmissionParams":
         """From the table `table` of a TOML file (keys as `from_dict`; docs/formats.md)."""
-        try:
-            with open(path, "rb") as f:
-                data = tomllib.load(f)
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            raise InputError(f"{path}: cannot read the pulley-transmission parameters ({exc})") from None
-        if table not in data or not isinstance(data[table], dict):
-            raise InputError(f"{path}: no [{table}] table")
-        return cls.from_dict(data[table], where=f"{path} [{table}]")
+        values, where = load_toml_table(path, table)
+        return cls.from_dict(values, where=where)
 
 
 #: TOML key -> field (units in the key)

@@ -55,12 +55,12 @@ sub-steps, on state arrays allocated once (no allocation a tick).
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 
 import numpy as np
 
 from scenes import tendon_sheath_kernels as K
+from teleop.core.config import load_toml_table
 from teleop.core.errors import InputError
 
 LOAD_KINDS = ("spring", "force", "position")
@@ -199,14 +199,8 @@ class TendonSheathParams:
     @classmethod
     def from_toml(cls, path, table: str = "tendon_sheath") -> "TendonSheathParams":
         """From the table `table` of a TOML file (keys as `from_dict`)."""
-        try:
-            with open(path, "rb") as f:
-                data = tomllib.load(f)
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            raise InputError(f"{path}: cannot read the tendon-sheath parameters ({exc})") from None
-        if table not in data or not isinstance(data[table], dict):
-            raise InputError(f"{path}: no [{table}] table")
-        return cls.from_dict(data[table], where=f"{path} [{table}]")
+        values, where = load_toml_table(path, table)
+        return cls.from_dict(values, where=where)
 
 
 #: TOML key -> (field, factor to SI)

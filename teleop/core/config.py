@@ -52,6 +52,15 @@ def load_toml(path: str | Path) -> dict:
         raise InputError(f"{path}: invalid TOML ({exc})") from None
 
 
+def load_toml_table(path: str | Path, table: str) -> tuple[dict, str]:
+    """The table `table` of a TOML file and the place to name in errors ("FILE [table]"); a file `load_toml`
+    refuses, or one without that table, is an InputError naming it."""
+    data = load_toml(path)
+    if table not in data or not isinstance(data[table], dict):
+        raise InputError(f"{path}: no [{table}] table")
+    return data[table], f"{path} [{table}]"
+
+
 def check_keys(table: dict, allowed: Iterable[str], where: str) -> None:
     """Raise if `table` has a key outside `allowed` (python-control style: unknown keys raise)."""
     allowed = set(allowed)

@@ -8,27 +8,21 @@ plant's curved transitions: tests/diagnosis/test_turns_and_transitions.py; the w
 
 import pytest
 
-from teleop.core.physics.links import is_exact, predict
-from teleop.diagnosis.diagnose import PROJECT_BASELINE, exact_rate, split
-from teleop.diagnosis.identify import rms, simulation_baseline
+from teleop.core.physics.links import predict
+from teleop.diagnosis.diagnose import split
+from teleop.diagnosis.identify import rms
 from teleop.diagnosis.links import find_links, link_data
 from teleop.io.recording_io import read_interchange
-from tests.diagnosis._independent import Case, make, write_csv
+from tests.diagnosis._independent import Case, make
+from tests.diagnosis.floor_table import floor_ratio
 
 FLOOR = 1.2
 
 
 def force_baseline(made, tmp_path):
-    """(held-out RMSE / true noise, the baseline Fit) of the recording's force link, read back from its CSV."""
-    rec = read_interchange(write_csv(made, tmp_path / "rec.csv"))
-    fit_idx, hold_idx = split(rec.n, 0.4)
-    link = next(L for L in find_links(rec) if L.kind == "force")
-    d = link_data(rec, link)
-    if d.v is None and is_exact(d.x):   # as diagnose: an exact drive's rate convention
-        d = exact_rate(d, fit_idx, hold_idx, PROJECT_BASELINE, 0)
-    base = simulation_baseline(d, fit_idx, hold_idx, PROJECT_BASELINE, 0)
-    assert rms((predict(d, base.model) - d.y)[hold_idx]) == pytest.approx(base.rmse_hold)
-    return base.rmse_hold / made.noise_N, base
+    """(held-out RMSE / true noise, the baseline Fit) of the recording's force link, read back from its CSV
+    (floor_table.floor_ratio, which also checks the Fit's RMSE against its prediction)."""
+    return floor_ratio(made, tmp_path / "rec.csv")
 
 
 CASES = [(1.2, "sine", None), (3.0, "sines", None), (5.0, "sine", None), (2.0, "sine", 8e4), (4.5, "sines", 8e4),

@@ -11,13 +11,14 @@ import numpy as np
 import pytest
 
 from scenes.pulley_transmission import PulleyTransmission, PulleyTransmissionParams
-from scenes.sim_robot import SimRobot, SimRobotParams, with_named_plant
+from scenes.sim_robot import SimRobotParams, with_named_plant
 from scenes.tendon_sheath import TendonSheathParams
 from teleop.apps.cli import build_parser, main
 from teleop.core.errors import InputError
 from teleop.core.kernels import sheath as SH
 from teleop.core.kinematics import poses2lengths
 from teleop.loop.devices_by_url import open_device
+from tests.scenes._readings import read_then_run
 
 WRAP = 2.6  # rad, a capstan wrap of the robot's order (theta0 + a pose bend)
 
@@ -109,22 +110,12 @@ def test_reading_by_reading_is_the_batch():
 
 
 def test_the_robot_batch_path_reads_what_the_readings_read():
-    params = SimRobotParams(pulley=PulleyTransmissionParams())
-    with SimRobot(params=params, seed=4) as robot:
-        q = np.zeros((300, 6))
-        q[:, 2] = np.concatenate([np.linspace(0.0, 8e-3, 150), np.linspace(8e-3, 0.0, 150)])
-        L = poses2lengths(q, robot.geom)
-        counts, t_fsr = [], []
-        for row in L:
-            robot.command_lengths(row)
-            r = robot.read()
-            counts.append(r.fsr_counts.copy())
-            t_fsr.append(r.extras["t_fsr"].copy())
-            assert np.all(r.extras["t_motor"] >= 0)   # a releasing cable may go slack at the motor
-    with SimRobot(params=params, seed=4) as robot:
-        trace = robot.run(L)
-    assert np.allclose(trace.t_fsr, np.array(t_fsr), atol=1e-9)
-    assert np.array_equal(trace.counts, np.array(counts))
+    q = np.zeros((300, 6))
+    q[:, 2] = np.concatenate([np.linspace(0.0, 8e-3, 150), np.linspace(8e-3, 0.0, 150)])
+    rows, trace = read_then_run(SimRobotParams(pulley=PulleyTransmissionParams()), 4, lambda g: poses2lengths(q, g))
+    assert all(np.all(x["t_motor"] >= 0) for _, x in rows)   # a releasing cable may go slack at the motor
+    assert np.allclose(trace.t_fsr, np.array([x["t_fsr"] for _, x in rows]), atol=1e-9)
+    assert np.array_equal(trace.counts, np.array([c for c, _ in rows]))
     assert np.ptp(trace.t_fsr) > 0.3   # the contact and the chain's friction move the FSR tension
 
 

@@ -9,6 +9,7 @@ from scenes.sim_robot import SimRobot, SimRobotParams, with_named_plant
 from scenes.tendon_sheath import TendonSheathParams
 from teleop.core.sensors import LOADING, UNLOADING, default_fsr_calibration
 from teleop.core.kinematics import poses2lengths
+from tests.scenes._readings import read_then_run
 
 
 def _press(n=1200, depth=8e-3):
@@ -49,20 +50,10 @@ def test_the_distributed_robots_fsr_reads_with_the_datasheets_hysteresis():
 
 
 def test_the_batch_path_reads_what_the_readings_read_with_the_fsr_alone():
-    params = with_named_plant(SimRobotParams(), "distributed", 4)
-    L = None
-    with SimRobot(params=params, seed=4) as robot:
-        L = poses2lengths(_press(600), robot.geom)
-        counts, t_fsr = [], []
-        for row in L:
-            robot.command_lengths(row)
-            r = robot.read()
-            counts.append(r.fsr_counts.copy())
-            t_fsr.append(r.extras["t_fsr"].copy())
-    with SimRobot(params=params, seed=4) as robot:
-        trace = robot.run(L)
-    assert np.allclose(trace.t_fsr, np.array(t_fsr), atol=1e-9)
-    assert np.array_equal(trace.counts, np.array(counts))
+    rows, trace = read_then_run(with_named_plant(SimRobotParams(), "distributed", 4), 4,
+                                lambda g: poses2lengths(_press(600), g))
+    assert np.allclose(trace.t_fsr, np.array([x["t_fsr"] for _, x in rows]), atol=1e-9)
+    assert np.array_equal(trace.counts, np.array([c for c, _ in rows]))
 
 
 def test_the_platform_calibration_holds_the_sensor_and_the_cables_friction():
