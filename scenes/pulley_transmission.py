@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from teleop.core.config import load_toml_table
+from teleop.core.config import check_keys, get_integer, get_number, load_toml_table
 from teleop.core.errors import InputError
 from teleop.core.kernels.effects import driven_play, driven_play_run
 from teleop.core.physics.pulley import PulleyChain, band_segments, chain_from_layout, chain_tensions, \
@@ -112,9 +112,7 @@ class PulleyTransmissionParams:
     @classmethod
     def from_dict(cls, d: dict, where: str = "pulley transmission") -> "PulleyTransmissionParams":
         """From a table with units in the keys (TOML_KEYS); unknown keys or wrong types raise InputError."""
-        unknown = sorted(set(d) - set(TOML_KEYS))
-        if unknown:
-            raise InputError(f"{where}: unknown key(s) {', '.join(unknown)}; known: {', '.join(TOML_KEYS)}")
+        check_keys(d, TOML_KEYS, where)
         kw = {}
         for key, value in d.items():
             name = TOML_KEYS[key]
@@ -129,13 +127,9 @@ class PulleyTransmissionParams:
                     raise InputError(f"{where}: {key} must be a number or a list of numbers, got {value!r}")
                 kw[name] = tuple(float(v) for v in value)
             elif name == "sensor_after":
-                if not isinstance(value, int) or isinstance(value, bool):
-                    raise InputError(f"{where}: {key} must be an integer, got {value!r}")
-                kw[name] = value
+                kw[name] = get_integer(d, key, where)
             else:
-                if not isinstance(value, (int, float)) or isinstance(value, bool):
-                    raise InputError(f"{where}: {key} must be a number, got {value!r}")
-                kw[name] = float(value)
+                kw[name] = get_number(d, key, where)
         try:
             return cls(**kw)
         except InputError as exc:

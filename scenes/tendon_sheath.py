@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenes import tendon_sheath_kernels as K
-from teleop.core.config import load_toml_table
+from teleop.core.config import check_keys, get_integer, get_number, load_toml_table
 from teleop.core.errors import InputError
 
 LOAD_KINDS = ("spring", "force", "position")
@@ -175,9 +175,7 @@ class TendonSheathParams:
     @classmethod
     def from_dict(cls, d: dict, where: str = "tendon sheath") -> "TendonSheathParams":
         """From a table with edge units in the keys (TOML_KEYS); unknown keys raise InputError."""
-        unknown = sorted(set(d) - set(TOML_KEYS))
-        if unknown:
-            raise InputError(f"{where}: unknown key(s) {', '.join(unknown)}; known: {', '.join(TOML_KEYS)}")
+        check_keys(d, TOML_KEYS, where)
         kw = {}
         for key, value in d.items():
             name, scale = TOML_KEYS[key]
@@ -187,13 +185,9 @@ class TendonSheathParams:
                     raise InputError(f"{where}: {key} must be [start, end] in m, got {value!r}")
                 kw[name] = (float(value[0]), float(value[1]))
             elif name in ("n_elements", "newton_iter"):
-                if not isinstance(value, int) or isinstance(value, bool):
-                    raise InputError(f"{where}: {key} must be an integer, got {value!r}")
-                kw[name] = value
+                kw[name] = get_integer(d, key, where)
             else:
-                if not isinstance(value, (int, float)) or isinstance(value, bool):
-                    raise InputError(f"{where}: {key} must be a number, got {value!r}")
-                kw[name] = float(value) * scale
+                kw[name] = get_number(d, key, where) * scale
         return cls(**kw)
 
     @classmethod

@@ -86,6 +86,14 @@ def get_number(table: dict, key: str, where: str, default: Any = None, *, positi
     return float(value)
 
 
+def get_integer(table: dict, key: str, where: str) -> int:
+    """An int from `table[key]` (a TOML integer, not a bool or float), with the file and key named on error."""
+    value = table.get(key)
+    if not isinstance(value, int) or isinstance(value, bool):
+        raise InputError(f"{where}: key '{key}' must be an integer, got {value!r}")
+    return value
+
+
 def get_vectors(table: dict, key: str, where: str, n: int, dim: int = 3) -> list[list[float]]:
     """An n x dim list of finite numbers from `table[key]`."""
     if key not in table:
