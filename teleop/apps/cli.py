@@ -20,7 +20,7 @@ from teleop import __version__
 from teleop.apps.argtypes import OUTPUT_OPTIONS, OUTPUT_TYPES, seed_int
 from teleop.core.errors import InputError
 from teleop.io.outputs import same_file
-from teleop.io.stop_signals import STOP, exit_code, ignore_stop_signals
+from teleop.io.stop_signals import STOP, exit_code
 
 
 _TYPE_NAMES = {"int": "an integer", "float": "a number"}
@@ -177,9 +177,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     finally:
         if main_thread:
-            STOP.uninstall()
-            if STOP.signum:  # stopped: a repeat must not kill the interpreter's shutdown (joining its children)
-                ignore_stop_signals()
+            STOP.uninstall(ignore=bool(STOP.signum))  # stopped: a repeat must not kill the shutdown
 
 
 def _device_error(exc: Exception) -> str | None:

@@ -66,10 +66,12 @@ class Stop:
         for s in STOP_SIGNALS:
             self._old[s] = signal.signal(s, self.handle)
 
-    def uninstall(self) -> None:
-        """Give the signals back to the handlers they had before `install`."""
+    def uninstall(self, ignore: bool = False) -> None:
+        """Give the signals back to the handlers they had before `install`, or with `ignore` set them to be
+        ignored instead: one replacement per signal, so that no default handler is put back in between (a
+        stopped command's repeat arriving there would kill the interpreter's shutdown, joining its children)."""
         for s, old in self._old.items():
-            signal.signal(s, old)
+            signal.signal(s, signal.SIG_IGN if ignore else old)
         self._old = {}
 
     @contextmanager

@@ -13,7 +13,7 @@ import time
 import pytest
 
 from teleop.io.recording import read_session
-from teleop.io.stop_signals import STOP, Stop, exit_code
+from teleop.io.stop_signals import STOP, STOP_SIGNALS, Stop, exit_code
 
 CASES = [  # (signal, to the group?, times sent, extra session arguments)
     (signal.SIGTERM, False, 1, []),
@@ -141,3 +141,21 @@ def test_sigterm_ends_bench_loop_with_its_json_marked(tmp_path):
     assert proc.wait(60) == 143
     out = json.loads((tmp_path / "b.json").read_text())
     assert out["interrupted"] == "SIGTERM" and 0 < out["ticks"] < 120_000
+
+
+def test_a_stopped_command_ignores_the_repeats_once_its_handler_is_gone():
+    """uninstall(ignore=True) puts SIG_IGN in place of the handler in one step (no default handler between,
+    which killed a session the second SIGHUP of `kill -HUP` twice reached while it returned); without it the
+    handlers from before install come back."""
+    before = {s: signal.getsignal(s) for s in STOP_SIGNALS}
+    stop = Stop()
+    stop.install()
+    stop.uninstall(ignore=True)
+    try:
+        assert all(signal.getsignal(s) is signal.SIG_IGN for s in STOP_SIGNALS)
+    finally:
+        for s, h in before.items():
+            signal.signal(s, h)
+    stop.install()
+    stop.uninstall()
+    assert {s: signal.getsignal(s) for s in STOP_SIGNALS} == before
