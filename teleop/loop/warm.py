@@ -221,7 +221,7 @@ def _cables(s) -> None:
         lag.counts(np.full(n, P), np.zeros(n))
     cal = default_fsr_calibration()  # the distributed robot's FSR alone (SimRobotParams.fsr): a reading, a batch
     sensor_alone = FsrSensor(n, 0, cal=cal)
-    reading_cables_fsr(s.tip, s.A, s.theta, s.L, s.kc, S, cab, p, T, rows - 1, *FsrSensor(n, 0, cal=cal).kernel_args(),
+    reading_cables_fsr(s.tip, s.A, s.theta, s.L, s.kc, S, cab, p, T, rows - 1, *sensor_alone.kernel_args(),
                        (0.0, 0.0, 0.0), s.L, s.L, np.zeros((1, n)), 0, np.empty(6), np.empty(n),
                        np.empty(n, dtype=np.int64), np.empty((rows, n)), np.empty(n, dtype=np.int64))
     sensor_alone.counts_into(np.full((1, n), P), np.zeros((1, n)), np.empty((1, n), dtype=np.int64))
