@@ -19,6 +19,7 @@ from urllib.parse import parse_qs, urlparse
 import numpy as np
 
 import teleop
+from scenes.fsr_lab import robot_url_calibration
 from scenes.sensor_identification import identify_one_sensor_on
 from teleop.core.estimation.kalman import KalmanNoise
 from teleop.core.estimation.reading import ReadingEstimator
@@ -223,7 +224,9 @@ def run_session(haptic_url: str, robot_url: str, seconds: float, record: str | N
         haptic = open_device(haptic_url, clock=clock)
     params = params or LoopParams()
     if estimator is None:
-        estimator = default_estimator(frame_period(params, robot_process_hz), geometry=geometry)
+        # on sim://robot?plant=distributed the plant's own FSR calibration (scenes.fsr_lab), else the built-in
+        estimator = default_estimator(frame_period(params, robot_process_hz), geometry=geometry,
+                                      cal=robot_url_calibration(robot_url) if robot is None else None)
     haptic = haptic if haptic is not None else open_device(haptic_url)
     built = robot  # the robot as built from its URL (a ProcessRobot runs it elsewhere): its pad for the scene
     if robot is None:

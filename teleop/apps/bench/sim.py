@@ -62,6 +62,7 @@ import time
 import numpy as np
 
 from devices.simulated import OperatorParams, Script, SimulatedStylus
+from scenes.fsr_lab import plant_fsr_calibration
 from scenes.sim_robot import PLANTS
 from teleop.apps.argtypes import add_geometry_option, geometry_of, input_file
 from teleop.core.errors import InputError
@@ -203,7 +204,9 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                              seed=stylus_seed, clock=lambda: clock_t[0])
     params = LoopParams(rate_hz=RATE_HZ, robot_rate_hz=None if substeps == 1 else RATE_HZ / substeps,
                         mapping=MappingParams(workspace_max=POKE_WORKSPACE_MAX))
-    estimator = default_estimator(frame_period(params, None), geometry=geometry)
+    # the FSR calibration of the robot's plant (scenes.fsr_lab: on the distributed plant its own, as teleop session)
+    estimator = default_estimator(frame_period(params, None), geometry=geometry,
+                                  cal=plant_fsr_calibration(robot.params))
     kin, phys, solver, rd = CallTimer(), CallTimer(), CallTimer(), CallTimer()
     solver_timed = False
     n_read = -(-n // params.robot_every)

@@ -8,6 +8,7 @@ import sys
 from dataclasses import replace
 
 from devices.wrappers import BacklashCompensatedRobot
+from scenes.fsr_lab import robot_url_calibration
 from teleop.apps.argtypes import (LOOP_RATE_HZ, ROBOT_RATE_HZ, SESSION_SECONDS, add_geometry_option, geometry_of,
                                    input_file, positive_float, rt_priority)
 from teleop.core.control.feedforward import model_backlash_width
@@ -46,7 +47,9 @@ def register(subparsers) -> None:
                    help="largest damping of the passivity observer/controller [N s/m] (default 0: off)")
     p.add_argument("--fsr-calibration", type=input_file, metavar="CSV|TOML",
                    help="FSR calibration for the estimator: a CSV (columns tension_N, conductance_uS, branch) or "
-                        "the .toml of `teleop calibrate fsr` (default: the built-in synthetic calibration)")
+                        "the .toml of `teleop calibrate fsr` (default: the built-in synthetic calibration; on "
+                        "sim://robot?plant=distributed the one fitted on that plant's calibration platform, "
+                        "scenes.fsr_lab)")
     p.add_argument("--compensation", type=input_file, metavar="MODEL",
                    help="backlash feed-forward: a link model (JSON) with a backlash finding on its position link, "
                         "from `teleop diagnose REC --save-model MODEL` or hand-written (docs/feedforward.md); each "
@@ -109,7 +112,8 @@ def run(args) -> int:
     if args.fsr_calibration and str(args.fsr_calibration).endswith(".toml"):
         cal = load_fsr(args.fsr_calibration)
     else:
-        cal = load_fsr_calibration(args.fsr_calibration) if args.fsr_calibration else None
+        # no file: the built-in calibration, or on sim://robot?plant=distributed that plant's own (scenes.fsr_lab)
+        cal = load_fsr_calibration(args.fsr_calibration) if args.fsr_calibration else robot_url_calibration(args.robot)
     wrapper = None
     if args.compensation:
         wrapper = compensation_wrapper(args.compensation, params.dt * params.robot_every)
