@@ -44,6 +44,7 @@ from dataclasses import asdict
 import numpy as np
 
 from scenes.cable_rig import simulate
+from scenes.fsr_lab import LAB_SEED, lab_fit
 from scenes.fsr_sensor import FsrSensor, FsrSensorParams
 from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams, tension_at_b
 from teleop.apps.argtypes import input_file
@@ -51,7 +52,7 @@ from teleop.core.errors import InputError
 from teleop.core.estimation.turn import TurnCompensation, TurnCompensator, fit_turn_compensation
 from teleop.core.geometry import Geometry
 from teleop.core.physics import motor2tip, motor2tip_transitions
-from teleop.core.sensors import FsrBranchLag, FsrConverter, default_fsr_calibration
+from teleop.core.sensors import FsrBranchLag, FsrCalibration, FsrConverter, default_fsr_calibration
 from teleop.io.figures import legend_outside
 from teleop.io.outputs import check_output, save_figure, write_json
 
@@ -96,6 +97,10 @@ def register(subparsers) -> None:
                         "tendon-sheath cable, scenes/tendon_sheath.py)")
     p.add_argument("--cable-params", type=input_file, default=None, metavar="TOML",
                    help="with --plant distributed: the cable's [tendon_sheath] table (docs/formats.md)")
+    p.add_argument("--fsr-calibration", default="builtin", choices=("builtin", "platform"),
+                   help="the FSR's calibration the converter reads with: builtin (default) or, with --plant "
+                        "distributed, platform (the one fitted on that cable's simulated calibration platform, "
+                        "scenes.fsr_lab, as the distributed robot's estimators)")
     p.add_argument("--json", metavar="F", help="write the numbers as JSON")
     p.add_argument("--plot", metavar="F", help="write the figure (PNG)")
     p.set_defaults(func=run)
@@ -145,12 +150,14 @@ def distributed(seed: int, x: np.ndarray, theta: float, load: dict, cable: Tendo
     return proximal, tension_at_b(run.tensions[:, 0, :], cable, theta1), run.f_tip[:, 0]
 
 
-def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0, alone: bool = False) -> np.ndarray:
+def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0, alone: bool = False,
+                converter: FsrCalibration | None = None) -> np.ndarray:
     """(n,) tension [N] the distal FSR reports for true tension T (n,) [N], through the loop's converter
-    (FsrConverter: the calibration's branch by the reading's direction). The sensor: `alone` False, the
-    matched robot's (teleop.core.sensors.FsrBranchLag: the calibration's whole branch gap as its play,
-    conductance, ADC); True, the FSR alone (scenes.fsr_sensor.FsrSensor: the datasheet's own hysteresis,
-    used with the distributed cable)."""
+    (FsrConverter: the calibration's branch by the reading's direction) with the calibration `converter`
+    (None: the built-in one). The sensor: `alone` False, the matched robot's (teleop.core.sensors.FsrBranchLag:
+    the calibration's whole branch gap as its play, conductance, ADC); True, the FSR alone
+    (scenes.fsr_sensor.FsrSensor: the datasheet's own hysteresis on the built-in loading branch, used with the
+    distributed cable)."""
     cal = default_fsr_calibration()
     if alone:
         counts = FsrSensor(1, seed, FsrSensorParams(noise_counts=noise_counts), cal).run(np.asarray(T, dtype=float))
@@ -160,7 +167,7 @@ def fsr_reading(T: np.ndarray, seed: int, noise_counts: float = 1.0, alone: bool
         rng = np.random.default_rng(seed)
         counts = np.clip(np.rint(cal.conductance2counts(lag.conductance(u)) + rng.normal(0, noise_counts, u.size)),
                          0, cal.adc_max)
-    conv = FsrConverter(cal, n=1)
+    conv = FsrConverter(cal if converter is None else converter, n=1)
     return np.array([conv.update(c[None])[0] for c in counts])
 
 
@@ -213,9 +220,10 @@ def _cable_keys(cable: TendonSheathParams | None) -> dict:
     return {} if cable is None else {"plant": "distributed", "cable": asdict(cable)}
 
 
-def fig9(seed: int = 0, cable: TendonSheathParams | None = None) -> dict:
+def fig9(seed: int = 0, cable: TendonSheathParams | None = None, converter: FsrCalibration | None = None) -> dict:
     """Proximal vs distal force under a hanging weight at theta = 0, 30, 60, 90 deg (module docstring);
-    `cable`: the distributed cable in place of the rig's capstan segments."""
+    `cable`: the distributed cable in place of the rig's capstan segments; `converter`: the FSR's calibration
+    (None: the built-in one; fsr_reading)."""
     x = triangle(5e-3, 2e-3, 6)
     out = {"mu_BD": mu_bd(), "mu_AB": mu_ab(), "theta0_deg": 140.0, "theta1_deg": 360.0, "cases": {}, "series": {}}
     if cable is not None:
@@ -229,7 +237,7 @@ def fig9(seed: int = 0, cable: TendonSheathParams | None = None) -> dict:
         else:
             proximal, T_B, _ = distributed(seed + 200 + k, x, math.radians(deg), {"tip_force": np.full(x.size, W)},
                                            cable, noise=1.0)
-        distal = fsr_reading(T_B, seed + 100 + k, alone=cable is not None)
+        distal = fsr_reading(T_B, seed + 100 + k, alone=cable is not None, converter=converter)
         d, p, b = _levels(distal, x), _levels(proximal, x), _levels(T_B, x)
         case = {"pretension_N": W, "distal_N": list(d), "proximal_N": list(p), "distal_change_N": d[0] - d[1],
                 "proximal_change_N": p[0] - p[1], "tension_B_N": list(b), "tension_B_change_N": b[0] - b[1]}
@@ -243,9 +251,11 @@ def fig9(seed: int = 0, cable: TendonSheathParams | None = None) -> dict:
     return out
 
 
-def fig10b(seed: int = 0, cable: TendonSheathParams | None = None, weights_N=None, theta_deg: float = 60.0) -> dict:
+def fig10b(seed: int = 0, cable: TendonSheathParams | None = None, weights_N=None, theta_deg: float = 60.0,
+           converter: FsrCalibration | None = None) -> dict:
     """The FSR's swing before and after the capstan compensation under each hanging weight (module docstring);
-    `cable`: the distributed cable in place of the rig's capstan segments; weights_N: default 0.49-4.9 N."""
+    `cable`: the distributed cable in place of the rig's capstan segments; weights_N: default 0.49-4.9 N;
+    `converter`: the FSR's calibration (None: the built-in one)."""
     x = triangle(5e-3, 2e-3, 6)
     theta = math.radians(theta_deg)
     weights = np.arange(50, 501, 50) * 1e-3 * G_N_PER_KG if weights_N is None else weights_N  # 50-500 g
@@ -256,7 +266,7 @@ def fig10b(seed: int = 0, cable: TendonSheathParams | None = None, weights_N=Non
             T_B, _ = sheath(seed + k, x, THETA0 + theta, mu_bd(), {"tip_force": np.full(x.size, W)})
         else:
             _, T_B, _ = distributed(seed + k, x, theta, {"tip_force": np.full(x.size, W)}, cable)
-        F = fsr_reading(T_B, seed + 100 + k, alone=cable is not None)
+        F = fsr_reading(T_B, seed + 100 + k, alone=cable is not None, converter=converter)
         comp = single_compensation(F, x, mu_bd(), THETA0 + theta)
         (f_hi, f_lo), (c_hi, c_lo), (b_hi, b_lo) = _levels(F, x), _levels(comp, x), _levels(T_B, x)
         out["cases"][f"{W:g}"] = {"weight_N": W, "fsr_change_N": f_hi - f_lo, "compensated_change_N": c_hi - c_lo,
@@ -279,7 +289,8 @@ def _errors(est: np.ndarray, truth: np.ndarray, x: np.ndarray, window_s: float =
             "max_abs_near_turns_N": float(np.max(np.abs(e[near]))) if near.any() else 0.0}
 
 
-def fig11(seed: int = 0, theta_deg: float = 0.0, cable: TendonSheathParams | None = None) -> dict:
+def fig11(seed: int = 0, theta_deg: float = 0.0, cable: TendonSheathParams | None = None,
+          converter: FsrCalibration | None = None) -> dict:
     """FSR-modelled tension against the F/T truth of a spring at variable motor speed (module docstring);
     `cable`: the distributed cable in place of the rig's capstan segments."""
     t = np.arange(int(20 * FS_HZ)) / FS_HZ
@@ -298,7 +309,7 @@ def fig11(seed: int = 0, theta_deg: float = 0.0, cable: TendonSheathParams | Non
                 proximal, T_B, truth = distributed(seed + 10 + k, x, math.radians(theta_deg), load, cable,
                                                    theta1=math.radians(ab))
             # the FSR at B: the same tension whatever A-B does
-            F = fsr_reading(T_B, seed + 100 + k, alone=cable is not None)
+            F = fsr_reading(T_B, seed + 100 + k, alone=cable is not None, converter=converter)
             single = single_compensation(F, x, mu_bd(), theta)
             flat = motor2tip_transitions(F, mu_bd(), theta)
             key = f"{name}_{ab}"
@@ -311,7 +322,7 @@ def fig11(seed: int = 0, theta_deg: float = 0.0, cable: TendonSheathParams | Non
 
 
 def fig13(seed: int = 0, pretensions_N=(1.96, 4.9), speed_mm_s: float = 0.5,
-          cable: TendonSheathParams | None = None) -> dict:
+          cable: TendonSheathParams | None = None, converter: FsrCalibration | None = None) -> dict:
     """No-load back and forth, 20 mm twice at 0.5 mm/s: sensed force without, single and double compensation,
     at each pretension (the weight that keeps the cable taut; the truth is 0); `cable`: the distributed cable
     in place of the rig's capstan segments."""
@@ -320,14 +331,15 @@ def fig13(seed: int = 0, pretensions_N=(1.96, 4.9), speed_mm_s: float = 0.5,
     out = {"stroke_mm": 20.0, "speed_mm_s": speed_mm_s, "strokes": 4, "pretensions": {}, "series": {"t": t, "x": x},
            **_cable_keys(cable)}
     for k, W in enumerate(pretensions_N):
-        res, sensed = _no_load(seed + 10 * k, x, float(W), cable)
+        res, sensed = _no_load(seed + 10 * k, x, float(W), cable, converter)
         out["pretensions"][f"{W:g}"] = res
         out["series"][f"{W:g}"] = sensed
     out["seed"] = SEED["fig13"]
     return out
 
 
-def _no_load(seed: int, x: np.ndarray, W: float, cable: TendonSheathParams | None = None) -> tuple[dict, dict]:
+def _no_load(seed: int, x: np.ndarray, W: float, cable: TendonSheathParams | None = None,
+             converter: FsrCalibration | None = None) -> tuple[dict, dict]:
     t = np.arange(x.size) / FS_HZ
     runs = []
     for r in range(2):                       # run 0 fits the turn polynomials, run 1 is measured
@@ -335,7 +347,7 @@ def _no_load(seed: int, x: np.ndarray, W: float, cable: TendonSheathParams | Non
             T_B, _ = sheath(seed + r, x, THETA0, mu_bd(), {"tip_force": np.full(x.size, W)})
         else:  # the same cable twice: the runs differ in the FSR's noise
             _, T_B, _ = distributed(seed + r, x, 0.0, {"tip_force": np.full(x.size, W)}, cable)
-        F = fsr_reading(T_B, seed + 100 + r, alone=cable is not None)
+        F = fsr_reading(T_B, seed + 100 + r, alone=cable is not None, converter=converter)
         runs.append((F, single_compensation(F, x, mu_bd(), THETA0), T_B))
     poses = np.zeros((x.size, 6))
     poses[:, 2] = x
@@ -539,13 +551,20 @@ def run(args) -> int:
             check_output(path, flag)
     if args.cable_params is not None and args.plant != "distributed":
         raise InputError("--cable-params: the cable's parameters belong to --plant distributed")
+    if args.fsr_calibration == "platform" and args.plant != "distributed":
+        raise InputError("--fsr-calibration platform: the platform calibration is fitted on --plant distributed")
     cable = None
     if args.plant == "distributed":
         cable = TendonSheathParams() if args.cable_params is None else TendonSheathParams.from_toml(args.cable_params)
-    res = {"fig9": fig9, "fig10b": fig10b, "fig11": fig11, "fig13": fig13}[args.experiment](args.seed, cable=cable)
+    converter = lab_fit(cable, FsrSensorParams(), LAB_SEED).cal if args.fsr_calibration == "platform" else None
+    res = {"fig9": fig9, "fig10b": fig10b, "fig11": fig11, "fig13": fig13}[args.experiment](
+        args.seed, cable=cable, converter=converter)
     print(table(args.experiment, res))
+    if converter is not None:
+        print("FSR converted with the platform calibration (scenes.fsr_lab, as the distributed robot's estimators)")
     if args.json:
-        write_json(args.json, {"experiment": args.experiment, "seed": args.seed, **_jsonable(res)})
+        write_json(args.json, {"experiment": args.experiment, "seed": args.seed,
+                               "fsr_calibration": args.fsr_calibration, **_jsonable(res)})
     if args.plot:
         save_figure(figure(args.experiment, res, args.seed), args.plot)
     return 0

@@ -73,3 +73,22 @@ def test_distributed_fsr_alone_passes_a_swing_smaller_than_the_calibration_gap()
     assert c0["distal_N"][0] == pytest.approx(c0["tension_B_N"][0], rel=0.03)
     # falling, the converter's unloading branch takes off the calibration's gap, more than the sensor's own
     assert c0["distal_N"][1] < c0["tension_B_N"][1]
+
+
+def test_the_platform_calibration_reads_the_scaffolds_friction_into_the_fsr(tmp_path, capsys):
+    # converted with the calibration fitted on the cable's own platform (scenes.fsr_lab), the FSR rising reads
+    # the weight the platform would hang for that reading: the tension at B times e^(mu_c theta0)
+    p = TendonSheathParams()
+    out = tmp_path / "p.json"
+    assert main(["bench", "cable", "--experiment", "fig9", "--plant", "distributed", "--fsr-calibration", "platform",
+                 "--json", str(out)]) == 0
+    assert "platform calibration" in capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    c0 = doc["cases"]["0"]
+    assert doc["fsr_calibration"] == "platform"
+    assert c0["distal_N"][0] == pytest.approx(c0["tension_B_N"][0] * math.exp(p.mu_c * p.theta0), rel=0.03)
+    builtin = cable.fig9(seed=0, cable=p)["cases"]["0"]
+    assert c0["distal_change_N"] > builtin["distal_change_N"] + 0.1        # the friction read in, by branch
+    assert main(["bench", "cable", "--experiment", "fig9", "--fsr-calibration", "platform"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--fsr-calibration platform" in err
