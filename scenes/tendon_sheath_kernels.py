@@ -31,9 +31,9 @@ Arrays of c cables (the TendonSheath's, written in place):
     out (O_ROWS + taps, c)  a tick's motor force [N], tip load force [N], tip travel [m], Newton iterations,
                          then the tension [N] at each tap (a sensor there): an element's tension, or at a node
                          the tension between its two elements' (`node_tension`)
-How the cables share a step: they run in lockstep, node by node (the Newton sweeps' recurrences are chains of
-dependent divisions; c independent chains side by side keep the processor busy), each cable iterating until
-its own convergence: a cable's numbers do not depend on the others'.
+How the cables share a step: one after the other, each iterating until its own convergence (a cable's numbers
+do not depend on the others'), with the sweeps' carried values in registers (running them in lockstep, node by
+node across cables, carried those values through memory and was slower).
 Compiled with IEEE division (jit.njit ieee_division: no zero test per division in the Newton sweeps; every
 divisor here is nonzero by construction, and a non-finite tension would reach the loop's finiteness checks).
 """
@@ -73,11 +73,9 @@ S_U, S_V, S_Z, S_DU, S_IZS, S_CP, S_R, S_B, S_W0, S_W1, S_W2 = range(11)
 S_ROWS = 11
 # columns of cab: t0, the last tick's tip input, the fixed bends, the motor input's map x = x0 + s x_in and
 # the kinematic bend's offset; then the step's scratch per cable: motor travel over the step, the step's tip
-# input, the sweep's carried tension and its slope, the eliminated upper diagonal and right-hand side, the
-# largest correction, Newton iterations, still iterating, motor force, tip load force, the tick's motor travel
-(C_T0, C_TIP, C_THETA0, C_THETA1, C_X0, C_XS, C_TH_OFF, C_DU0, C_A, C_TL, C_AL, C_CP, C_RP, C_BIG, C_IT, C_ACTIVE,
- C_FM, C_FL, C_XT) = range(19)
-CAB_COLS = 19
+# input, Newton iterations, motor force, tip load force, the tick's motor travel
+C_T0, C_TIP, C_THETA0, C_THETA1, C_X0, C_XS, C_TH_OFF, C_DU0, C_A, C_IT, C_FM, C_FL, C_XT = range(13)
+CAB_COLS = 13
 # rows of out
 O_MOTOR, O_TIP, O_X_TIP, O_ITER = range(4)
 O_ROWS = 4
@@ -157,10 +155,11 @@ def cables_step(S, cab, p, h):
     A Newton iteration is two sweeps over the nodes: the first evaluates node i's tensions, friction and
     residual and eliminates its row at once (Thomas algorithm, forward), the second substitutes back and
     updates du. The Stribeck curve, fixed over the step, is evaluated once a node and step (as 1 / zs).
-    After the last update one sweep takes the tensions and bristle states at the converged du."""
+    After the last update one sweep takes the tensions and bristle states at the converged du.
+    One cable after the other, each iterating until its own convergence (the sweeps' carried values stay
+    in registers)."""
     nc = S.shape[1]
     N = S.shape[2] - 1
-    u, v, z, du, izs, cpv, rv, b = S[S_U], S[S_V], S[S_Z], S[S_DU], S[S_IZS], S[S_CP], S[S_R], S[S_B]
     k = p[P_K]
     kl = p[P_K_LOAD]
     rest = p[P_REST]
@@ -178,109 +177,96 @@ def cables_step(S, cab, p, h):
     spring = int(p[P_MODE]) == MODE_SPRING
     last = N if spring else N - 1
     for c in range(nc):
-        du[c, 0] = cab[c, C_DU0]
+        # this cable's rows: travel, velocity, bristle state, step, 1 / zs, the eliminated upper diagonal and
+        # right-hand side (then the element tensions), bends
+        u, v, z, du, izs = S[S_U, c], S[S_V, c], S[S_Z, c], S[S_DU, c], S[S_IZS, c]
+        cpv, rv, b = S[S_CP, c], S[S_R, c], S[S_B, c]
+        t0 = cab[c, C_T0]
+        fa = cab[c, C_A]
+        du[0] = cab[c, C_DU0]
         if not spring:
-            du[c, N] = cab[c, C_A]
+            du[N] = fa
         for i in range(N + 1):
             if 0 < i <= last:
-                du[c, i] = h * v[c, i]  # predictor: the last step's velocity
+                du[i] = h * v[i]  # predictor: the last step's velocity
             # 1 / zs: sigma0 / mu_c past the Stribeck peak (no division there: most nodes, most steps)
-            if abs(v[c, i]) > v_peak:
-                izs[c, i] = izs_c
+            if abs(v[i]) > v_peak:
+                izs[i] = izs_c
             else:
-                g = stribeck_curve(v[c, i], mu_c, mu_s, v_s)
-                izs[c, i] = s0 / g if g > 0.0 else 0.0
-        cab[c, C_ACTIVE] = 1.0
-    active = nc
-    its = 0
-    while active > 0:
-        for c in range(nc):  # the first element's tension starts the sweep
-            if cab[c, C_ACTIVE] > 0.0:
-                cab[c, C_TL], cab[c, C_AL] = taut(cab[c, C_T0], k, u[c, 0] + du[c, 0] - u[c, 1] - du[c, 1])
-                cab[c, C_CP] = 0.0
-                cab[c, C_RP] = 0.0
-        # forward sweep: node i's residual R_i and its row of the tridiagonal Jacobian, eliminated at once
-        for i in range(1, last + 1):
-            for c in range(nc):
-                if cab[c, C_ACTIVE] <= 0.0:
-                    continue
-                Tl = cab[c, C_TL]
-                al = cab[c, C_AL]
-                bl = b[c, i - 1]
+                g = stribeck_curve(v[i], mu_c, mu_s, v_s)
+                izs[i] = s0 / g if g > 0.0 else 0.0
+        its = 0
+        while True:
+            # forward sweep: node i's residual R_i and its row of the tridiagonal Jacobian, eliminated at once;
+            # the first element's tension starts it
+            Tl, al = taut(t0, k, u[0] + du[0] - u[1] - du[1])
+            cp = 0.0
+            rp = 0.0
+            for i in range(1, last + 1):
+                bl = b[i - 1]
                 if i < N:
-                    Tr, ar = taut(cab[c, C_T0], k, u[c, i] + du[c, i] - u[c, i + 1] - du[c, i + 1])
-                    br = b[c, i]
+                    Tr, ar = taut(t0, k, u[i] + du[i] - u[i + 1] - du[i + 1])
+                    br = b[i]
                     mi = mh
                 else:
                     Tr = 0.0
                     ar = 0.0
                     br = 0.0
                     mi = 0.5 * mh
-                x = du[c, i]
-                zi = z[c, i]
-                zn, dz = bristle(zi, x, izs[c, i])
+                x = du[i]
+                zi = z[i]
+                zn, dz = bristle(zi, x, izs[i])
                 phi = cf * zn - s1h * zi + s2h * x
                 dphi = cf * max(dz, 0.0) + s2h
                 n = 0.5 * (Tl * bl + Tr * br)  # normal force n'_i
-                res = mi * (x - h * v[c, i]) - Tl + Tr + n * phi
+                res = mi * (x - h * v[i]) - Tl + Tr + n * phi
                 d = mi + al + ar + n * dphi + 0.5 * phi * (br * ar - bl * al)
                 if i == N:  # MODE_SPRING: the load on the tip node
-                    res += kl * (u[c, N] + x - rest) + cab[c, C_A]
+                    res += kl * (u[N] + x - rest) + fa
                     d += kl
                 lo = -al * (1.0 - 0.5 * phi * bl)
-                iden = 1.0 / (d - lo * cab[c, C_CP])
+                iden = 1.0 / (d - lo * cp)
                 cp = -ar * (1.0 + 0.5 * phi * br) * iden
-                rp = (-res - lo * cab[c, C_RP]) * iden
-                cpv[c, i] = cp
-                rv[c, i] = rp
-                cab[c, C_CP] = cp
-                cab[c, C_RP] = rp
-                cab[c, C_TL] = Tr
-                cab[c, C_AL] = ar
-        # back substitution (the ends' travel is known: their delta is 0); a step that would carry du across 0
-        # (friction's kink) stops on it
-        for c in range(nc):
-            cab[c, C_BIG] = 0.0
-            cab[c, C_RP] = 0.0
-        for i in range(last, 0, -1):
-            for c in range(nc):
-                if cab[c, C_ACTIVE] <= 0.0:
-                    continue
-                dn = rv[c, i] - cpv[c, i] * cab[c, C_RP]
-                cab[c, C_RP] = dn
-                x = du[c, i]
-                if (x > 0.0 and x + dn < 0.0) or (x < 0.0 and x + dn > 0.0):
-                    dn = -x
-                du[c, i] = x + dn
-                cab[c, C_BIG] = max(cab[c, C_BIG], abs(dn))
-        its += 1
-        for c in range(nc):
-            if cab[c, C_ACTIVE] > 0.0:
-                cab[c, C_IT] += 1.0
-                if cab[c, C_BIG] < tol or its >= max_iter:
-                    cab[c, C_ACTIVE] = 0.0
-                    active -= 1
-    # the converged step: tensions, friction of the motor node (it adds to the motor's force: the proximal
-    # gauge between motor and sheath) and of the tip node (the reaction of a held tip), the state
-    for c in range(nc):
-        t0 = cab[c, C_T0]
+                rp = (-res - lo * rp) * iden
+                cpv[i] = cp
+                rv[i] = rp
+                Tl = Tr
+                al = ar
+            # back substitution (the ends' travel is known: their delta is 0); a step that would carry du
+            # across 0 (friction's kink) stops on it
+            big = 0.0
+            dn = 0.0
+            for i in range(last, 0, -1):
+                dn = rv[i] - cpv[i] * dn
+                x = du[i]
+                s = dn
+                if (x > 0.0 and x + s < 0.0) or (x < 0.0 and x + s > 0.0):
+                    s = -x
+                du[i] = x + s
+                big = max(big, abs(s))
+            its += 1
+            if big < tol or its >= max_iter:
+                break
+        cab[c, C_IT] += its
+        # the converged step: tensions, friction of the motor node (it adds to the motor's force: the proximal
+        # gauge between motor and sheath) and of the tip node (the reaction of a held tip), the state
         for j in range(N):
-            rv[c, j] = taut(t0, k, u[c, j] + du[c, j] - u[c, j + 1] - du[c, j + 1])[0]
-        du0 = du[c, 0]
-        z0 = bristle(z[c, 0], du0, izs[c, 0])[0]
-        cab[c, C_FM] = rv[c, 0] * (1.0 + 0.5 * b[c, 0] * (cf * z0 - s1h * z[c, 0] + s2h * du0))
+            rv[j] = taut(t0, k, u[j] + du[j] - u[j + 1] - du[j + 1])[0]
+        du0 = du[0]
+        z0 = bristle(z[0], du0, izs[0])[0]
+        cab[c, C_FM] = rv[0] * (1.0 + 0.5 * b[0] * (cf * z0 - s1h * z[0] + s2h * du0))
         if spring:
-            cab[c, C_FL] = kl * (u[c, N] + du[c, N] - rest) + cab[c, C_A]
+            cab[c, C_FL] = kl * (u[N] + du[N] - rest) + fa
         else:
-            zN = bristle(z[c, N], du[c, N], izs[c, N])[0]
-            phiN = cf * zN - s1h * z[c, N] + s2h * du[c, N]
-            Tt = rv[c, N - 1]
-            cab[c, C_FL] = Tt - 0.5 * Tt * b[c, N - 1] * phiN - 0.5 * mh * (du[c, N] - h * v[c, N])
+            zN = bristle(z[N], du[N], izs[N])[0]
+            phiN = cf * zN - s1h * z[N] + s2h * du[N]
+            Tt = rv[N - 1]
+            cab[c, C_FL] = Tt - 0.5 * Tt * b[N - 1] * phiN - 0.5 * mh * (du[N] - h * v[N])
         for i in range(N + 1):
-            x = du[c, i]
-            z[c, i] = bristle(z[c, i], x, izs[c, i])[0]
-            v[c, i] = x * ih
-            u[c, i] += x
+            x = du[i]
+            z[i] = bristle(z[i], x, izs[i])[0]
+            v[i] = x * ih
+            u[i] += x
 
 
 @njit(ieee_division=True)

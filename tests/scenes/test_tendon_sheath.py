@@ -240,8 +240,8 @@ def test_cables_are_independent():
 
 
 def test_a_cable_s_numbers_do_not_depend_on_when_the_others_converge():
-    """The cables share each compiled step in lockstep; one that needs more Newton iterations (a reversal, slack)
-    must not change another's numbers."""
+    """The cables share each compiled step; one that needs more Newton iterations (a reversal, slack) must not
+    change another's numbers."""
     params = TendonSheathParams()
     rng = np.random.default_rng(3)
     x = np.cumsum(rng.normal(0, 3e-5, (300, 4)), axis=0)
