@@ -40,12 +40,12 @@ REALTIME = (
 
 def _shared_fixture_scope(item) -> str | None:
     """Node id of the widest module- or session-scoped fixture of the suite's own that `item` uses, if any
-    (pytest's own, like tmp_path_factory, are left out: every worker has its own anyway)."""
+    (pytest's own, like tmp_path_factory, and this file's are left out: every worker has its own anyway)."""
     info = getattr(item, "_fixtureinfo", None)
     best = None
     for defs in (info.name2fixturedefs.values() if info else ()):
         fd = defs[-1]
-        if fd.scope in ("module", "package", "session") and fd.baseid.startswith("tests"):
+        if fd.scope in ("module", "package", "session") and fd.baseid.startswith("tests/"):  # not this file's
             if best is None or len(fd.baseid) < len(best):  # the conftest's directory before a module
                 best = fd.baseid
     return best
