@@ -45,6 +45,7 @@ from scenes.fsr_sensor import FsrSensor, FsrSensorParams
 from scenes.sim_robot import DistributedCables, from_url
 from scenes.tendon_sheath import TendonSheathParams
 from teleop.core.calibration.fsr import FsrFit, fit_fsr
+from teleop.core.kernels.sensor import counts2conductance
 from teleop.core.sensors import G, LOADING, UNLOADING, FsrCalibration, FsrCalibrationData, default_fsr_calibration
 from teleop.io.calibration_csv import write_fsr_calibration_csv
 
@@ -101,7 +102,9 @@ def calibration_run(cable: TendonSheathParams, sensor: FsrSensorParams, seed: in
     cables = DistributedCables(cable, 1, float(W[0]) if W[0] > 0 else 0.0, TICK_S, 0.0, float(THETA0))
     t_b = cables.run(np.zeros((m, 1)), W[:, None], np.full((m, 1), THETA0))[0]
     counts = FsrSensor(1, seed, sensor, truth).run(t_b).astype(float)[:, 0]
-    g = np.array([truth.counts2conductance(np.mean(counts[a:b])) for a, b, _, _ in holds], dtype=float)
+    # the scalar kernel the loop's converter uses (compiled by the warm-up: no new compilation in a session)
+    g = np.array([counts2conductance(float(np.mean(counts[a:b])), float(truth.r_divider), float(truth.adc_max))
+                  for a, b, _, _ in holds], dtype=float)
     weight, reading, branch = average_passes(holds, g, repeats)
     return FsrCalibrationData(weight, reading, branch,
                               source=f"scenes.fsr_lab.calibration_run (simulated seed 000 Fig 6 platform, seed {seed})")
