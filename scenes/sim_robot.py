@@ -44,6 +44,7 @@ from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry, default_geometry
 from teleop.core.kernels import sim as KS
 from teleop.core.kernels import tension as KT
+from teleop.core.kernels.tension import OK
 from teleop.core.kernels import sheath as SH
 from teleop.core.kernels.sensor import fsr_counts
 from teleop.core.kinematics import FREE_AXIAL, check_lengths, poses2lengths
@@ -347,6 +348,7 @@ class SimRobot(ContextDevice):
                            *self._fsr.kernel_args()) if self._fused is not None and self._fsr is not None and \
             self._rich is None else None  # reading_cables_fsr's arguments that stay the same objects
         self._dt = p.dt  # [s] a reading's period (read's: a property call less)
+        self._n, self._substeps = n, p.substeps  # cables, physics steps a reading (read's: lookups less)
         self.is_open = True
 
     def close(self) -> None:
@@ -406,10 +408,10 @@ class SimRobot(ContextDevice):
         """Advance one reading period and return the raw reading."""
         if not self.is_open:
             self._require_open()
-        p, g = self.params, self.geom
         # `substeps` physics steps toward the commanded pose: tip (3,) [m], contact force (fx, fy, fz) [N] on the tip
-        tip, F = self.world.advance(self._target if self._terms is not None else self._pose_terms()[1], p.substeps)
-        n = len(self.L_cmd)
+        tip, F = self.world.advance(self._target if self._terms is not None else self._pose_terms()[1],
+                                    self._substeps)
+        n = self._n
         t_tip, f, steps, counts = np.empty(n), np.empty(6), np.empty(n, np.int64), np.empty(n, np.int64)
         noise, k = self._noise_row()  # this reading's ADC noise [counts]: noise[k]
         fused = self._fused
@@ -419,16 +421,17 @@ class SimRobot(ContextDevice):
                 L = self.L_cmd
                 status = reading_cables_fsr(*self._fused_fsr, F, L, L if self._play is None else self._L_real, noise,
                                             k, f, t_tip, steps, out, counts)
-                done = status == KT.OK
+                done = status == OK
             else:
                 status = reading_cables(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f,
                                         t_tip, steps, self.L_cmd if self._play is None else self._L_real, *fused[:4],
                                         out, TAP_FSR, *self._lag_args, noise, k, counts)
-                done = status == KT.OK and self._rich is None and self._fsr is None
+                done = status == OK and self._rich is None and self._fsr is None
             if done:  # the usual case: no motor position, no lumped sheath, the FSRs' counts from the call
                 self._cables.sheath.t += self._dt
-                return self._reading(counts, steps, f, tip, t_tip, out[TAP_FSR], out[TAP_FBG],
-                                     {"t_motor": out[O_MOTOR]})
+                return self._reading(counts, steps, f, tip, t_tip, out[TAP_FSR],
+                                     None if self._fbg is None else out[TAP_FBG], out[O_MOTOR])
+        p, g = self.params, self.geom
         x = -self.L_cmd  # motor position: hauling in (shortening) is +
         if self._rich is not None and self._play is not None:  # the cable moves with its realized length
             x = -self._L_real
@@ -439,21 +442,19 @@ class SimRobot(ContextDevice):
             # chain and, when direct, the FSRs (lag, conductance, ADC: FsrBranchLag.counts)
             status = KS.reading_counts(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
                                        self._cap, f, t_tip, t_fsr, steps, direct, *self._lag_args, noise, k, counts)
-        if status != KT.OK:
+        if status != OK:
             # not the one-dimensional null space, or infeasible: teleop.core.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)
             SH.motor_forces(self._cap, x, t_tip, self._theta, self._kc, t_fsr)
-        t_fbg, extras = t_tip, {}
+        t_fbg, t_motor = t_tip, None
         # the FSRs' counts came with the kernel call (not those of the FSR alone, params.fsr)
-        counted = status == KT.OK and (direct or fused is not None) and self._fsr is None
-        if fused is not None and status == KT.OK:  # the cable's tick was in the call: its output rows
+        counted = status == OK and (direct or fused is not None) and self._fsr is None
+        if fused is not None and status == OK:  # the cable's tick was in the call: its output rows
             self._cables.sheath.t += self._dt
-            t_fsr, t_fbg = out[TAP_FSR], out[TAP_FBG]
-            extras["t_motor"] = out[O_MOTOR]
+            t_fsr, t_fbg, t_motor = out[TAP_FSR], out[TAP_FBG], out[O_MOTOR]
         elif self._cables is not None:  # the distributed cable in place of the lumped sheath
             t_fsr, t_fbg, t_motor = self._cables.step(self.L_cmd if self._play is None else self._L_real, t_tip,
                                                       self._theta)
-            extras["t_motor"] = t_motor
         if self._added is not None:
             t_fsr = self._added.forces(t_fsr, x, self.t + self._dt)
         if self._rich is not None:
@@ -462,18 +463,21 @@ class SimRobot(ContextDevice):
             self._fsr.counts_into(t_fsr[None], noise[k:k + 1], counts[None])
         elif not counted:  # lag, conductance, ADC (FsrBranchLag.counts' kernel, = counts_from(..))
             fsr_counts(t_fsr, *self._lag_args, noise[k], counts)
-        return self._reading(counts, steps, f, tip, t_tip, t_fsr, t_fbg, extras)
+        return self._reading(counts, steps, f, tip, t_tip, t_fsr, t_fbg, t_motor)
 
-    def _reading(self, counts, steps, f, tip, t_tip, t_fsr, t_fbg, extras: dict) -> RobotReading:
-        """The reading's record (read's end): the distal FBGs' wavelengths from t_fbg, the clock and sequence
-        advanced one reading."""
+    def _reading(self, counts, steps, f, tip, t_tip, t_fsr, t_fbg, t_motor) -> RobotReading:
+        """The reading's record (read's end): the distal FBGs' wavelengths from t_fbg (unused without FBGs), the
+        cable's tension at the motor t_motor (extras "t_motor"; None: a plant without one), the clock and
+        sequence advanced one reading."""
         fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + self._dt)  # distal FBGs (sim_sensors)
         self.t += self._dt
         self.seq += 1
+        extras = {"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy()}
+        if t_motor is not None:
+            extras["t_motor"] = t_motor
         return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
                             commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
-                            boot_id=self.boot_id, wrench_truth=f, fbg_pm=fbg,
-                            extras={"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy(), **extras})
+                            boot_id=self.boot_id, wrench_truth=f, fbg_pm=fbg, extras=extras)
 
     def _noise_row(self) -> tuple:
         """(block, k): the next row of ADC noise [counts] is block[k] (the row _noise_rows(1)[0] would be, without
