@@ -12,8 +12,10 @@ sheath's entrance, tip force, the bend, the sensors' temperature), every third c
 sensor (its own draw, Rules.draw). A distributed plant has no single catalogue effect: the case reports what
 the diagnosis names, the sheath's friction coefficient its baseline capstan fits against the plant's, the
 play it fits on the position link against the dead zone of Kaneko's closed form at the mean tip tension
-(`dead_zone_uniform`; it grows with the tension), and per channel the held-out RMSE over the noise the case
-added (the noise floor).
+(`dead_zone_uniform`; it grows with the tension) and, where the play's general form grows with the tension
+(backlash's `tension`: under a spring the tip position is the tension), its width at the 5th and 95th
+percentile of the tip tension against Kaneko's there, and per channel the held-out RMSE over the noise the
+case added (the noise floor).
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ from teleop.io.recording_io import interchange_text, read_interchange
 #: pre-sliding travel of the plant's LuGre bristles [m] (scenes.tendon_sheath's default: mu_c / sigma0)
 PRESLIDING_M = 1.0e-5
 #: expected of the diagnosis on a distributed plant: the capstan on the force link (in the project's
-#: baseline), a play on the position link
+#: baseline), a play whose dead zone grows with the tension on the position link
 EXPECTED = {"motor_force": "capstan_friction", "tip_pos": "backlash"}
 
 
@@ -122,7 +124,8 @@ def run_distributed_case(case: dict, seed: int, duration_s: float = 20.0, noise:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"distributed_{case['index']:04d}.csv"
         path.write_text(sim["csv"], encoding="utf-8")
-        diag = diagnose(read_interchange(path), sindy=sindy)
+        rec = read_interchange(path)
+        diag = diagnose(rec, sindy=sindy)
     doc = diag.as_dict()
     s = sim["setup"]
     named = {}
@@ -143,16 +146,35 @@ def run_distributed_case(case: dict, seed: int, duration_s: float = 20.0, noise:
         if ch == "tip_pos":
             play = [f for f in doc["findings"] if f["channel"] == "tip_pos" and f["effect"] == "backlash"]
             if play:
-                w = float(play[0]["params"]["width"]["value"])
-                row["play_width_m"] = w
-                row["dead_zone_mean_m"] = s["dead_zone_mean_m"]
-                row["play_over_dead_zone"] = w / max(s["dead_zone_mean_m"], 1e-300)
+                row.update(play_against_kaneko(play[0], rec, s, case["load"]))
     row["expected_named"] = {ch: (e in named.get(ch, []) or e in doc["baseline"]["effects"].get(ch, []))
                              for ch, e in EXPECTED.items() if ch in doc["peer"]}
     if sim["truth"]:
         e = next(iter(sim["truth"]))
         row["sensor_effect_named"] = e in named.get("motor_force", [])
     return row
+
+
+def play_against_kaneko(finding: dict, rec, setup: dict, load: str) -> dict:
+    """A backlash finding on tip_pos against Kaneko's dead zone: its width in motor travel [m] (`width_input`,
+    else the tip's) over `dead_zone_uniform` at the mean tip tension; where its width grows with the tension
+    (`tension`) under a spring, also its width at the tip positions of the 5th and 95th percentile tip
+    tension (the spring law fitted on the recording) over Kaneko's there."""
+    p = finding["params"]
+    w = float(p.get("width_input", p["width"])["value"])
+    out = {"play_width_m": w, "dead_zone_mean_m": setup["dead_zone_mean_m"],
+           "play_over_dead_zone": w / max(setup["dead_zone_mean_m"], 1e-300)}
+    if "tension" in p and load == "spring" and "tip_force" in rec.channels:
+        ch = rec.channels
+        tension, ref = float(p["tension"]["value"]), float(p["x_ref"]["value"])
+        slope, icpt = np.polyfit(ch["tip_force"], ch["tip_pos"], 1)      # the spring law, tip on tension
+        q = np.percentile(ch["tip_force"], [5, 95])
+        wq = w * np.maximum(1.0 + tension * (slope * q + icpt - ref), 0.0)
+        out["play_tension_per_m"] = tension
+        out["play_width_range_m"] = [float(v) for v in wq]
+        out["play_over_dead_zone_range"] = [float(a / max(b, 1e-300))
+                                            for a, b in zip(wq, setup["dead_zone_range_m"])]
+    return out
 
 
 def summarise_distributed(rows: list[dict]) -> dict:
@@ -195,7 +217,10 @@ def distributed_text(summary: dict, rows: list[dict]) -> str:
         if "capstan_mu_ratio" in r:
             extra += f", capstan mu {r['capstan_mu_ratio']:.2f}x true"
         if "play_over_dead_zone" in r:
-            extra += f", play {1e3 * r['play_width_m']:.3g} mm = {r['play_over_dead_zone']:.2f}x dead zone"
+            extra += f", play {1e3 * r['play_width_m']:.3g} mm = {r['play_over_dead_zone']:.2f}x Kaneko's dead zone"
+        if "play_over_dead_zone_range" in r:
+            lo, hi = r["play_over_dead_zone_range"]
+            extra += f" ({lo:.2f}x, {hi:.2f}x at the 5th, 95th percentile tension)"
         lines.append(f"  case {r['index']} ({r['load']}, {r['cable']}, ratio {r['capstan_ratio']:.2f}, "
                      f"{'+'.join(r['switched_on'])}): named {named}{extra}; RMSE/noise {rn}")
     for ch, e in summary["expected"].items():

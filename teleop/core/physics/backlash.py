@@ -12,9 +12,23 @@ scales as e^(grow (x - x_ref)) with the tip's position x (the tendon's tension, 
 stretch, changes along the stroke; the scale is 1 at x_ref, where `elastic` is the part that follows at
 once; a fit holds x_ref at the record's mean tip position). `start` in [-1, 1] is where in its band each play was
 when the record began (0: centred). This is a Prandtl-Ishlinskii operator with three play widths (0, w,
-TAIL_RATIO w) and a position-dependent output scale; with elastic = tail = grow = start = 0 it is the plain
-play. The physics is one step kernel (kernels.effects.backlash_step, over kernels.friction.play_mix_step);
-the array form is the catalogue's driver loop over it.
+TAIL_RATIO w) and a position-dependent output scale.
+
+Tension (a tendon pulling a spring through a sheath of friction; Kaneko et al., ICAR 1991): after a reversal
+the cable's tension profile turns over from the motor end towards the tip, T e^(+-mu kappa s), and with uniform
+friction the tip stays put until the turn-over reaches it (a sharp take-up: the whole profile is then the
+new sliding one). The dead zone is the difference of the two sliding profiles' stretches, 2 T L (cosh(mu
+Theta) - 1) / (EA mu Theta), proportional to the tension T at the reversal; their common part, the elastic
+stretch T L / EA times a mean of the profile, is linear in T as well and goes to the link's gain. Under a
+spring the tip's position is its tension (up to the preload), so the main play's half-width grows linearly
+with its position: width / 2 (1 + tension (z - x_ref)), its envelopes z = x -/+ width / 2 (1 + tension z)
+solved in closed form (kernels.tension_play); Kaneko's tension = 1 / (x_ref - the slack tip position). For
+the tip position this is the quasi-static distributed model itself, not an approximation of it: the tip
+moves only on a branch where the whole profile slides, and there its stretch is that branch's.
+
+With elastic = tail = grow = tension = start = 0 it is the plain play. The physics is one step kernel
+(kernels.tension_play.backlash_step: the plain play kernels.effects.plain_play_step, or the general one over
+kernels.friction.play_mix_step); the array form is the catalogue's driver loop over it.
 """
 
 from __future__ import annotations
@@ -23,10 +37,13 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.kernels.effects import backlash_run, backlash_step
+from teleop.core.kernels.tension_play import backlash_run, backlash_step
 from teleop.core.physics.base import Effect, Kernel, KernelStep, ParamSpec, Rules, Signals, drive_kernel, register
 
 TAIL_RATIO = 4.0   # the wide play's width over the main play's
+#: largest |b| = width tension / 2 of the main play's envelopes (x -/+ width / 2) / (1 +/- b): its dead zone
+#: may not grow as fast as the play moves
+TENSION_B_MAX = 0.9
 
 
 def backlash(x: np.ndarray, width: float, y0: float | None = None) -> np.ndarray:
@@ -46,13 +63,16 @@ def mix_layout(p: Mapping[str, float]) -> tuple[float, float, float, float]:
 
 def is_plain(p: Mapping[str, float]) -> bool:
     """True when the general form's parameters are all at the plain play's values."""
-    return p["elastic"] == 0.0 and p["tail"] == 0.0 and p["grow"] == 0.0 and p["start"] == 0.0
+    return (p["elastic"] == 0.0 and p["tail"] == 0.0 and p["grow"] == 0.0 and p["start"] == 0.0
+            and p["tension"] == 0.0)
 
 
 def pack(p: Mapping[str, float]) -> tuple:
-    """The step kernel's parameters (kernels.effects.backlash_step): mix_layout, grow, start, x_ref and
-    whether the form is plain (fixed with the parameters: decided once, not per sample)."""
-    return mix_layout(p) + (p["grow"], p["start"], p["x_ref"], float(is_plain(p)))
+    """The step kernel's parameters (kernels.tension_play.backlash_step): mix_layout, grow, start, x_ref,
+    whether the form is plain (fixed with the parameters: decided once, not per sample) and b = width
+    tension / 2 (within +-TENSION_B_MAX)."""
+    b = min(max(0.5 * p["width"] * p["tension"], -TENSION_B_MAX), TENSION_B_MAX)
+    return mix_layout(p) + (p["grow"], p["start"], p["x_ref"], float(is_plain(p)), b)
 
 
 KERNEL = Kernel(backlash_step, backlash_run, state=(np.nan, np.nan), pack=pack)
@@ -74,6 +94,9 @@ PARAMS = (ParamSpec("width", "m", 1e-8, 100.0, 5e-4, "total play (dead band) wid
                     "position x (1/rad for a rotary joint; general form)", shape=True),
           ParamSpec("x_ref", "m", -1e6, 1e6, 0.0, "where the lag's scale is 1 (fits hold it at the record's mean "
                     "tip position; general form)", shape=True),
+          ParamSpec("tension", "1/m", -1e4, 1e4, 0.0, "the main play's width grows as (1 + tension (z - x_ref)) "
+                    "with its position z (a spring's tension; Kaneko: 1 / (x_ref - the slack tip position); 1/rad "
+                    "for a rotary joint; general form)", shape=True, log=True, tiny=1.0),
           ParamSpec("start", "1", -1.0, 1.0, 0.0, "where in its band the play began (-1 .. 1, 0 centred; "
                     "general form)", shape=True, state=True))
 
@@ -94,7 +117,7 @@ class BacklashStep(KernelStep):
 
 
 def _hold(rec, known, direction) -> dict:
-    """The general form's width holds at the record's mean tip position."""
+    """The general form's width (and its growth with the tension) refers to the record's mean tip position."""
     return {"x_ref": float(np.mean(rec.tip))}
 
 
@@ -102,7 +125,8 @@ BACKLASH = register(Effect(
     name="backlash",
     link="position",
     doc="play operator: tip = clamp(tip_prev, motor - width/2, motor + width/2); general form: an elastic "
-        "part, a wider slow play and a lag growing with position (a tendon in a sheath)",
+        "part, a wider slow play, a lag growing with position and a dead zone growing with the tension "
+        "(a tendon in a sheath)",
     params=PARAMS,
     inputs=("x",),
     output="x",
