@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from teleop.core.kernels.friction import clamp, coulomb_force, dahl_step, play_mix_start, play_mix_step, \
+from teleop.core.kernels.friction import clamp, coulomb_force, dahl_step, \
     stribeck_force, viscous_force
 from teleop.core.kernels.jit import njit
 from teleop.core.kernels.sheath import F
@@ -30,40 +30,11 @@ from teleop.core.kernels.sheath import F
 # ------------------------------------------------------------------ position links
 @njit
 def plain_play_step(s, u, p):
-    """backlash_step's plain form: the play of half-width r1, z1 = clamp(z1, x - r1, x + r1), starting at x."""
+    """backlash's plain form (its step kernel: kernels.tension_play.backlash_step): the play of half-width
+    r1, z1 = clamp(z1, x - r1, x + r1), starting at x."""
     x, r = u[0], p[0]
     s[0] = x if s[0] != s[0] else clamp(s[0], x - r, x + r)
     return s[0]
-
-
-@njit
-def general_play_step(s, u, p):
-    """backlash_step's general form: the general play (kernel friction.play_mix_step) about x_ref."""
-    xr = u[0] - p[6]
-    if s[0] != s[0]:
-        s[0], s[1] = play_mix_start(xr, p[0], p[1], p[5])
-    s[0], s[1], y = play_mix_step(s[0], s[1], xr, p[0], p[1], p[2], p[3], p[4])
-    return y + p[6]
-
-
-@njit
-def backlash_step(s, u, p):
-    """u = (x,) motor position; p = (r1, r2, w1, w2, grow, start, x_ref, plain) (physics.backlash.pack);
-    s = (z1, z2) the two plays: plain_play_step where plain = 1, else general_play_step."""
-    return plain_play_step(s, u, p) if p[7] != 0.0 else general_play_step(s, u, p)
-
-
-@njit
-def backlash_run(s, U, p, out):
-    """out (n,): backlash_step along U (n, k) from the state s (the form chosen once, outside the loop: a
-    branch inside kept numba from inlining the step)."""
-    if p[7] != 0.0:
-        for i in range(U.shape[0]):
-            out[i] = plain_play_step(s, U[i], p)
-    else:
-        for i in range(U.shape[0]):
-            out[i] = general_play_step(s, U[i], p)
-    return out
 
 
 # ------------------------------------------------------------------ force links
