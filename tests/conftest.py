@@ -8,7 +8,7 @@ Every test is free to run on either worker, except:
   worker, never two at once; the other worker meanwhile runs the rest.
 - tests that share a module- or session-scoped fixture of the suite's own (a recorded session, a built
   firmware) stay together on one worker, so that the fixture is made once, not once per worker.
-Run serially with `-n 0` (or `-p no:xdist`, then also without `--dist`)."""
+`-n 0` runs the suite in one process (the groups are then ignored)."""
 
 import os
 
