@@ -1,0 +1,27 @@
+"""The distributed suite of `teleop bench diagnose` on the position link: a recording of the distributed
+tendon-sheath plant (scenes.tendon_sheath, LuGre friction per node: no catalogue kernel) pulling a spring
+names a play whose dead zone grows with the tension, near Kaneko's closed form, and fits the tip to its
+noise floor."""
+
+import pytest
+
+from teleop.apps.bench.diagnose_distributed import distributed_plan, play_against_kaneko, run_distributed_case
+
+
+def test_spring_case_names_the_tension_play_at_kanekos_dead_zone():
+    case = distributed_plan(1)[0]
+    assert case["load"] == "spring" and case["effect"] == "none"
+    row = run_distributed_case(case, seed=1, duration_s=8.0)
+    assert row["named"]["tip_pos"] == ["backlash"]
+    assert row["play_tension_per_m"] > 0                      # the dead zone grows with the tension
+    lo, hi = row["play_over_dead_zone_range"]                 # at the 5th and 95th percentile tension
+    assert 0.6 < lo < 1.3 and 0.6 < hi < 1.3
+    tip = next(p for p in row["peer"] if p["channel"] == "tip_pos")
+    assert tip["model_over_noise"] < 1.2
+
+
+def test_play_against_kaneko_reads_the_width_in_motor_travel():
+    finding = {"effect": "backlash", "params": {"width": {"value": 2e-3}, "width_input": {"value": 1e-3}}}
+    out = play_against_kaneko(finding, None, {"dead_zone_mean_m": 5e-4}, "force")
+    assert out["play_width_m"] == 1e-3 and out["play_over_dead_zone"] == pytest.approx(2.0)
+    assert "play_over_dead_zone_range" not in out            # no tension growth reported without it
