@@ -31,6 +31,7 @@ from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams, d
 from teleop.core.physics import REGISTRY, Signals, get_effect
 from teleop.core.physics.base import Scale
 from teleop.diagnosis.diagnose import diagnose
+from teleop.diagnosis.links import smooth_width
 from teleop.diagnosis.scoring import QUANTUM_M, peer_rows
 from teleop.io.recording_io import interchange_text, read_interchange
 
@@ -147,12 +148,26 @@ def run_distributed_case(case: dict, seed: int, duration_s: float = 20.0, noise:
             play = [f for f in doc["findings"] if f["channel"] == "tip_pos" and f["effect"] == "backlash"]
             if play:
                 row.update(play_against_kaneko(play[0], rec, s, case["load"]))
+    tip = next((p for p in row["peer"] if p["channel"] == "tip_pos" and p.get("model_rmse") is not None), None)
+    if tip is not None:
+        floor = input_floor(rec, sim["noise"])
+        row["tip_pos_floor_with_input_m"] = floor
+        row["tip_pos_over_floor_with_input"] = tip["model_rmse"] / max(floor, 1e-300)
     row["expected_named"] = {ch: (e in named.get(ch, []) or e in doc["baseline"]["effects"].get(ch, []))
                              for ch, e in EXPECTED.items() if ch in doc["peer"]}
     if sim["truth"]:
         e = next(iter(sim["truth"]))
         row["sensor_effect_named"] = e in named.get("motor_force", [])
     return row
+
+
+def input_floor(rec, noise: dict) -> float:
+    """The tip position's noise floor [m] with its input's: the tip encoder's noise and the motor encoder's
+    left after the diagnosis' smoothing of the drive (links.smooth_width samples averaged), in quadrature;
+    an exact tip encoder's floor is its counts' alone, which a noisy motor encoder's smoothed noise can
+    exceed many times over."""
+    w = smooth_width(rec.channels["motor_pos"], rec.dt)
+    return math.hypot(noise["tip_pos"], noise["motor_pos"] / math.sqrt(w))
 
 
 def play_against_kaneko(finding: dict, rec, setup: dict, load: str) -> dict:
@@ -202,6 +217,8 @@ def summarise_distributed(rows: list[dict]) -> dict:
     out["sensor_effect_named_rate"] = float(np.mean(sens)) if sens else None
     mus = [r["capstan_mu_ratio"] for r in rows if "capstan_mu_ratio" in r]
     out["capstan_mu_ratio_median"] = med(mus)
+    floors = [r["tip_pos_over_floor_with_input"] for r in rows if "tip_pos_over_floor_with_input" in r]
+    out["tip_pos_over_floor_with_input"] = {"median": med(floors), "max": max(floors)} if floors else None
     plays = [r["play_over_dead_zone"] for r in rows if "play_over_dead_zone" in r]
     out["play_over_dead_zone_median"] = med(plays)
     return out
@@ -221,6 +238,8 @@ def distributed_text(summary: dict, rows: list[dict]) -> str:
         if "play_over_dead_zone_range" in r:
             lo, hi = r["play_over_dead_zone_range"]
             extra += f" ({lo:.2f}x, {hi:.2f}x at the 5th, 95th percentile tension)"
+        if "tip_pos_over_floor_with_input" in r:
+            rn += f" (tip_pos {r['tip_pos_over_floor_with_input']:.2f}x the floor with the smoothed motor encoder's noise)"
         lines.append(f"  case {r['index']} ({r['load']}, {r['cable']}, ratio {r['capstan_ratio']:.2f}, "
                      f"{'+'.join(r['switched_on'])}): named {named}{extra}; RMSE/noise {rn}")
     for ch, e in summary["expected"].items():
@@ -228,4 +247,8 @@ def distributed_text(summary: dict, rows: list[dict]) -> str:
             lines.append(f"{ch}: {e['effect']} named or in the baseline in {e['rate']:.2f} of {e['cases']}")
     for ch, m in summary["model_over_noise"].items():
         lines.append(f"{ch}: held-out RMSE / noise median {m['median']:.2f}, max {m['max']:.2f}")
+    f = summary.get("tip_pos_over_floor_with_input")
+    if f:
+        lines.append(f"tip_pos: held-out RMSE / the floor with the smoothed motor encoder's noise median "
+                     f"{f['median']:.2f}, max {f['max']:.2f}")
     return "\n".join(lines)
