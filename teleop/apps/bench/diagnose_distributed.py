@@ -5,14 +5,15 @@ physics no catalogue effect is), diagnosed from their CSV alone.
 Each case draws a literature-range set-up (scenes.cable_rig.draw_setup: mu, total bend at a capstan ratio
 up to 5, a steel or polymer cable's EA and length, the mean tip load, the noise fraction, exact or noisy
 encoders, the sampling rate) and the drive (scenes.cable_rig.trajectory, reaching past the cable's dead
-zone); the plant's sheath is that cable over that bend (the route bend spread over the first 80 % of its
-length, mu_s = 1.2 mu, 10 um of pre-sliding travel), its tip on a preloaded spring or an external force of
+zone); the plant's sheath is that cable over that bend (the route bend spread over the first BENT = 80 % of
+its length, mu_s = 1.2 mu, 10 um of pre-sliding travel), its tip on a preloaded spring or an external force of
 its own. The motor and tip sides of the cable are recorded (motor and tip position, motor force at the
 sheath's entrance, tip force, the bend, the sensors' temperature), every third case with a catalogue sensor effect on the motor force
 sensor (its own draw, Rules.draw). A distributed plant has no single catalogue effect: the case reports what
 the diagnosis names, the sheath's friction coefficient its baseline capstan fits against the plant's, the
 play it fits on the position link against the dead zone of Kaneko's closed form at the mean tip tension
-(`dead_zone_uniform`; it grows with the tension) and, where the play's general form grows with the tension
+(`dead_zone_uniform` over the bent length BENT L, where the friction is: the straight rest carries the tip's
+tension on either branch and adds no dead zone; it grows with the tension) and, where the play's general form grows with the tension
 (backlash's `tension`: under a spring the tip position is the tension), its width at the 5th and 95th
 percentile of the tip tension against Kaneko's there, and per channel the held-out RMSE over the noise the
 case added (the noise floor).
@@ -37,6 +38,8 @@ from teleop.io.recording_io import interchange_text, read_interchange
 
 #: pre-sliding travel of the plant's LuGre bristles [m] (scenes.tendon_sheath's default: mu_c / sigma0)
 PRESLIDING_M = 1.0e-5
+#: the fraction of the cable's length (from the motor) the route bend is spread over; the rest is straight
+BENT = 0.8
 #: expected of the diagnosis on a distributed plant: the capstan on the force link (in the project's
 #: baseline), a play whose dead zone grows with the tension on the position link
 EXPECTED = {"motor_force": "capstan_friction", "tip_pos": "backlash"}
@@ -70,7 +73,7 @@ def simulate_case(case: dict, seed: int, duration_s: float = 20.0, noise: float 
     L = s["length_m"]
     params = TendonSheathParams(length=L, EA=s["EA_N"], mu_c=s["mu"], mu_s=1.2 * s["mu"],
                                 sigma0=s["mu"] / PRESLIDING_M, theta0=0.0, theta1=s["bend_rad"],
-                                route_span=(0.0, 0.8 * L), scaffold_span=(0.8 * L, 0.95 * L),
+                                route_span=(0.0, BENT * L), scaffold_span=(BENT * L, 0.95 * L),
                                 kinematic_span=(0.95 * L, L))
     L0 = s["load_N"]
     if case["load"] == "spring":
@@ -110,8 +113,8 @@ def simulate_case(case: dict, seed: int, duration_s: float = 20.0, noise: float 
     meta = {"source": f"scenes.tendon_sheath (distributed plant), bench diagnose case {case['index']}",
             "load": "spring" if case["load"] == "spring" else "external"}
     setup = {**s, "fs_hz": fs, "spring_N_per_m": ks, "mean_tip_N": float(np.mean(ft)),
-             "dead_zone_mean_m": dead_zone_uniform(float(np.mean(ft)), s["EA_N"], L, s["mu"] * s["bend_rad"]),
-             "dead_zone_range_m": [dead_zone_uniform(float(q), s["EA_N"], L, s["mu"] * s["bend_rad"])
+             "dead_zone_mean_m": dead_zone_uniform(float(np.mean(ft)), s["EA_N"], BENT * L, s["mu"] * s["bend_rad"]),
+             "dead_zone_range_m": [dead_zone_uniform(float(q), s["EA_N"], BENT * L, s["mu"] * s["bend_rad"])
                                    for q in np.percentile(ft, [5, 95])]}
     noise_ch = {**sf, **{f"{e}_pos": math.sqrt(v ** 2 + QUANTUM_M ** 2 / 12.0) for e, v in sx.items()}}
     return {"csv": interchange_text(t, chans, units, meta), "setup": setup, "truth": truth, "noise": noise_ch,

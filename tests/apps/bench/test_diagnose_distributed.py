@@ -1,7 +1,7 @@
 """The distributed suite of `teleop bench diagnose` on the position link: a recording of the distributed
 tendon-sheath plant (scenes.tendon_sheath, LuGre friction per node: no catalogue kernel) pulling a spring
-names a play whose dead zone grows with the tension, near Kaneko's closed form, and fits the tip to its
-noise floor."""
+names a play whose dead zone grows with the tension, within 20 % of Kaneko's closed form over the bent length
+at the 5th and 95th percentile tension, and fits the tip to its noise floor."""
 
 import pytest
 
@@ -15,7 +15,7 @@ def test_spring_case_names_the_tension_play_at_kanekos_dead_zone():
     assert row["named"]["tip_pos"] == ["backlash"]
     assert row["play_tension_per_m"] > 0                      # the dead zone grows with the tension
     lo, hi = row["play_over_dead_zone_range"]                 # at the 5th and 95th percentile tension
-    assert 0.6 < lo < 1.3 and 0.6 < hi < 1.3
+    assert 0.8 < lo < 1.2 and 0.8 < hi < 1.2
     tip = next(p for p in row["peer"] if p["channel"] == "tip_pos")
     assert tip["model_over_noise"] < 1.2
 
