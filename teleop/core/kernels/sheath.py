@@ -201,7 +201,7 @@ def stick_transition(f, travel, s, lo, hi, k, n):
     if n == 1.0 or hi <= lo:
         return clamp(f + s * k * travel, lo, hi)
     band = hi - lo
-    a = math.sqrt(hi / lo) ** (2.0 * (1.0 - n)) if lo > 0.0 else 1.0
+    a = (hi / lo) ** (1.0 - n) if lo > 0.0 else 1.0   # sqrt(hi / lo) ** (2 (1 - n)), one power
     up = s > 0.0
     u = clamp((f - lo) / band if up else (hi - f) / band, 0.0, 1.0)
     z = clamp(_band_coordinate(u, a, up), 0.0, 1.0)
