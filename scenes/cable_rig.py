@@ -154,6 +154,9 @@ class RigRecording:
     trajectory: str
     load: str
     setup: dict = field(default_factory=dict)   # the simulation's own parameters (mu, k_stick, spring)
+    #: {effect: {"channel", "clean" (n,), "change" (n,)}}: what each effect switched on changed on its channel
+    #: (noise-free, before the sensor's gain and zero) and that channel without it, in SI
+    contributions: dict = field(default_factory=dict, repr=False)
 
     def write(self, path) -> None:
         Path(path).write_text(self.csv, encoding="utf-8")
@@ -254,8 +257,9 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
 
     `given` fixes what is otherwise drawn (a set experiment, e.g. seed 000 Fig 9-13): "x" motor haul-in
     (n,) [m] with n = duration_s * fs_hz, "theta" bend [rad] (scalar or (n,)), "mu", "k_stick" [N/m],
-    "spring_N_per_m" and "preload_N" (load = spring), "tip_force" (n,) [N] (load = external), and
-    "ideal_sensors": True for unit gains and zero offsets. The random draws happen all the same, so the
+    "spring_N_per_m" and "preload_N" (load = spring), "tip_force" (n,) [N] (load = external),
+    "ideal_sensors": True for unit gains and zero offsets, and "sensor_channel" ("motor_force" or
+    "tip_force") the force sensor a sensor effect sits on. The random draws happen all the same, so the
     rest of the recording is the one `seed` gives without `given`.
 
     `ranges` (a RigRanges, e.g. LITERATURE): the set-up is drawn over them (`draw_setup`; its record in
@@ -286,6 +290,11 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     vmax = float(np.percentile(np.abs(v), 99))
     v25 = float(np.percentile(np.abs(v[v != 0]), 25))      # a slow stroke's speed (moving samples)
     truth: dict = {}
+    contrib: dict = {}
+
+    def changed(name, channel, before, after):   # an effect's own change of its channel (noise-free)
+        contrib[name] = {"channel": channel, "clean": np.array(before, dtype=float),
+                         "change": np.asarray(after, dtype=float) - before}
     # sheath bend: constant, or stepped between a few angles as in the seed's bend-angle experiments
     if rng.random() < 0.5 or "bend_angle_deg" not in columns:   # a bend nobody records is fixed
         theta = np.full(t.shape, rng.uniform(math.pi / 2, 2 * math.pi))
@@ -308,7 +317,8 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     for name in _switched_on(effects, "position", with_load=False):
         p = get_effect(name).rules.draw(rng, Scale(travel=A, v_fast=vmax, v_slow=v25))
         truth[name] = {"channel": on_tip or get_effect(name).rules.channel, "params": p}
-        z = _apply(name, p, t=t, x=z)
+        z_before, z = z, _apply(name, p, t=t, x=z)
+        changed(name, truth[name]["channel"], z_before, z)
     # the load at the tip: a preloaded spring on the tip's travel, or an external load of its own
     if load == "spring":
         ks = rng.uniform(200.0, 2000.0)                 # N/m
@@ -340,14 +350,18 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
         p = get_effect(name).rules.draw(rng, Scale(travel=A, load=float(np.mean(F_tip)),
                                                    load_span=float(np.ptp(F_tip)), v_fast=vmax, v_slow=v25))
         truth[name] = {"channel": on_tip or get_effect(name).rules.channel, "params": p}
+        z0 = z
         if load == "spring":
-            z0 = z
             for _ in range(20):
                 z = _apply(name, p, t=t, x=z0, load=F_tip)
                 F_tip = spring(z)
         else:
             z = _apply(name, p, t=t, x=z, load=F_tip)
+        changed(name, truth[name]["channel"], z0, z)
     L0 = float(np.mean(F_tip))
+    if load == "spring":   # a position effect shows on the tip force through the spring
+        for c in contrib.values():
+            c["clean"], c["change"] = spring(c["clean"]), spring(c["clean"] + c["change"]) - spring(c["clean"])
     # the sheath: capstan friction over the bend, stick transitions at reversals
     band = 2 * L0 * math.sinh(mu * float(np.mean(theta)))
     k_stick = band / (rng.uniform(0.02, 0.08) * A)
@@ -359,8 +373,9 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     for name in _switched_on(effects, "force"):
         p = get_effect(name).rules.draw(rng, Scale(travel=A, load=L0, load_span=float(np.ptp(F_tip)), friction=Fc,
                                                    v_fast=vmax, v_slow=v25))
-        F_m = _apply(name, p, t=t, x=x, v=v, load=F_m, theta=theta, temperature=temp)
+        F_before, F_m = F_m, _apply(name, p, t=t, x=x, v=v, load=F_m, theta=theta, temperature=temp)
         truth[name] = {"channel": get_effect(name).rules.channel, "params": p}
+        changed(name, truth[name]["channel"], F_before, F_m)
     if "eccentric_pulley" in effects:
         lam = rng.uniform(0.5, 1.0) * 2 * A
         amp = rng.uniform(0.1, 0.2) * float(np.ptp(F_m))
@@ -372,6 +387,7 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
     if given.get("ideal_sensors"):
         readings = {"motor_force": F_m.copy(), "tip_force": F_tip.copy()}
     sensor_channel = "motor_force" if rng.random() < 0.5 else "tip_force"
+    sensor_channel = given.get("sensor_channel", sensor_channel)
     if "motor_force_N" not in columns:
         sensor_channel = "tip_force"
     if "tip_force_N" not in columns or load != "spring":   # a tip sensor's own effect needs the spring law
@@ -382,11 +398,13 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
                                                    temp_span=float(np.ptp(temp)), v_fast=vmax, v_slow=v25))
         readings[sensor_channel] = _apply(name, p, t=t, x=x, force=F, temperature=temp, theta=theta)
         truth[name] = {"channel": sensor_channel, "params": p}
+        changed(name, sensor_channel, F, readings[sensor_channel])
     if "sensor_delay" in effects:
         tau = rng.uniform(0.05, 0.15)
         # a pure delay of the tip force, which the catalogue knows (an effect's Rules.also_known_as)
         truth["sensor_delay"] = {"channel": "tip_force", "params": {"delay": tau}}
-        readings["tip_force"] = np.interp(t - tau, t, readings["tip_force"])
+        changed("sensor_delay", "tip_force", readings["tip_force"], np.interp(t - tau, t, readings["tip_force"]))
+        readings["tip_force"] = readings["tip_force"] + contrib["sensor_delay"]["change"]
     sf = {"motor_force": 0.004 * L0 * noise, "tip_force": 0.004 * L0 * noise}
     sx = {"motor": 2e-6 * noise, "tip": 5e-6 * noise}
     if lit is not None:   # a fraction of each sensor's full scale (its peak reading, the travel's span)
@@ -412,4 +430,4 @@ def simulate(seed, effects=("none",), columns=COLUMNS, load: str = "spring", fs_
              "noise_N": {c: float(v) for c, v in sf.items()}, "noise_m": {e: float(v) for e, v in sx.items()}}
     if lit is not None:
         setup.update({k: lit[k] for k in ("cable", "EA_N", "length_m", "noise_fs", "motor_encoder", "tip_encoder")})
-    return RigRecording(truth, "\n".join(lines) + "\n", tuple(names[1:]), traj, load, setup)
+    return RigRecording(truth, "\n".join(lines) + "\n", tuple(names[1:]), traj, load, setup, contrib)

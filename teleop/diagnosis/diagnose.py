@@ -305,11 +305,15 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
         used = {link.input, link.load, link.drive} & set(corrections)
         if used:
             # a correction found on another link must make this one's baseline fit better, or it was that
-            # link's misfit (a stiffening spring read as a sensor hysteresis), not its sensor's
+            # link's misfit (a stiffening spring read as a sensor hysteresis), not its sensor's; or, where
+            # the baseline alone fits the uncorrected input better, this link's identified fit (a tip
+            # sensor's hysteresis beside a Dahl friction: the capstan alone takes the one for the other)
             plain = link_data(rec, link)
             with_c = simulation_baseline(d, fit_idx, hold_idx, tuple(baseline), seed)
             without = simulation_baseline(plain, fit_idx, hold_idx, tuple(baseline), seed)
-            if without.rmse_hold <= with_c.rmse_hold:
+            if without.rmse_hold <= with_c.rmse_hold and (
+                    identify_link(plain, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline)).final.rmse_hold
+                    <= identify_link(d, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline)).final.rmse_hold):
                 d = plain
         if link.kind == "force" and link.drive and d.v is None and is_exact(d.x):   # d.v: a noisy drive
             d = exact_rate(d, fit_idx, hold_idx, tuple(baseline), seed)

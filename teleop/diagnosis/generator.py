@@ -67,7 +67,8 @@ class GenConfig:
 class Case:
     """One generated recording: effect ('none' for effect-free), its channel and true parameters, the
     setup ('rig' or 'pad'), trajectory kind and the interchange CSV text; a rig case also its columns,
-    load and the simulation's own set-up (scenes.cable_rig RigRecording.setup: mu, capstan ratio, noise...)."""
+    load, the simulation's own set-up (scenes.cable_rig RigRecording.setup: mu, capstan ratio, noise...) and
+    what its effect changed on its channel (RigRecording.contributions)."""
 
     index: int
     effect: str
@@ -79,6 +80,7 @@ class Case:
     columns: tuple = ()
     load: str = ""
     rig: dict = field(default_factory=dict, repr=False)
+    contributions: dict = field(default_factory=dict, repr=False)   # RigRecording.contributions
 
     def write(self, path: str | Path) -> Path:
         return atomic_write(path, lambda tmp: tmp.write_text(self.csv, encoding="utf-8"))
@@ -111,7 +113,7 @@ def _rig(effect: str, index: int, seed: int, cfg: GenConfig) -> Case:
     rig = simulate([seed, index], (effect,), cols, load, cfg.fs_hz, cfg.duration_s, cfg.noise, ranges=ranges)
     truth = rig.effects.get(effect, {"channel": None, "params": {}})
     return Case(index, effect, truth["channel"], dict(truth["params"]), "rig", rig.trajectory, rig.csv,
-                rig.columns, load, dict(rig.setup))
+                rig.columns, load, dict(rig.setup), dict(rig.contributions))
 
 
 def _pokes(rng: np.random.Generator, t: np.ndarray, cfg: GenConfig) -> np.ndarray:

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from scenes.cable_rig import COLUMNS
-from teleop.diagnosis.diagnose import diagnose
+from teleop.diagnosis.diagnose import HOLDOUT, diagnose, split
 from teleop.diagnosis.generator import Case, case_effects, primary
 from teleop.io.recording_io import read_interchange
 
@@ -34,6 +34,9 @@ def run_case(case: Case, workdir: str | Path | None = None, sindy: bool = False)
     row = score(case, doc)
     if case.rig:
         row.update(rig_context(case.columns, case.load, case.rig))
+        if case.effect != "none":
+            row.update(detectability({case.effect: {"channel": case.channel}}, case.contributions,
+                                     true_noise(case.rig)))
     row["peer"] = peer_rows(doc, true_noise(case.rig) if case.rig else {})
     return row
 
@@ -45,6 +48,38 @@ def true_noise(setup: dict) -> dict:
     for enc, s in setup.get("noise_m", {}).items():
         out[f"{enc}_pos"] = math.sqrt(float(s) ** 2 + QUANTUM_M ** 2 / 12.0)
     return out
+
+
+#: the held-out improvement a case is scored on (>= 2x)
+IMPROVEMENT = 2.0
+
+
+def ceiling(contribution: dict | None, noise: float, holdout: float = HOLDOUT) -> float | None:
+    """The largest held-out improvement on its channel that any model can show for an effect (scenes.cable_rig
+    RigRecording.contributions: its noise-free change of the channel and the channel without it, (n,) each),
+    against the channel's true noise `noise`: sqrt(1 + (c / noise)^2), c the RMS over the held-out part of
+    what no baseline gain and offset can take of the change (its residual on a constant and the channel
+    without it, fitted by least squares on the fit part as a baseline is). A perfect model leaves the noise;
+    a baseline that took all it could leaves the noise and c. None without a contribution or noise."""
+    if not contribution or not noise > 0:
+        return None
+    fit, hold = split(contribution["change"].size, holdout)
+    change, clean = contribution["change"], contribution["clean"]
+    A = np.column_stack([np.ones(change.size), clean])
+    coef, *_ = np.linalg.lstsq(A[fit], change[fit], rcond=None)
+    c = float(np.sqrt(np.mean(np.square((change - A @ coef)[hold]))))
+    return math.sqrt(1.0 + (c / noise) ** 2)
+
+
+def detectability(truth: dict, contributions: dict, noise: dict) -> dict:
+    """{"ceiling": the least over the true effects of the improvement any model could show on each one's
+    channel (`ceiling`), "below_detectability": True where that is under IMPROVEMENT (no method reaches
+    2x there: the effect is about the size of the noise)}; {} where no effect has a contribution."""
+    cs = [ceiling(contributions.get(e), noise.get(v["channel"], 0.0)) for e, v in truth.items()]
+    cs = [c for c in cs if c is not None]
+    if not cs:
+        return {}
+    return {"ceiling": min(cs), "below_detectability": min(cs) < IMPROVEMENT}
 
 
 def rig_context(columns, load: str, setup: dict) -> dict:
@@ -104,7 +139,7 @@ def score(case: Case, doc: dict) -> dict:
             out["improvement"] = doc["baseline"]["rmse"][ch] / max(doc["channels"][ch]["rmse_model"], 1e-300)
         else:
             out["improvement"] = 1.0
-        out["improved_2x"] = out["improvement"] >= 2.0
+        out["improved_2x"] = out["improvement"] >= IMPROVEMENT
     return out
 
 

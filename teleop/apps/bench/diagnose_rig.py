@@ -21,7 +21,7 @@ from teleop.core.physics import REGISTRY, get_effect
 from teleop.core.physics.base import alike
 from teleop.diagnosis.diagnose import diagnose
 from teleop.diagnosis.generator import RANGES
-from teleop.diagnosis.scoring import peer_rows, rig_context, true_noise
+from teleop.diagnosis.scoring import detectability, peer_rows, rig_context, true_noise
 from teleop.io.recording_io import read_interchange
 
 #: column subsets of the interchange format a rig may record (name -> columns)
@@ -41,6 +41,35 @@ def compounds() -> tuple:
     constant-magnitude frictions on one channel, or a motor-sensor hysteresis beside one, are one effect to
     any data, loading and pulling coinciding on a spring)."""
     return tuple((a, b) for a, b in combinations(rig_effects(), 2) if not alike(a, b))
+
+
+def separable_pairs() -> tuple:
+    """Pairs of the rig's effects that are alike only on one sensor (Rules.alike): a sensor effect beside a
+    force-link effect it is alike, which on the motor sensor under a spring is that friction's band but on
+    the tip sensor reads the load before the sheath: (sensor effect, other), concealed with the sensor
+    effect on the tip sensor."""
+    sensor = [e for e in rig_effects() if get_effect(e).link == "sensor"]
+    return tuple((a, b) for a in sensor for b in rig_effects()
+                 if b != a and get_effect(b).link == "force" and alike(a, b))
+
+
+def pair_plan(n: int, seed: int) -> list[dict]:
+    """n rig cases of two effects at once: every pair of `compounds` and `separable_pairs` (the latter's
+    sensor effect on the tip sensor), the separable pairs first, then the rest in an order shuffled from
+    seed; each with a spring load, all columns or no tip position in turn."""
+    rng = np.random.default_rng([seed, 4243])
+    rest = list(compounds())
+    order = [tuple(p) for p in separable_pairs()] + [rest[i] for i in rng.permutation(len(rest))]
+    sep = set(separable_pairs())
+    plan = []
+    for i in range(n):
+        effects = order[i % len(order)]
+        case = {"index": i, "effects": effects, "subset": "spring, no tip position" if i % 2 else "all columns",
+                "load": "spring"}
+        if effects in sep:
+            case["given"] = {"sensor_channel": "tip_force"}
+        plan.append(case)
+    return plan
 
 
 def rig_plan(n: int, seed: int) -> list[dict]:
@@ -70,12 +99,12 @@ def run_rig_case(case: dict, seed: int, fs_hz: float | None = 500.0, duration_s:
     ranges: the rig's set-up ranges, a key of teleop.diagnosis.generator.RANGES; fs_hz None: drawn)."""
     cols = SUBSETS[case["subset"]]
     rig = simulate([seed, case["index"], 7], case["effects"], cols, case["load"], fs_hz, duration_s, noise,
-                   ranges=RANGES[ranges])
+                   given=case.get("given"), ranges=RANGES[ranges])
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"rig_{case['index']:04d}.csv"
         rig.write(path)
         doc = diagnose(read_interchange(path), sindy=sindy).as_dict()
-    truth = {}
+    truth, shown = {}, {}
     for e, v in rig.effects.items():
         if not observable(e, cols, case["load"]):
             continue
@@ -83,6 +112,7 @@ def run_rig_case(case: dict, seed: int, fs_hz: float | None = 500.0, duration_s:
         name = e if e in REGISTRY else next((n for n, x in REGISTRY.items() if e in x.rules.also_known_as), None)
         if name is not None:
             truth[name] = v
+            shown[e] = v
     findings = doc["findings"]
     named = [f["effect"] for f in findings]
     if not truth:
@@ -113,6 +143,7 @@ def run_rig_case(case: dict, seed: int, fs_hz: float | None = 500.0, duration_s:
             len(get_effect(e).rules.primary) for e in truth)
         row["improvement"] = min(imps.values()) if imps else 1.0
         row["improved_2x"] = row["improvement"] >= 2.0
+        row.update(detectability(shown, rig.contributions, true_noise(rig.setup)))
     return row
 
 
@@ -124,12 +155,16 @@ def rates(rows: list[dict]) -> dict:
 
     def rate(xs):
         return float(np.mean(xs)) if xs else None
+    # an effect about the size of the noise: no model could show 2x (scoring.detectability), counted apart
+    able = [r for r in eff if not r.get("below_detectability")]
     return {"cases": len(rows), "effect_cases": len(eff), "clean_cases": len(clean),
             "named_first_rate": rate([r["correct"] for r in eff]),
             "none_rate": rate([r["correct"] for r in clean]),
             "params_within_20pct_rate": rate([bool(r["params_ok"]) for r in eff]),
             "improved_2x_rate": rate([bool(r["improved_2x"]) for r in eff]),
-            "improvement_min": min((r["improvement"] for r in eff), default=None)}
+            "improvement_min": min((r["improvement"] for r in eff), default=None),
+            "below_detectability": len(eff) - len(able),
+            "improved_2x_rate_detectable": rate([bool(r["improved_2x"]) for r in able])}
 
 
 def summarise_rig(rows: list[dict]) -> dict:
