@@ -16,8 +16,7 @@ from tests._data import MRDLAB, needs_mrdlab
 
 pytestmark = needs_mrdlab
 RUNS = ["tool4_left_00.TXT", "tool4_left_43.TXT"]   # slowest/lightest and fastest/heaviest
-FRICTION = {"coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis", "capstan_friction",
-            "lugre_friction"}
+FRICTION = {"coulomb_friction", "viscous_friction", "stribeck_friction", "dahl_hysteresis", "capstan_friction"}
 
 
 @pytest.fixture(scope="module")
