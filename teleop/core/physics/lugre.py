@@ -58,18 +58,10 @@ def _from_dahl(p, s: Signals) -> list:
             for q in SPEED_PERCENTILES]
 
 
-#: the largest breakaway-to-sliding ratio Fs / Fc a fit may end at: beyond it the record's speeds never reach
-#: the sliding level (a Stribeck velocity past the drive's fastest speeds: the "peak" is a level that falls
-#: with the speed over the whole stroke, which a position- or rate-law beside a Dahl friction shapes too)
-MAX_PEAK = 5.0
-
-
 def _wrong(p, rec) -> bool:
-    """A LuGre friction has a breakaway peak (1.1 Fc < Fs <= MAX_PEAK Fc; below, it is the Dahl law) and a
-    transition longer than the drive moves in a sample (Fs / sigma; else it is the Stribeck law switched at
-    once)."""
-    return (not 1.1 * p["Fc"] < p["Fs"] <= MAX_PEAK * p["Fc"]
-            or (rec.x is not None and p["Fs"] / p["sigma"] < drive_step(rec.x)))
+    """A LuGre friction has a breakaway peak (Fs > 1.1 Fc; else it is the Dahl law) and a transition longer
+    than the drive moves in a sample (Fs / sigma; else it is the Stribeck law switched at once)."""
+    return p["Fs"] <= 1.1 * p["Fc"] or (rec.x is not None and p["Fs"] / p["sigma"] < drive_step(rec.x))
 
 
 def _draw(rng: np.random.Generator, s) -> dict:
