@@ -61,8 +61,6 @@ def scenario(name: str) -> Scenario:
         return Scenario(Signals(t=t, x=x, load=load), {"Fc": 0.3, "Fs": 0.6, "vs": 4e-3}, 0.02)
     if name == "dahl_hysteresis":
         return Scenario(Signals(t=t, x=x, load=load), {"sigma": 2e3, "Fc": 0.3}, 0.02)
-    if name == "lugre_friction":
-        return Scenario(Signals(t=t, x=x, load=load), {"sigma": 4e3, "Fc": 0.3, "Fs": 0.9, "vs": 8e-3}, 0.01)
     if name == "parallel_spring":
         return Scenario(Signals(t=t, x=x, load=load), {"k": 150.0}, 0.02, {"x_ref": 1e-3, "g": 1.2e4})
     if name == "sensor_hysteresis":
