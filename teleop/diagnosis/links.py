@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.signal import savgol_filter
 
 from teleop.core.errors import InputError
 from teleop.core.physics.base import REGISTRY, get_effect
@@ -72,20 +71,14 @@ def find_links(rec: Recording) -> list[Link]:
     return links
 
 
-def smooth(x: np.ndarray, width: int, degree: int = 1) -> np.ndarray:
+def smooth(x: np.ndarray, width: int) -> np.ndarray:
     """Zero-phase local-line smoothing over odd `width` samples: each sample's value on the least-squares
     line through the samples within half a width of it. Inside the record that is the centred moving
     average; within half a width of either end the window is the one-sided part the record holds, whose
     line neither lags a sloping signal (a one-sided mean lags it by a quarter of the width) nor keeps the
-    end sample's own noise (a window shrunk to the end sample does: a stateful effect starts from it).
-    degree 3: the local cubic instead (Savitzky-Golay; within half a width of an end the cubic through the
-    end's whole window), whose error on a curving signal is of the fourth derivative, not the second: a
-    moving average flattens a signal's peaks by about (pi f width dt)^2 / 6 of a component of frequency f,
-    which a link's input passes on at its gain (an input's value matters, not only its rate)."""
+    end sample's own noise (a window shrunk to the end sample does: a stateful effect starts from it)."""
     if width <= 1:
         return x
-    if degree == 3 and width > 4 and x.shape[0] >= width:
-        return savgol_filter(x, width, 3, mode="interp")
     n = x.shape[0]
     half = width // 2
     cs = np.concatenate(([0.0], np.cumsum(x)))
@@ -244,18 +237,17 @@ def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_i
 
     widths = []
 
-    def sm(name, degree=1):
+    def sm(name):
         w = smooth_width(ch[name], dt)
         widths.append(w)
-        return smooth(ch[name], w, degree)
+        return smooth(ch[name], w)
 
     x = sm(link.drive) if link.drive and link.kind != "contact" else None
     v = None
     if x is not None and widths[-1] > 1:   # a noisy drive: its turns located between samples
         v = located_rate(ch[link.drive], rec.t, x, widths[-1])
-    # the input and the load by their values: a local cubic (the drive's moving average is for its rate)
-    u = ch[link.input] if raw_input else sm(link.input, 3)
-    load = sm(link.load, 3) if link.load else None
+    u = ch[link.input] if raw_input else sm(link.input)
+    load = sm(link.load) if link.load else None
     temp = sm("temperature") if "temperature" in ch else None
     return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"), max(widths) * dt,
                     known_params(rec), v=v)

@@ -157,57 +157,20 @@ T_PREV, N_RATE_STATE = N_STATE, N_STATE + 1
 
 
 @njit
-def _band_part(z, a, up):
-    """Part u in [0, 1] of the band [lo, hi] crossed at the friction coordinate z in [0, 1] (`stick_transition`)
-    for a = sqrt(hi / lo) >= 0: from lo (up) u = ((1 + (a - 1) z)^2 - 1) / (a^2 - 1), from hi
-    u = (1 - (1 - (1 - 1/a) z)^2) / (1 - 1/a^2); u = z at a = 1."""
-    if abs(a - 1.0) < 1e-9:
-        return z
-    if up:
-        return ((1.0 + (a - 1.0) * z) ** 2 - 1.0) / (a * a - 1.0)
-    b = 1.0 - 1.0 / a
-    return (1.0 - (1.0 - b * z) ** 2) / (1.0 - 1.0 / (a * a))
-
-
-@njit
-def _band_coordinate(u, a, up):
-    """The inverse of `_band_part`: z in [0, 1] for u in [0, 1]."""
-    if abs(a - 1.0) < 1e-9:
-        return u
-    if up:
-        return (math.sqrt(max(1.0 + u * (a * a - 1.0), 0.0)) - 1.0) / (a - 1.0)
-    b = 1.0 - 1.0 / a
-    return (1.0 - math.sqrt(max(1.0 - u * (1.0 - 1.0 / (a * a)), 0.0))) / b
-
-
-@njit
 def stick_transition(f, travel, s, lo, hi, k, n):
     """Motor force [N] after a travel [m] (>= 0) in the direction s (+1, -1) from f [N] across the band
-    [lo, hi] [N]: the part u of the band crossed from the line the cable left grows with the travel delta
-    since it left it, rho = delta / delta_c, delta_c = (hi - lo) / k the travel across the whole band (k [N/m]
-    the transition's mean stiffness), as u = B(rho^n).
-
-    n = 1: the linear stick (a lumped compliance), clamp(f + s k travel, lo, hi). n = 1/2: Coulomb friction
-    spread uniformly along the sheath (Kaneko et al. 1991): after a reversal the tension changes over a zone
-    growing from the proximal end, where the new and the old exponential profiles meet at the wrap phi_c with
-    e^(2 phi_c) = the proximal tension's ratio to its start, and the motor travel is the cable's stretch change
-    over that zone: from lo, delta ~ lo (sqrt(1 + r) - 1)^2 (r the tension's rise over lo), from hi
-    delta ~ hi (1 - sqrt(1 - r))^2; the whole band is crossed when the zone reaches the tip (phi_c = mu
-    Theta), so with a = e^(mu Theta) = sqrt(hi / lo): sqrt(rho) = z, u = B_a(z) with
-    B_a(z) = ((1 + (a - 1) z)^2 - 1) / (a^2 - 1) from lo and (1 - (1 - (1 - 1/a) z)^2) / (1 - 1/a^2) from hi
-    (`_band_part`): a square root (u = sqrt(rho)) only for a narrow band, steeper leaving the high line than
-    the low one for a wide band. Other n: z = rho^n and B of a^(2 (1 - n)), continuous in n (1: B the
-    identity). Exact for any travel: rho advances by travel / delta_c."""
+    [lo, hi] [N]: the part u of the band crossed from the line the cable left grows as u = (delta /
+    delta_c)^n with the travel delta since it left it, delta_c = (hi - lo) / k the travel across the whole
+    band (k [N/m] the transition's mean stiffness). n = 1: the linear stick, clamp(f + s k travel, lo, hi);
+    n = 1/2: the square-root transition of a friction distributed along the sheath (the stuck part of the
+    cable grows with the tension change, so the travel grows with its square; Kaneko et al. 1991, Agrawal et
+    al. 2010). Exact for any travel: u^(1 / n) advances by travel / delta_c."""
     if n == 1.0 or hi <= lo:
         return clamp(f + s * k * travel, lo, hi)
     band = hi - lo
-    a = (hi / lo) ** (1.0 - n) if lo > 0.0 else 1.0   # sqrt(hi / lo) ** (2 (1 - n)), one power
-    up = s > 0.0
-    u = clamp((f - lo) / band if up else (hi - f) / band, 0.0, 1.0)
-    z = clamp(_band_coordinate(u, a, up), 0.0, 1.0)
-    z = min(z ** (1.0 / n) + k * travel / band, 1.0) ** n
-    u = clamp(_band_part(z, a, up), 0.0, 1.0)
-    return lo + band * u if up else hi - band * u
+    u = clamp((f - lo) / band if s > 0.0 else (hi - f) / band, 0.0, 1.0)
+    u = min(u ** (1.0 / n) + k * travel / band, 1.0) ** n
+    return lo + band * u if s > 0.0 else hi - band * u
 
 
 @njit
