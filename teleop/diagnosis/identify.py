@@ -683,6 +683,26 @@ def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: 
             return pick
     if f.at_bound or f.rmse_hold * (1 + PARSIMONY) > pick.rmse_hold or delta_bic(f, pick) >= 0:
         return pick
+    return _alone_pays(d, f, pick, free, fit_idx, hold_idx, seed)
+
+
+def _alone_pays(d: LinkData, f: Fit, pick: Fit, free: tuple, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:
+    """The general form `f` (shape parameters `free` fitted from `pick`), or, where a freed parameter that
+    must pay on its own (ParamSpec.alone) does not (the form refitted with it at its default is within
+    PARSIMONY of `f` on held-out data, and pays over `pick` as a general form must), that refit."""
+    for key in free:
+        name, par = key.split(".", 1)
+        spec = get_effect(name).spec(par)
+        if not spec.alone or dict(f.model.effects)[name][par] == spec.default:
+            continue
+        rest = tuple(k for k in free if k != key)
+        try:
+            g = fit_chain(d, pick.model, (), fit_idx, hold_idx, seed=seed, free_shape=rest) if rest else pick
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            continue
+        pays = g.rmse_hold * (1 + PARSIMONY) <= pick.rmse_hold and delta_bic(g, pick) < 0
+        if pays and g.rmse_hold <= f.rmse_hold * (1 + PARSIMONY) and not g.at_bound:
+            f = g
     return f
 
 

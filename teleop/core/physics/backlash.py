@@ -96,7 +96,8 @@ PARAMS = (ParamSpec("width", "m", 1e-8, 100.0, 5e-4, "total play (dead band) wid
                     "tip position; general form)", shape=True),
           ParamSpec("tension", "1/m", -1e4, 1e4, 0.0, "the main play's width grows as (1 + tension (z - x_ref)) "
                     "with its position z (a spring's tension; Kaneko: 1 / (x_ref - the slack tip position); 1/rad "
-                    "for a rotary joint; general form)", shape=True, log=True, tiny=1.0),
+                    "for a rotary joint; general form)", shape=True, log=True, tiny=1.0,
+                    alone=True),
           ParamSpec("start", "1", -1.0, 1.0, 0.0, "where in its band the play began (-1 .. 1, 0 centred; "
                     "general form)", shape=True, state=True))
 

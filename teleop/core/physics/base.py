@@ -131,6 +131,9 @@ class ParamSpec:
     `state=True`: an initial state of the record, not a property of the link (where a play began in its
     band): fitted on every recording (never carried from one to another), and a value on a bound is a
     state the data can hold, not a sign that the effect's form is wrong.
+    `alone=True`: a shape parameter the general form keeps only where it pays on its own (the general form
+    refitted with it held at its default is worse by the diagnosis' parsimony margin): one whose physics
+    needs a load the record may not carry (backlash's growth with a spring's tension).
     """
 
     name: str
@@ -144,6 +147,7 @@ class ParamSpec:
     shape: bool = False
     state: bool = False
     tiny: float = 0.0
+    alone: bool = False
 
     def __post_init__(self):
         signed = self.log and self.tiny > 0
