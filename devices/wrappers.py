@@ -353,7 +353,7 @@ class ProcessRobot(ContextDevice):
         self.last = None
         self.last_version = -1.0
         deadline = time.monotonic() + self.start_timeout
-        while self.pub[0] == 0 and time.monotonic() < deadline:
+        while self.pub[0] < 2 and time.monotonic() < deadline:   # the first reading written whole (seqlock: 2)
             time.sleep(0.001)
         self.is_open = True
 
