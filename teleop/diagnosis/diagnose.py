@@ -300,8 +300,13 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
     PySINDy peer (teleop.diagnosis.sindy_peer) beside the ARX one."""
     fit_idx, hold_idx = split(rec.n, holdout)
     results, peer, corrections = [], {}, {}
+
+    def identify(data, bar=None) -> LinkResult:
+        return identify_link(data, fit_idx, hold_idx, progress=bar, seed=seed, baseline=tuple(baseline))
+
     for link in find_links(rec):
         d = link_data(rec, link, corrections)
+        res = None   # the identified d, where the choice of input already made it
         used = {link.input, link.load, link.drive} & set(corrections)
         if used:
             # a correction found on another link must make this one's baseline fit better, or it was that
@@ -311,20 +316,20 @@ def diagnose(rec: Recording, holdout: float = HOLDOUT, progress=None, seed: int 
             plain = link_data(rec, link)
             with_c = simulation_baseline(d, fit_idx, hold_idx, tuple(baseline), seed)
             without = simulation_baseline(plain, fit_idx, hold_idx, tuple(baseline), seed)
-            if without.rmse_hold <= with_c.rmse_hold and (
-                    identify_link(plain, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline)).final.rmse_hold
-                    <= identify_link(d, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline)).final.rmse_hold):
-                d = plain
+            if without.rmse_hold <= with_c.rmse_hold:
+                res_plain, res = identify(plain), identify(d, progress)
+                if res_plain.final.rmse_hold <= res.final.rmse_hold:
+                    d, res = plain, res_plain
         if link.kind == "force" and link.drive and d.v is None and is_exact(d.x):   # d.v: a noisy drive
-            d = exact_rate(d, fit_idx, hold_idx, tuple(baseline), seed)
-        res: LinkResult = identify_link(d, fit_idx, hold_idx, progress=progress, seed=seed,
-                                        baseline=tuple(baseline))
+            d, res = exact_rate(d, fit_idx, hold_idx, tuple(baseline), seed), None
+        if res is None:
+            res = identify(d, progress)
         sharp = [n for n in res.final.names if get_effect(n).rules.raw_input]
         if link.kind == "position" and sharp and not is_exact(rec.channels[link.input]):
             # a play seen on the raw input too: keep whichever input the held-out part prefers (an exact
             # input is not smoothed: its raw form is the same)
             d_raw = link_data(rec, link, corrections, raw_input=True)
-            raw = identify_link(d_raw, fit_idx, hold_idx, seed=seed, baseline=tuple(baseline))
+            raw = identify(d_raw)
             if raw.final.rmse_hold < res.final.rmse_hold and set(sharp) & set(raw.final.names):
                 d, res = d_raw, raw
         results.append(res)
