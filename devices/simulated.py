@@ -28,6 +28,7 @@ from devices.base import OMEGA_SPEC, TOUCH_SPEC, ContextDevice, DeviceError, Dev
 from devices.guard import guarded_force
 from teleop.core.errors import InputError
 from teleop.core.kernels import operator as KO
+from teleop.core.kernels.jit import bind
 from teleop.core.kernels.operator import operator_steps, script_offset
 from teleop.core.kinematics import rotation_zyx
 from teleop.io.recording import read_session
@@ -154,6 +155,7 @@ class SimulatedStylus(ContextDevice):
         self._x = np.zeros(9)  # the integrator's state: p, v, F_tremor (p, v, F_tremor are copies of it)
         self._x[0:3] = self.p
         self._no_targets = np.zeros((0, 3))
+        self._steps_call = None  # operator_steps bound at the first step (_advance)
         self.is_open = True
 
     def close(self) -> None:
@@ -199,7 +201,11 @@ class SimulatedStylus(ContextDevice):
             targets = np.array([self.script.target_xyz((self.steps + i + 1) * h) for i in range(n)])
         x = self._x
         fx, fy, fz = self.F_cmd
-        operator_steps(x, fx, fy, fz, self.steps, n, self._constants(), noise, i0, tremor, targets, self._absent)
+        c, call = self._constants(), self._steps_call
+        if call is None:  # bound to its argument types (jit.bind): the stylus's own arrays, floats and ints
+            call = self._steps_call = bind(operator_steps, x, fx, fy, fz, self.steps, n, c, noise, i0, tremor, targets,
+                                           self._absent)
+        call(x, fx, fy, fz, self.steps, n, c, noise, i0, tremor, targets, self._absent)
         self.steps += n
         # p, v and F_tremor: views of one fresh copy (never written in place: a sample may hand them out as they are)
         pv = x.copy()

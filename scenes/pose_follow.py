@@ -15,6 +15,7 @@ from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry
 from teleop.core.kernels import sim as KS
 from teleop.core.kernels.geometry import forward_kinematics
+from teleop.core.kernels.jit import bind
 from teleop.core.kinematics import FREE_AXIAL, check_lengths
 
 FREE = tuple(FREE_AXIAL.tolist())  # axial geometry: the roll alpha is not set by the cables
@@ -37,6 +38,7 @@ class PoseFollower:
         self.tol, self.max_residual = float(tol), float(max_residual)
         self._q = np.array(pose, dtype=float).reshape(6)
         self._L = np.zeros(len(geom.B))
+        self._bound = self._bound_terms = None  # follow's kernel and the terms it was bound with
 
     @property
     def q(self) -> list:
@@ -58,8 +60,13 @@ class PoseFollower:
         anchors) in the same kernel call (sim.follow_pose), which first checks L (n,) float64 against the
         geometry's length limits (teleop.core.kinematics.check_lengths raises with the reason, the pose unchanged);
         the pose's (6,) array if it moved, else None."""
-        worst, moved, bad = KS.follow_pose(L, *self._limits, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12,
-                                           self.max_residual, *terms)
+        call = self._bound
+        if call is None or terms is not self._bound_terms:  # bound to the robot's arrays' types (jit.bind)
+            call = self._bound = bind(KS.follow_pose, L, *self._limits, self._q, FREE_AXIAL, self.r, self.B, self.tol,
+                                      12, self.max_residual, *terms)
+            self._bound_terms = terms
+        worst, moved, bad = call(L, *self._limits, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12,
+                                 self.max_residual, *terms)
         if bad >= 0:
             check_lengths(L, self.geom)
         self._check(worst)

@@ -46,6 +46,7 @@ from teleop.core.kernels import sim as KS
 from teleop.core.kernels import tension as KT
 from teleop.core.kernels.tension import OK
 from teleop.core.kernels import sheath as SH
+from teleop.core.kernels.jit import bind
 from teleop.core.kernels.sensor import fsr_counts
 from teleop.core.kinematics import FREE_AXIAL, check_lengths, poses2lengths
 from teleop.core.physics import get_effect
@@ -347,6 +348,7 @@ class SimRobot(ContextDevice):
         self._fused_fsr = (self._tip_off, self._A, self._theta, self.L_home, self._kc, *self._fused[:4], TAP_FSR,
                            *self._fsr.kernel_args()) if self._fused is not None and self._fsr is not None and \
             self._rich is None else None  # reading_cables_fsr's arguments that stay the same objects
+        self._bound_fsr = self._bound_cables = self._bound_counts = None  # read's kernel, bound at the first reading
         self._dt = p.dt  # [s] a reading's period (read's: a property call less)
         self._n, self._substeps = n, p.substeps  # cables, physics steps a reading (read's: lookups less)
         self.is_open = True
@@ -417,15 +419,25 @@ class SimRobot(ContextDevice):
         fused = self._fused
         if fused is not None:  # the distributed cable and its FSRs in the same call (kernel reading_cables)
             out = np.empty((fused[-1], n))  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
+            # the kernel bound to this robot's argument types at its first reading (jit.bind: the arrays are the
+            # robot's own; F the world's tuple of floats, anything else goes through numba's dispatch)
             if self._fused_fsr is not None:  # the FSR alone (params.fsr): its counts in the call
                 L = self.L_cmd
-                status = reading_cables_fsr(*self._fused_fsr, F, L, L if self._play is None else self._L_real, noise,
-                                            k, f, t_tip, steps, out, counts)
+                Lc = L if self._play is None else self._L_real
+                call = self._bound_fsr if type(F) is tuple else reading_cables_fsr
+                if call is None:
+                    call = self._bound_fsr = bind(reading_cables_fsr, *self._fused_fsr, F, L, Lc, noise, k, f, t_tip,
+                                                  steps, out, counts)
+                status = call(*self._fused_fsr, F, L, Lc, noise, k, f, t_tip, steps, out, counts)
                 done = status == OK
             else:
-                status = reading_cables(self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f,
-                                        t_tip, steps, self.L_cmd if self._play is None else self._L_real, *fused[:4],
-                                        out, TAP_FSR, *self._lag_args, noise, k, counts)
+                args = (self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f, t_tip, steps,
+                        self.L_cmd if self._play is None else self._L_real, *fused[:4], out, TAP_FSR, *self._lag_args,
+                        noise, k, counts)
+                call = self._bound_cables if type(F) is tuple else reading_cables
+                if call is None:
+                    call = self._bound_cables = bind(reading_cables, *args)
+                status = call(*args)
                 done = status == OK and self._rich is None and self._fsr is None
             if done:  # the usual case: no motor position, no lumped sheath, the FSRs' counts from the call
                 self._cables.sheath.t += self._dt
@@ -440,8 +452,13 @@ class SimRobot(ContextDevice):
         if fused is None:
             # one kernel call: the wrench f (force at the tool tip, moments about p), the motor steps, the cable
             # chain and, when direct, the FSRs (lag, conductance, ADC: FsrBranchLag.counts)
-            status = KS.reading_counts(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc,
-                                       self._cap, f, t_tip, t_fsr, steps, direct, *self._lag_args, noise, k, counts)
+            call = self._bound_counts if type(F) is tuple else KS.reading_counts  # bound as reading_cables_fsr
+            if call is None:
+                call = self._bound_counts = bind(KS.reading_counts, self._tip_off, F, self._A, self._theta, x,
+                                                 self.L_home, self.L_cmd, self._kc, self._cap, f, t_tip, t_fsr, steps,
+                                                 direct, *self._lag_args, noise, k, counts)
+            status = call(self._tip_off, F, self._A, self._theta, x, self.L_home, self.L_cmd, self._kc, self._cap, f,
+                          t_tip, t_fsr, steps, direct, *self._lag_args, noise, k, counts)
         if status != OK:
             # not the one-dimensional null space, or infeasible: teleop.core.tension decides (raises with the reason)
             t_tip = TensionSolver(self._A, g.t_min, g.t_max, p.pretension).solve(f)

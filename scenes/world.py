@@ -29,6 +29,7 @@ import numpy as np
 
 from scenes.calibration import default_calibration
 from scenes.pads import Pad
+from teleop.core.kernels.jit import bind
 from teleop.core.kernels.sim import series_spring_force
 
 
@@ -206,6 +207,7 @@ class PadWorld:
                 self._dtm = p.dt / p.indenter_mass
             self._KDM = np.ascontiguousarray(np.stack([self.K, self._D, self._Mi]))  # the kernel's matrices
         self._r = self.proxy_radius
+        self._spring = self._target_ok = None  # series_spring_force bound at the first step, its checked target
         self._steps = 0  # stepSimulation calls so far; the contact force is cached per step
         self._fc, self._fc_step = None, -1
         self._pos, self._pos_step = None, -1  # the tip's base position, cached per step like the contact force
@@ -344,10 +346,18 @@ class PadWorld:
                                     maxForce=1e4)  # the sphere centre's target
         else:  # the series spring-damper (kernel sim.series_spring_force)
             fc = self._contact_force_tuple() if self._implicit else _NO_FORCE
-            if type(target) is not np.ndarray:  # the kernel takes an array (float64, contiguous: its one type)
-                target = np.array(target, dtype=np.float64)
-            f = series_spring_force(pos, self._velocity(), target, self._r, self._KDM, self._dtm, fc,
-                                    self._implicit)
+            if target is not self._target_ok:  # the kernel takes a (3,) float64 contiguous array, its one type
+                if type(target) is np.ndarray and target.dtype == np.float64 and target.shape == (3,) \
+                        and target.flags.c_contiguous:
+                    self._target_ok = target  # the caller's own array (the robot's target), checked once
+                else:
+                    target = np.array(target, dtype=np.float64).reshape(3)
+            v = self._velocity()
+            call = self._spring
+            if call is None:  # bound to its argument types (jit.bind): pybullet's tuples of floats, the target array
+                call = self._spring = bind(series_spring_force, pos, v, target, self._r, self._KDM, self._dtm, fc,
+                                           self._implicit)
+            f = call(pos, v, target, self._r, self._KDM, self._dtm, fc, self._implicit)
             self._push_tip(f, pos, self._world_frame, self._client_id)
         self._z_before = pos[2]
         self._step()

@@ -21,6 +21,7 @@ from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry, _frozen
 from teleop.core.kernels import geometry as KG
 from teleop.core.kernels import mapping as KM
+from teleop.core.kernels.jit import bind
 
 
 @dataclass(frozen=True)
@@ -147,6 +148,7 @@ class Follower:
         dmax = float(geom.v_max * dt)
         self.c = np.r_[target_constants(params), dmax, geom.v_max * (dmax / geom.v_max), geom.l_min, geom.l_max]
         self.offsets = platform_offsets(geom, params.home[3:])
+        self._step_call = None  # kernel mapping.follow_step bound to its argument types (step_into)
         self.dmax = dmax
         self._p, self._anchor = np.zeros(3), np.zeros(6)
         self._pos, self._L = np.zeros(3), np.zeros(len(geom.B))
@@ -155,10 +157,17 @@ class Follower:
         """Cable lengths [m] at position (x, y, z) [m] (`position2lengths` with the held orientation)."""
         return KG.lengths_at(float(x), float(y), float(z), self.offsets, np.empty(len(self.offsets))).tolist()
 
+    def __getstate__(self) -> dict:
+        """Pickled without the bound kernel (compiled code does not pickle; bound again at the next call)."""
+        return {**self.__dict__, "_step_call": None}
+
     def step_into(self, p: np.ndarray, anchor: np.ndarray, pos: np.ndarray, L: np.ndarray) -> None:
         """The step on float64 arrays: p (3,) stylus [m], anchor (6,) stylus and robot anchors [m]; pos (3,)
         and L (n,) hold the previous target and lengths [m] and are updated (kernel mapping.follow_step)."""
-        KM.follow_step(p, anchor, self.c, self.offsets, pos, L)
+        call = self._step_call
+        if call is None:  # bound at the first step (jit.bind): float64 arrays, as documented
+            call = self._step_call = bind(KM.follow_step, p, anchor, self.c, self.offsets, pos, L)
+        call(p, anchor, self.c, self.offsets, pos, L)
 
     def step(self, p_stylus, anchor_stylus, anchor_robot, pos_prev, L_prev) -> tuple[list, list]:
         """(target position [x, y, z] [m], commanded lengths [6] [m]) for this tick (see the class docstring)."""

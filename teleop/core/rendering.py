@@ -27,6 +27,7 @@ import numpy as np
 
 from teleop.core.errors import InputError
 from teleop.core.kernels import render as KR
+from teleop.core.kernels.jit import bind
 from teleop.core.kernels.render import clamp_norm, engage_count, frame_map, is_finite3, is_small, render_step
 
 DISABLED, WAITING, RAMPING, ENGAGED = "disabled", "waiting", "ramping", "engaged"
@@ -96,8 +97,13 @@ class Renderer:
         self.rp = np.array([params.max_force, params.scale, float(params.zero_negative_z), params.engage_N,
                             params.engage_ticks, params.ramp_s, params.alpha_max], dtype=float)
         self.rs = np.zeros(5)  # the kernel's state: teleop.core.kernels.render
+        self._step_call = None  # render_step bound to its argument types (render_tick)
         self.out = np.zeros(6)
         self.reset()
+
+    def __getstate__(self) -> dict:
+        """Pickled without the bound kernel (compiled code does not pickle; bound again at the next call)."""
+        return {**self.__dict__, "_step_call": None}
 
     def reset(self) -> None:
         """Back to DISABLED, fault cleared, passivity energy zero."""
@@ -143,8 +149,11 @@ class Renderer:
         """The loop's render stage in one call: render_xyz (floats as it takes them), then what the loop reads
         after it: (force (3,) [N] device frame (a fresh array), `mapped` (3 floats), `ramp` (0.0 while
         disabled), `fault`)."""
-        rs, out = self.rs, self.out
-        trip = render_step(rs, self.rp, self.R, fx, fy, fz, dt, vx, vy, vz, out)
+        rs, out, call = self.rs, self.out, self._step_call
+        if call is None:  # bound at the first tick (jit.bind): the renderer's arrays and floats
+            call = self._step_call = bind(render_step, rs, self.rp, self.R, float(fx), float(fy), float(fz), float(dt),
+                                          float(vx), float(vy), float(vz), out)
+        trip = call(rs, self.rp, self.R, fx, fy, fz, dt, vx, vy, vz, out)
         if trip:
             self.fault_reason = _TRIPS[trip]
         st, o = rs.tolist(), out.tolist()  # Python floats: one conversion each, not one per element

@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from teleop.core.kernels import safety as KS
+from teleop.core.kernels.jit import bind
 
 
 def beyond(value: float, limit: float, unit: str, op: str = ">") -> str:
@@ -127,14 +128,21 @@ class StuckCable:
                 f"over {1e3 * (now - st[KS.T0, bad]):.0f} ms while paying out")
 
 
+_monitors = [None]  # kernel safety.tension_monitors bound to its argument types (one set for every caller)
+
+
 def tension_monitors(rng: TensionRange, stuck: StuckCable, now: float, t, dL, check_range: bool = True) -> str | None:
     """`rng.update(now, t)` (when check_range) and, unless it reports, `stuck.update(now, t, dL)`: the loop's
     tension monitors on each estimate, in one compiled call (kernel safety.tension_monitors). The first
     reason, or None. t (n,) tensions [N], dL (n,) length steps [m]."""
-    t = np.ascontiguousarray(t, dtype=float)
-    k = KS.tension_monitors(float(now), t, np.ascontiguousarray(dL, dtype=float), check_range, rng.since, rng.t_max,
-                            rng.t_slack, rng.window, stuck.st, stuck.sc, stuck.tau, stuck.eps, stuck.window, stuck.rise,
-                            stuck.confirm)
+    t, dL, now = np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(dL, dtype=float), float(now)
+    call = _monitors[0] if t.ndim == 1 and dL.ndim == 1 else KS.tension_monitors
+    if call is None:  # bound at the first call (jit.bind): floats, a truth value, float64 arrays (t, dL checked 1-D)
+        call = _monitors[0] = bind(KS.tension_monitors, now, t, dL, check_range, rng.since, rng.t_max, rng.t_slack,
+                                   rng.window, stuck.st, stuck.sc, stuck.tau, stuck.eps, stuck.window, stuck.rise,
+                                   stuck.confirm)
+    k = call(now, t, dL, check_range, rng.since, rng.t_max, rng.t_slack, rng.window, stuck.st, stuck.sc, stuck.tau,
+             stuck.eps, stuck.window, stuck.rise, stuck.confirm)
     if k < 0:
         return None
     n2 = 2 * rng.n

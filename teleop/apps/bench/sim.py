@@ -67,6 +67,7 @@ from scenes.sim_robot import PLANTS
 from teleop.apps.argtypes import add_geometry_option, geometry_of, input_file
 from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry
+from teleop.core.kernels.jit import bind
 from teleop.core.kernels.tap import sim_log_row
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 from teleop.io.outputs import write_json
@@ -227,7 +228,7 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
             solver_timed = _meter_world(robot.world, phys, solver)
         tp = Teleop(stylus, robot, params, geom=geometry, estimator=estimator)
         tp.start(0.0)
-        log_row, no_L, no_counts = sim_log_row, np.zeros(6), np.zeros(6, dtype=np.int64)
+        log_row, no_L, no_counts = None, np.zeros(6), np.zeros(6, dtype=np.int64)  # log_row: bound at tick 0
         ka, pa, sa, ra = kin.acc, phys.acc, solver.acc, rd.acc  # the robot's timers [ns]: acc[0]
         dt = params.dt
         pc = time.perf_counter_ns
@@ -244,6 +245,9 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                 t1 = pc()
                 # the tick's row of every log in one compiled call (kernel tap.sim_log_row)
                 r = x.reading
+                if log_row is None:  # the log's kernel bound to its argument types (jit.bind): the bench's arrays
+                    log_row = bind(sim_log_row, k, t1 - t0, tp.stage_ns, ka[0], pa[0], sa[0], ra[0], ns_log,
+                                   stylus.p, x.F, pF_log, -1, no_L, no_counts, no_L, Lf_log, counts_log)
                 if r is not None:
                     log_row(k, t1 - t0, tp.stage_ns, ka[0], pa[0], sa[0], ra[0], ns_log, stylus.p, x.F, pF_log, j,
                             r.commanded_lengths, r.fsr_counts, r.wrench_truth, Lf_log, counts_log)

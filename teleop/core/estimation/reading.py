@@ -24,6 +24,7 @@ from teleop.core.estimation.tick import TickComputer
 from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation
 from teleop.core.geometry import Geometry
 from teleop.core.kernels.estimate import counts_tensions
+from teleop.core.kernels.jit import bind
 from teleop.core.sensors import LOADING, UNLOADING, FsrCalibration, default_fsr_calibration
 
 
@@ -51,7 +52,12 @@ class ReadingEstimator:
                                dtype=float).reshape(2, n_counts)
         self._counts = np.zeros(self.n)
         self._t = np.zeros(self.n)
+        self._counts_call = self._counts_dtype = None  # update_arrays' kernel bound to the counts' dtype
         self.reset()
+
+    def __getstate__(self) -> dict:
+        """Pickled without the bound kernel (compiled code does not pickle; bound again at the next call)."""
+        return {**self.__dict__, "_counts_call": None, "_counts_dtype": None}
 
     def _tension1(self, v: float, branch: int) -> float:
         """Tension [N] of `v` counts on `branch` (FsrCalibration.counts_tension1)."""
@@ -95,12 +101,18 @@ class ReadingEstimator:
             t = self.tensions_into(np.ascontiguousarray(counts, dtype=float))
             return t, tc.estimate_into(pose, t, float(dt))[1, :6]
         c = counts if type(counts) is np.ndarray and counts.dtype in _COUNT_DTYPES and counts.flags.c_contiguous \
-            else np.ascontiguousarray(counts, dtype=float)
+            and counts.ndim == 1 else np.ascontiguousarray(counts, dtype=float).reshape(-1)
+        dt = float(dt)
+        call = self._counts_call
+        if c.dtype is not self._counts_dtype or call is None:  # bound to the counts' dtype (jit.bind), the rest ours
+            call = self._counts_call = bind(tc.counts_kernel, c, self._fsr, self.deadband_counts, self._table,
+                                            self._t, pose, dt, tc.cab, tc.c, tc.st, tc.kf, tc.turn, tc.coefs, tc.out)
+            self._counts_dtype = c.dtype
         # tensions_into and estimate_into in one compiled call (kernel estimate.counts_dynamic)
-        if tc.counts_kernel(c, self._fsr, self.deadband_counts, self._table, self._t, pose, float(dt), tc.cab, tc.c,
-                            tc.st, tc.kf, tc.turn, tc.coefs, tc.out):
+        if call(c, self._fsr, self.deadband_counts, self._table, self._t, pose, dt, tc.cab, tc.c, tc.st, tc.kf,
+                tc.turn, tc.coefs, tc.out):
             self._off_table(c, self._t)  # some counts off the table: converted here, then the estimate
-            tc.estimate_into(pose, self._t, float(dt))
+            tc.estimate_into(pose, self._t, dt)
         return self._t, tc.out[1, :6]
 
     @property
