@@ -10,6 +10,8 @@ of the noise says so ("below detectability": no model could show 2x, scoring.det
 LITERATURE), project over the rig's own. --sindy: per channel, the physics' held-out RMSE beside PySINDy's
 static and free-run fits on the same split, and the channels where the physics is worse (ratio > 1.0).
 --recordings: real recordings (any layout with --map), the peer comparison alone (no truth to score).
+--scheduler (as for `teleop campaign`): each case, or each recording, runs where the scheduler runs tasks; the
+report does not depend on where.
 """
 
 from __future__ import annotations
@@ -24,8 +26,11 @@ from teleop.apps.bench.diagnose_distributed import (distributed_plan, distribute
                                                     summarise_distributed)
 from teleop.apps.argtypes import input_file
 from teleop.apps.bench.diagnose_rig import pair_plan, rates, rig_plan, rig_text, run_rig_case, summarise_rig
+from teleop.apps.campaign.recordings import diagnose_files
+from teleop.apps.campaign.scheduler import open_scheduler
+from teleop.apps.commands.campaign import add_scheduler_option
 from teleop.core.errors import InputError
-from teleop.diagnosis.diagnose import diagnose
+from teleop.diagnosis.diagnose import HOLDOUT, diagnose
 from teleop.diagnosis.generator import RANGES, GenConfig, case_plan, make_case
 from teleop.diagnosis.scoring import confusion_text, peer_rows, run_case, summarise
 from teleop.io.outputs import write_json
@@ -64,7 +69,20 @@ def register(subparsers) -> None:
                    help="instead of generated cases: real recordings, diagnosed with the PySINDy peer; prints "
                         "the per-channel comparison")
     p.add_argument("--map", metavar="MAP", help="column map of --recordings (a .toml path or a shipped name)")
+    add_scheduler_option(p)  # each generated case simulated, diagnosed and scored where the scheduler runs tasks
     p.set_defaults(func=run)
+
+
+def bench_case(item: tuple) -> dict:
+    """One generated case's scored row: item = (suite, index in its plan, plan entry, (seed, GenConfig, rate,
+    seconds, noise, sindy, ranges)); a module-level function so that a Dask worker can run it."""
+    suite, i, entry, (seed, cfg, rate, seconds, noise, sindy, ranges) = item
+    if suite == "generator":
+        effect, setup = entry
+        return run_case(make_case(i, effect, setup, seed, cfg), sindy=sindy)
+    if suite == "rig":
+        return run_rig_case(entry, seed, rate, seconds, noise, sindy, ranges)
+    return run_distributed_case(entry, seed, seconds, noise, rate, sindy)
 
 
 def speed_case(seed: int = 0):
@@ -157,9 +175,12 @@ def run_recordings(args) -> int:
     RMSE beside the peers'."""
     out_rows, items = [], []
     recs = [read_recording(path, args.map) for path in args.recordings]   # every one read before any work
+    remote = None  # with a scheduler: each file read again and diagnosed on its workers (their progress shown)
+    if args.scheduler != "none":
+        remote = diagnose_files(args.recordings, args.map, HOLDOUT, args.scheduler, seed=args.seed, sindy=True)
     with progress(len(args.recordings), "bench diagnose", unit="recordings") as bar:
-        for path, rec in zip(args.recordings, recs):
-            doc = diagnose(rec, seed=args.seed, sindy=True).as_dict()
+        for k, (path, rec) in enumerate(zip(args.recordings, recs)):
+            doc = (remote[k] if remote else diagnose(rec, seed=args.seed, sindy=True)).as_dict()
             rows = peer_rows(doc)
             out_rows.append({"recording": str(path), "peer": rows,
                              "findings": [{"channel": f["channel"], "effect": f["effect"]} for f in doc["findings"]]})
@@ -193,21 +214,20 @@ def run(args) -> int:
 
     n_gen = {"all": args.cases // 2, "generator": args.cases}.get(args.suite, 0)
     n_dist = {"all": args.cases // 8, "distributed": args.cases}.get(args.suite, 0)
-    rows, rig_rows, dist_rows = [], [], []
-    plan = case_plan(n_gen)
-    rplan = (pair_plan if args.suite == "pairs" else rig_plan)(args.cases - n_gen - n_dist, args.seed)
-    dplan = distributed_plan(n_dist)
-    with progress(len(plan) + len(rplan) + len(dplan), "bench diagnose", unit="cases") as bar:
-        for i, (effect, setup) in enumerate(plan):
-            rows.append(run_case(make_case(i, effect, setup, args.seed, cfg), sindy=args.sindy))
+    plans = {"generator": case_plan(n_gen),
+             "rig": (pair_plan if args.suite == "pairs" else rig_plan)(args.cases - n_gen - n_dist, args.seed),
+             "distributed": distributed_plan(n_dist)}
+    opts = (args.seed, cfg, args.rate, args.seconds, args.noise, args.sindy, args.ranges)
+    items = [(suite, i, entry, opts) for suite, plan in plans.items() for i, entry in enumerate(plan)]
+    done = {}
+    with open_scheduler(args.scheduler) as sched, progress(len(items), "bench diagnose", unit="cases") as bar:
+        for item, outcome in sched.run(bench_case, items):
+            if not outcome.ok:  # a bug, not the user's input: the worker's traceback with it
+                raise RuntimeError(f"{item[0]} case {item[1]} failed: {outcome.error}\n{outcome.traceback}")
+            done[item[:2]] = outcome.value
             bar.update()
-        for case in rplan:
-            rig_rows.append(run_rig_case(case, args.seed, args.rate, args.seconds, args.noise, args.sindy,
-                                         args.ranges))
-            bar.update()
-        for case in dplan:
-            dist_rows.append(run_distributed_case(case, args.seed, args.seconds, args.noise, args.rate, args.sindy))
-            bar.update()
+    rows, rig_rows, dist_rows = ([done[suite, i] for i in range(len(plans[suite]))]
+                                 for suite in ("generator", "rig", "distributed"))
     summary = summarise(rows) if rows else {}
     rig_summary = summarise_rig(rig_rows) if rig_rows else {}
     scored = rows + rig_rows
