@@ -148,12 +148,12 @@ class SimulatedStylus(ContextDevice):
         self.p = self.script.target(0.0).astype(float).copy()
         self.v = np.zeros(3)
         self.F_cmd = (0.0, 0.0, 0.0)  # commanded force (fx, fy, fz) [N], device frame
-        self.F_tremor = np.zeros(3)
         self.R = rotation_zyx(0.0, 0.0, self.script.tilt)
         self._lo, self._hi = np.asarray(self.spec.workspace_min), np.asarray(self.spec.workspace_max)
         self._c_for = None  # (operator, script, spec) the integrator's constants were built for
         self._x = np.zeros(9)  # the integrator's state: p, v, F_tremor (p, v, F_tremor are copies of it)
         self._x[0:3] = self.p
+        self._pv = self._x.copy()  # the state's last copy (p, v, F_tremor views of it after a step)
         self._no_targets = np.zeros((0, 3))
         self._steps_call = None  # operator_steps bound at the first step (_advance)
         self.is_open = True
@@ -207,9 +207,16 @@ class SimulatedStylus(ContextDevice):
                                            self._absent)
         call(x, fx, fy, fz, self.steps, n, c, noise, i0, tremor, targets, self._absent)
         self.steps += n
-        # p, v and F_tremor: views of one fresh copy (never written in place: a sample may hand them out as they are)
-        pv = x.copy()
-        self.p, self.v, self.F_tremor, self.t = pv[0:3], pv[3:6], pv[6:9], self.steps * h
+        # p, v (and F_tremor, when asked for): views of one fresh copy (never written in place: a sample may hand
+        # them out as they are)
+        self._pv = pv = x.copy()
+        self.p, self.v, self.t = pv[0:3], pv[3:6], self.steps * h
+
+    @property
+    def F_tremor(self) -> np.ndarray:
+        """(3,) the operator's tremor force [N] after the last step (a view of the state's copy, made when asked:
+        the loop does not read it)."""
+        return self._pv[6:9]
 
     def _noise(self, n: int) -> tuple:
         """(rows, i0): n rows of 3 standard normal draws at rows[i0:i0 + n], taken from blocks drawn 1024 rows

@@ -299,7 +299,7 @@ class PadWorld:
         x, y, z = self._position()
         return np.array([x, y, z + self._r])
 
-    tip = _touching_point  # the public name (advance calls _touching_point: a wrapper on `tip` times it once)
+    tip = _touching_point  # the public name (advance writes it out: a wrapper put on `tip` does not time it twice)
 
     def _position(self) -> tuple:
         """The sphere centre (x, y, z) [m], queried once per step (only stepping moves the tip); with the
@@ -332,9 +332,11 @@ class PadWorld:
     def advance(self, target, steps: int = 1) -> tuple:
         """`steps` steps toward `target` (3,) [m]; (tip (3,) [m] as `tip`, contact force (fx, fy, fz) [N] as
         `contact_force`): a robot reading's physics in one call."""
+        step = self._step_to
         for _ in range(steps):
-            self._step_to(target)
-        return self._touching_point(), self._contact_force_tuple()
+            step(target)
+        x, y, z = self._position()  # _touching_point written out (this runs every reading)
+        return np.array([x, y, z + self._r]), self._contact_force_tuple()
 
     def _step_to(self, target) -> None:
         """Advance one dt with the tip (touching point) commanded to `target` (3,) [m]."""

@@ -100,14 +100,19 @@ class ReadingEstimator:
         if tc.counts_kernel is None:
             t = self.tensions_into(np.ascontiguousarray(counts, dtype=float))
             return t, tc.estimate_into(pose, t, float(dt))[1, :6]
-        c = counts if type(counts) is np.ndarray and counts.dtype in _COUNT_DTYPES and counts.flags.c_contiguous \
-            and counts.ndim == 1 else np.ascontiguousarray(counts, dtype=float).reshape(-1)
         dt = float(dt)
-        call = self._counts_call
-        if c.dtype is not self._counts_dtype or call is None:  # bound to the counts' dtype (jit.bind), the rest ours
-            call = self._counts_call = bind(tc.counts_kernel, c, self._fsr, self.deadband_counts, self._table,
-                                            self._t, pose, dt, tc.cab, tc.c, tc.st, tc.kf, tc.turn, tc.coefs, tc.out)
-            self._counts_dtype = c.dtype
+        call = self._counts_call  # the kernel bound to the counts' dtype (jit.bind), the other arguments ours
+        if type(counts) is np.ndarray and counts.dtype is self._counts_dtype and counts.ndim == 1 \
+                and counts.flags.c_contiguous:
+            c = counts  # the usual case: the bound dtype (told by identity, before any comparison)
+        else:
+            c = counts if type(counts) is np.ndarray and counts.dtype in _COUNT_DTYPES and counts.ndim == 1 \
+                and counts.flags.c_contiguous else np.ascontiguousarray(counts, dtype=float).reshape(-1)
+            if c.dtype is not self._counts_dtype:
+                call = self._counts_call = bind(tc.counts_kernel, c, self._fsr, self.deadband_counts, self._table,
+                                                self._t, pose, dt, tc.cab, tc.c, tc.st, tc.kf, tc.turn, tc.coefs,
+                                                tc.out)
+                self._counts_dtype = c.dtype
         # tensions_into and estimate_into in one compiled call (kernel estimate.counts_dynamic)
         if call(c, self._fsr, self.deadband_counts, self._table, self._t, pose, dt, tc.cab, tc.c, tc.st, tc.kf,
                 tc.turn, tc.coefs, tc.out):

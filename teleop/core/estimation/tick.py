@@ -32,6 +32,7 @@ from teleop.core.estimation.turn import TurnCompensation, turn_arrays
 from teleop.core.geometry import Geometry
 from teleop.core.kernels import estimate as K
 from teleop.core.kernels import sheath as SH
+from teleop.core.kernels.jit import bind
 from teleop.core.kernels.safety import all_finite2
 from teleop.core.mapping import Follower
 from teleop.core.rendering import Renderer
@@ -133,7 +134,12 @@ class LoopTick:
         self.home = [float(v) for v in mapping.home]
         self.estimator = estimator
         self.renderer = renderer if renderer is not None else Renderer()
+        self._finite = None  # kernel safety.all_finite2 bound to the estimator's buffers (estimate)
         self._home_mapping()  # the estimator and renderer keep their state (the loop may hand in its own)
+
+    def __getstate__(self) -> dict:
+        """Pickled without the bound kernel (compiled code does not pickle; bound again at the next call)."""
+        return {**self.__dict__, "_finite": None}
 
     def _home_mapping(self) -> None:
         # compute()'s own mapping state; the loop keeps its own (Teleop.pose, L_last, anchors) and calls map()
@@ -175,7 +181,11 @@ class LoopTick:
         """ESTIMATE: (tensions (n,) [N], wrench (6,) [N, N m] in {B}), copies, from raw FSR counts (n,) at the
         commanded pose (6,) float64 (ReadingEstimator.update_arrays); ValueError if either is not finite."""
         t, w = self.estimator.update_arrays(counts, pose, dt)
-        if not all_finite2(t, w):
+        call = self._finite
+        if call is None:  # bound at the first estimate (jit.bind): ReadingEstimator's (n,) and (6,) float64 buffers
+            call = self._finite = bind(all_finite2, t, w) if type(t) is np.ndarray and type(w) is np.ndarray \
+                else all_finite2
+        if not call(t, w):
             raise ValueError("estimated tensions/wrench not finite")
         return t.copy(), w.copy()
 
