@@ -8,9 +8,17 @@ Every test is free to run on either worker, except:
   worker, never two at once; the other worker meanwhile runs the rest.
 - tests that share a module- or session-scoped fixture of the suite's own (a recorded session, a built
   firmware) stay together on one worker, so that the fixture is made once, not once per worker.
-`-n 0` runs the suite in one process (the groups are then ignored)."""
+`-n 0` runs the suite in one process (the groups are then ignored).
+
+A run of the whole suite (no paths given: pyproject's testpaths) first fills numba's on-disk cache in two
+processes, one per core, while the workers start and collect (tests/_warm_kernels.py): on a cold cache (a
+fresh clone, any kernel source changed) every worker, `teleop` child process and Dask worker would otherwise
+compile the same kernels again. The tests start once both are done. A warm cache costs their start only."""
 
 import os
+import subprocess
+import sys
+from pathlib import Path
 
 import matplotlib
 import pytest
@@ -30,11 +38,12 @@ REALTIME = (
     "tests/io/test_stop_signals.py",
     "tests/io/recording/test_recording_kill.py",
     "tests/io/recording/test_recording_orphan.py",
-    "tests/devices/arduino/",
+    "tests/devices/arduino/test_arduino_firmware.py",   # simavr over a pty (framing, messages: host-side only)
+    "tests/devices/arduino/test_arduino_robot.py",
+    "tests/devices/arduino/test_arduino_watchdog.py",
     "tests/devices/test_process_robot_warm.py",
     "tests/apps/campaign/test_dask_campaign.py",
     "tests/apps/campaign/test_diagnose_scheduler.py",
-    "tests/apps/test_feedforward_end_to_end.py",    # a paced 8 s session that must end ENABLED
 )
 
 
@@ -51,8 +60,38 @@ def _shared_fixture_scope(item) -> str | None:
     return best
 
 
+_warming: list = []  # the cache-filling processes of a whole-suite run, until they are done
+
+
 def pytest_configure(config):
     config.addinivalue_line("markers", "xdist_group(name): run on the one worker that runs the group `name`")
+    whole_suite = config.args_source == pytest.Config.ArgsSource.TESTPATHS
+    if whole_suite and not hasattr(config, "workerinput"):  # the controller (or the one process of -n 0)
+        root = Path(__file__).resolve().parents[1]
+        _warming.extend(subprocess.Popen([sys.executable, "-m", "tests._warm_kernels", part], cwd=root,
+                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                        for part in ("loop", "diagnosis"))
+
+
+def _warmed() -> None:
+    """Wait for the cache-filling processes (their failure is the tests' to show: they compile then)."""
+    while _warming:
+        _warming.pop().wait()
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_node_collection_finished(node, ids):
+    _warmed()  # the controller schedules no test before the cache is full
+
+
+def pytest_collection_finish(session):
+    _warmed()  # -n 0
+
+
+def pytest_unconfigure(config):
+    for proc in _warming:  # a run ended before its tests (an error, Ctrl-C): not left compiling
+        proc.kill()
+        proc.wait()
 
 
 @pytest.hookimpl(tryfirst=True)  # before xdist reads the groups into the node ids
