@@ -35,7 +35,7 @@ from scenes.pose_follow import PoseFollower
 from scenes.pulley_transmission import PulleyTransmission, PulleyTransmissionParams
 from scenes.rich_plant import PLANTS as RICH_PLANTS
 from scenes.rich_plant import RichPlant, RichPlantParams, plant_params, with_plant
-from scenes.sim_robot_kernels import reading_cables, reading_cables_fsr
+from scenes.sim_robot_kernels import fixed_fsr, reading_cables, reading_cables_fsr_fixed
 from scenes.sim_sensors import FBG_FROM_END_M, FbgArray, fbg_cables
 from scenes.tendon_sheath import SheathLoad, TendonSheath, TendonSheathParams, b_node
 from scenes.tendon_sheath_kernels import O_MOTOR, O_ROWS
@@ -348,6 +348,8 @@ class SimRobot(ContextDevice):
         self._fused_fsr = (self._tip_off, self._A, self._theta, self.L_home, self._kc, *self._fused[:4], TAP_FSR,
                            *self._fsr.kernel_args()) if self._fused is not None and self._fsr is not None and \
             self._rich is None else None  # reading_cables_fsr's arguments that stay the same objects
+        # ... held together, one argument of the reading's call (reading_cables_fsr_fixed)
+        self._fixed_fsr = None if self._fused_fsr is None else fixed_fsr(*self._fused_fsr)
         self._bound_fsr = self._bound_cables = self._bound_counts = None  # read's kernel, bound at the first reading
         self._dt = p.dt  # [s] a reading's period (read's: a property call less)
         self._n, self._substeps = n, p.substeps  # cables, physics steps a reading (read's: lookups less)
@@ -424,11 +426,11 @@ class SimRobot(ContextDevice):
             if self._fused_fsr is not None:  # the FSR alone (params.fsr): its counts in the call
                 L = self.L_cmd
                 Lc = L if self._play is None else self._L_real
-                call = self._bound_fsr if type(F) is tuple else reading_cables_fsr
+                call = self._bound_fsr if type(F) is tuple else reading_cables_fsr_fixed
                 if call is None:
-                    call = self._bound_fsr = bind(reading_cables_fsr, *self._fused_fsr, F, L, Lc, noise, k, f, t_tip,
-                                                  steps, out, counts)
-                status = call(*self._fused_fsr, F, L, Lc, noise, k, f, t_tip, steps, out, counts)
+                    call = self._bound_fsr = bind(reading_cables_fsr_fixed, self._fixed_fsr, F, L, Lc, noise, k, f,
+                                                  t_tip, steps, out, counts)
+                status = call(self._fixed_fsr, F, L, Lc, noise, k, f, t_tip, steps, out, counts)
                 done = status == OK
             else:
                 args = (self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f, t_tip, steps,

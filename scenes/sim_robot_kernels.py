@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from scenes import tendon_sheath_kernels as TK
 from scenes.fsr_sensor_kernels import counts_row
-from teleop.core.kernels.jit import njit
+from teleop.core.kernels.jit import COMPILED, njit
 from teleop.core.kernels.sensor import fsr_counts
 from teleop.core.kernels.sim import reading_tips
 from teleop.core.kernels.tension import OK
@@ -50,3 +50,46 @@ def reading_cables_fsr(o, A, theta, L_home, c, S, cab, p, T, tap, fc, y, w, fres
         counts_row(out[tap], fc, y, w, fresh[0], r_divider, adc_max, noise[i], counts)
         fresh[0] = False
     return status
+
+
+#: reading_cables_fsr's arguments that stay the same objects reading after reading (its first 16), by name
+FIXED_FSR = ("o", "A", "theta", "L_home", "c", "S", "cab", "p", "T", "tap", "fc", "y", "w", "fresh", "r_divider",
+             "adc_max")
+
+if COMPILED:  # a numba structure: a kernel takes it as one argument, its arrays (the same memory) unboxed once
+    from numba.core import types as _types
+    from numba.experimental import structref as _structref
+
+    @_structref.register
+    class FixedFsrType(_types.StructRef):
+        """numba type of FixedFsr: the fields' types as built (literal values widened)."""
+
+        def preprocess_fields(self, fields):
+            return tuple((name, _types.unliteral(t)) for name, t in fields)
+
+    class FixedFsr(_structref.StructRefProxy):
+        """reading_cables_fsr's fixed arguments (FIXED_FSR) held together (made by `fixed_fsr`)."""
+
+    _structref.define_proxy(FixedFsr, FixedFsrType, list(FIXED_FSR))
+else:  # pragma: no cover - exercised with TELEOP_NO_JIT=1
+    class FixedFsr:
+        """reading_cables_fsr's fixed arguments (FIXED_FSR) held together (made by `fixed_fsr`)."""
+
+        def __init__(self, *values):
+            for name, value in zip(FIXED_FSR, values):
+                setattr(self, name, value)
+
+
+@njit
+def fixed_fsr(o, A, theta, L_home, c, S, cab, p, T, tap, fc, y, w, fresh, r_divider, adc_max):
+    """A FixedFsr holding reading_cables_fsr's fixed arguments (the same arrays, not copies), for
+    reading_cables_fsr_fixed; built by a compiled (cached) call."""
+    return FixedFsr(o, A, theta, L_home, c, S, cab, p, T, tap, fc, y, w, fresh, r_divider, adc_max)
+
+
+@njit
+def reading_cables_fsr_fixed(a, F, L, Lc, noise, i, f, t_tip, steps, out, counts):
+    """reading_cables_fsr with its fixed arguments in `a` (fixed_fsr): one argument for sixteen (a kernel call
+    unboxes each array argument, ~0.05 us each; the simulated robot's reading makes this call every tick)."""
+    return reading_cables_fsr(a.o, a.A, a.theta, a.L_home, a.c, a.S, a.cab, a.p, a.T, a.tap, a.fc, a.y, a.w, a.fresh,
+                              a.r_divider, a.adc_max, F, L, Lc, noise, i, f, t_tip, steps, out, counts)

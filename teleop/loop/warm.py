@@ -24,7 +24,7 @@ import numpy as np
 from scenes import fsr_sensor_kernels, sim_robot_kernels, tendon_sheath_kernels
 from scenes.fsr_sensor import FsrSensor
 from scenes.sim_robot import DistributedCables
-from scenes.sim_robot_kernels import reading_cables, reading_cables_fsr
+from scenes.sim_robot_kernels import fixed_fsr, reading_cables, reading_cables_fsr_fixed
 from scenes.tendon_sheath import TendonSheathParams
 from teleop.core.estimation.estimators import ESTIMATOR_NAMES, DynamicParams
 from teleop.core.estimation.kalman import KalmanNoise
@@ -221,9 +221,9 @@ def _cables(s) -> None:
         lag.counts(np.full(n, P), np.zeros(n))
     cal = default_fsr_calibration()  # the distributed robot's FSR alone (SimRobotParams.fsr): a reading, a batch
     sensor_alone = FsrSensor(n, 0, cal=cal)
-    reading_cables_fsr(s.tip, s.A, s.theta, s.L, s.kc, S, cab, p, T, rows - 1, *sensor_alone.kernel_args(),
-                       (0.0, 0.0, 0.0), s.L, s.L, np.zeros((1, n)), 0, np.empty(6), np.empty(n),
-                       np.empty(n, dtype=np.int64), np.empty((rows, n)), np.empty(n, dtype=np.int64))
+    fixed = fixed_fsr(s.tip, s.A, s.theta, s.L, s.kc, S, cab, p, T, rows - 1, *sensor_alone.kernel_args())
+    reading_cables_fsr_fixed(fixed, (0.0, 0.0, 0.0), s.L, s.L, np.zeros((1, n)), 0, np.empty(6), np.empty(n),
+                             np.empty(n, dtype=np.int64), np.empty((rows, n)), np.empty(n, dtype=np.int64))
     sensor_alone.counts_into(np.full((1, n), P), np.zeros((1, n)), np.empty((1, n), dtype=np.int64))
     sensor_alone.log_conductance(np.full((2, n), P))
 
