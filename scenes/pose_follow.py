@@ -38,7 +38,8 @@ class PoseFollower:
         self.tol, self.max_residual = float(tol), float(max_residual)
         self._q = np.array(pose, dtype=float).reshape(6)
         self._L = np.zeros(len(geom.B))
-        self._bound = self._bound_terms = None  # follow's kernel and the terms it was bound with
+        self._bound = self._bound_terms = self._fixed = None  # follow's kernel, the terms it was bound with, its
+        # fixed arguments
 
     @property
     def q(self) -> list:
@@ -60,13 +61,13 @@ class PoseFollower:
         anchors) in the same kernel call (sim.follow_pose), which first checks L (n,) float64 against the
         geometry's length limits (teleop.core.kinematics.check_lengths raises with the reason, the pose unchanged);
         the pose's (6,) array if it moved, else None."""
-        call = self._bound
-        if call is None or terms is not self._bound_terms:  # bound to the robot's arrays' types (jit.bind)
-            call = self._bound = bind(KS.follow_pose, L, *self._limits, self._q, FREE_AXIAL, self.r, self.B, self.tol,
-                                      12, self.max_residual, *terms)
+        if terms is not self._bound_terms:  # the other arguments held together (kernel sim.fixed_follow) and the
+            # kernel bound to their types and the lengths' (jit.bind: the robot's own float64 arrays)
+            self._fixed = KS.fixed_follow(*self._limits, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12,
+                                          self.max_residual, *terms)
+            self._bound = bind(KS.follow_pose_fixed, L, self._fixed)
             self._bound_terms = terms
-        worst, moved, bad = call(L, *self._limits, self._q, FREE_AXIAL, self.r, self.B, self.tol, 12,
-                                 self.max_residual, *terms)
+        worst, moved, bad = self._bound(L, self._fixed)
         if bad >= 0:
             check_lengths(L, self.geom)
         self._check(worst)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from scenes import tendon_sheath_kernels as TK
 from scenes.fsr_sensor_kernels import counts_row
-from teleop.core.kernels.jit import COMPILED, njit
+from teleop.core.kernels.jit import njit, structure
 from teleop.core.kernels.sensor import fsr_counts
 from teleop.core.kernels.sim import reading_tips
 from teleop.core.kernels.tension import OK
@@ -56,28 +56,9 @@ def reading_cables_fsr(o, A, theta, L_home, c, S, cab, p, T, tap, fc, y, w, fres
 FIXED_FSR = ("o", "A", "theta", "L_home", "c", "S", "cab", "p", "T", "tap", "fc", "y", "w", "fresh", "r_divider",
              "adc_max")
 
-if COMPILED:  # a numba structure: a kernel takes it as one argument, its arrays (the same memory) unboxed once
-    from numba.core import types as _types
-    from numba.experimental import structref as _structref
-
-    @_structref.register
-    class FixedFsrType(_types.StructRef):
-        """numba type of FixedFsr: the fields' types as built (literal values widened)."""
-
-        def preprocess_fields(self, fields):
-            return tuple((name, _types.unliteral(t)) for name, t in fields)
-
-    class FixedFsr(_structref.StructRefProxy):
-        """reading_cables_fsr's fixed arguments (FIXED_FSR) held together (made by `fixed_fsr`)."""
-
-    _structref.define_proxy(FixedFsr, FixedFsrType, list(FIXED_FSR))
-else:  # pragma: no cover - exercised with TELEOP_NO_JIT=1
-    class FixedFsr:
-        """reading_cables_fsr's fixed arguments (FIXED_FSR) held together (made by `fixed_fsr`)."""
-
-        def __init__(self, *values):
-            for name, value in zip(FIXED_FSR, values):
-                setattr(self, name, value)
+# reading_cables_fsr's fixed arguments held together (jit.structure; the type bound here for numba's cache)
+FixedFsr = structure(__name__, "FixedFsr", FIXED_FSR)
+FixedFsrType = getattr(FixedFsr, "numba_type", None)
 
 
 @njit

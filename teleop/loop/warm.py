@@ -185,10 +185,11 @@ def _sim_robot(s) -> None:
                                (0.0, 0.0, 0.0), implicit)
     KS.pose_target(q, geom.r, geom.B, np.asarray(geom.v, dtype=float), float(geom.theta0),
                    np.asarray(geom.tip, dtype=float), np.empty((n, 6)), A, theta, tip, np.empty(3))
-    KS.follow_pose(np.ascontiguousarray(L), float(geom.l_min), float(geom.l_max), q.copy(), FREE_AXIAL, geom.r, geom.B,
-                   1e-12, 12, 1e-6,
-                   np.asarray(geom.v, dtype=float), float(geom.theta0), np.asarray(geom.tip, dtype=float),
-                   np.empty((n, 6)), A, theta, tip, np.empty(3))
+    # scenes.pose_follow.PoseFollower.follow: its fixed arguments held together, then the command
+    fixed = KS.fixed_follow(float(geom.l_min), float(geom.l_max), q.copy(), FREE_AXIAL, geom.r, geom.B, 1e-12, 12, 1e-6,
+                            np.asarray(geom.v, dtype=float), float(geom.theta0), np.asarray(geom.tip, dtype=float),
+                            np.empty((n, 6)), A, theta, tip, np.empty(3))
+    KS.follow_pose_fixed(np.ascontiguousarray(L), fixed)
     # the sim robot's reading (scenes.sim_robot.SimRobot.read): the contact force as pybullet's tuple
     kc = np.empty(KS.N_READING_CONST)
     kc[:SH.N_CONST] = sc

@@ -21,7 +21,7 @@ import numpy as np
 from teleop.core.kernels import sheath as SH
 from teleop.core.kernels.geometry import cable, forward_kinematics, lengths_outside, platform_offsets, rotation_zyx, \
     structure_column, wrap_angle
-from teleop.core.kernels.jit import njit
+from teleop.core.kernels.jit import njit, structure
 from teleop.core.kernels.sensor import conductance_loop, fsr_counts  # noqa: F401 (conductance_loop: KS.conductance_loop)
 from teleop.core.kernels.tension import OK, null1_terms, null1_tensions
 
@@ -183,6 +183,31 @@ def follow_pose(L, l_min, l_max, q, free, r, B, tol, max_iter, max_residual, v, 
     if moved and worst <= max_residual:
         pose_target(q, r, B, v, theta0, tip, off, A, theta, tip_off, target)
     return worst, moved, bad
+
+
+#: follow_pose's arguments after the lengths, by name: the same objects (and values) command after command
+FOLLOW_FIXED = ("l_min", "l_max", "q", "free", "r", "B", "tol", "max_iter", "max_residual", "v", "theta0", "tip", "off",
+                "A", "theta", "tip_off", "target")
+# follow_pose's fixed arguments held together (jit.structure; the type bound here for numba's cache)
+FixedFollow = structure(__name__, "FixedFollow", FOLLOW_FIXED)
+FixedFollowType = getattr(FixedFollow, "numba_type", None)
+
+
+@njit
+def fixed_follow(l_min, l_max, q, free, r, B, tol, max_iter, max_residual, v, theta0, tip, off, A, theta, tip_off,
+                 target):
+    """A FixedFollow holding follow_pose's arguments after the lengths (the same arrays, not copies), for
+    follow_pose_fixed; built by a compiled (cached) call."""
+    return FixedFollow(l_min, l_max, q, free, r, B, tol, max_iter, max_residual, v, theta0, tip, off, A, theta, tip_off,
+                       target)
+
+
+@njit
+def follow_pose_fixed(L, a):
+    """follow_pose of the lengths L (n,) [m] with its other arguments in `a` (fixed_follow): two arguments for
+    eighteen (a kernel call unboxes each array argument; the simulated robot commands every tick)."""
+    return follow_pose(L, a.l_min, a.l_max, a.q, a.free, a.r, a.B, a.tol, a.max_iter, a.max_residual, a.v, a.theta0,
+                       a.tip, a.off, a.A, a.theta, a.tip_off, a.target)
 
 
 @njit
