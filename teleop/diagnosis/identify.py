@@ -15,7 +15,9 @@ chain whose held-out RMSE is within ACCEPT of its residual's white noise (locate
 addition, and pairs are tried only above ACCEPT^2 of it: nothing fits below the noise, so none could pay.
 Fits run on the fit part decimated, with the samples about each of the drive's reversals (`fit_samples`).
 An added effect's general form (ParamSpec.shape) is tried once it is named (`general_form`); the baseline's
-own, in place of the additions once they are exhausted (`_general_baseline`: the capstan's pretension).
+own, in place of the additions once they are exhausted (`_general_baseline`: the capstan's pretension). A
+baseline shape parameter that must pay on its own (ParamSpec.alone: the curve of the capstan's stick
+transitions) is the baseline's choice, made on the baseline alone (`_baseline_shape`), never a finding.
 The fit part is scored with Huber's loss (`robust_rms`) for the information criterion; held-out scores are
 plain RMSEs.
 An effect that extends a simpler one (Rules.extends: a Stribeck friction a Coulomb one) is also fitted from
@@ -389,9 +391,11 @@ TIE = 1e-4   # simulation_baseline: fits whose fit-part scores differ by less th
 
 def _at_limits(m: LinkModel) -> int:
     """The number of m's effect parameters at an end of their range (within 1 % of it in unit space: a log
-    stiffness over 12 decades within its top 0.12 decade)."""
+    stiffness over 12 decades within its top 0.12 decade); a shape parameter that must pay on its own, at its
+    plain default, is not counted (held there, it is no limit the fit reached: `_baseline_shape` frees it)."""
     return sum(1 for n, p in m.effects for s in get_effect(n).params
-               if s.name in p and min(s.to_unit(s.clip(p[s.name])), 1.0 - s.to_unit(s.clip(p[s.name]))) < 1e-2)
+               if s.name in p and not (s.shape and s.alone and p[s.name] == s.default)
+               and min(s.to_unit(s.clip(p[s.name])), 1.0 - s.to_unit(s.clip(p[s.name]))) < 1e-2)
 
 
 def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tuple = (), seed: int = 0) -> Fit:
@@ -405,7 +409,8 @@ def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tup
     # a load read from a spring's travel has no known zero: the sheath grips the spring's tension, the load
     # plus a pretension, so the baseline effects' general form (the capstan's preload) is the baseline's own
     general = d.link.spring_load
-    free = tuple(f"{n}.{s.name}" for n in names for s in get_effect(n).params if s.shape) if general else ()
+    free = tuple(f"{n}.{s.name}" for n in names for s in get_effect(n).params
+                 if s.shape and not s.alone) if general else ()
     fits = []
     try:
         fits.append(fit_chain(d, start, names, fit_idx, hold_idx, starts=2, seed=seed, free_shape=free))
@@ -430,9 +435,42 @@ def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tup
     # among fits the fit part cannot tell apart, the one with more parameters at their limits (the limit
     # law: a stiff stick whose transitions the fit part never sees cross late is the instant switch)
     fit = max((f for f in fits if f.rmse_fit <= low * (1.0 + TIE)), key=lambda f: _at_limits(f.model))
+    fit = _baseline_shape(d, fit, free, fit_idx, hold_idx, seed)
     m = fit.model
     return Fit(LinkModel(m.link, m.gain, m.offset, m.direction, m.load_sign, m.effects, len(m.effects)),
                fit.stderr, fit.rmse_fit, fit.rmse_hold, fit.k, fit.n_eff, fit.at_bound)
+
+
+def baseline_shapes(names) -> tuple:
+    """("effect.param") the baseline effects' shape parameters that must pay on their own (ParamSpec.alone and
+    shape: the capstan's transition spread): the baseline's own choice (`_baseline_shape`), never a finding."""
+    return tuple(f"{n}.{s.name}" for n in names for s in get_effect(n).params if s.shape and s.alone)
+
+
+def _baseline_shape(d: LinkData, fit: Fit, free: tuple, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:
+    """The baseline `fit` (its shape parameters `baseline_shapes` at their plain defaults, `free` the general
+    form's fitted beside them), or the baseline refitted with those parameters free, from the middle of
+    their range, where that pays on its own (`_alone_pays`' rule: held-out RMSE lower by PARSIMONY and a
+    better information criterion). Not tried where moving them changes nothing at the fitted values (an
+    instant switch, a linear stick: the transition's curve does not show)."""
+    shapes = tuple(k for k in baseline_shapes(fit.names)
+                   if k.split(".", 1)[1] not in d.known.get(k.split(".", 1)[0], {}))   # the user's given value
+    if not shapes:
+        return fit
+    chain = [(n, dict(p)) for n, p in fit.model.effects]
+    for key in shapes:
+        name, par = key.split(".", 1)
+        spec = get_effect(name).spec(par)
+        next(p for n, p in chain if n == name)[par] = spec.from_unit(0.5)
+    start = fit.model.with_effects(tuple(chain))
+    if np.allclose(predict(d, start), predict(d, fit.model), rtol=0.0,
+                   atol=1e-9 * max(float(np.std(d.y)), 1e-12)):
+        return fit
+    try:
+        g = fit_chain(d, start, (), fit_idx, hold_idx, seed=seed, free_shape=free + shapes)
+    except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+        return fit
+    return g if g.rmse_hold * (1 + PARSIMONY) <= fit.rmse_hold and delta_bic(g, fit) < 0 else fit
 
 
 def identify_link(d: LinkData, fit_idx: slice, hold_idx: slice, progress=None, seed: int = 0,
@@ -460,7 +498,7 @@ def _general_baseline(d: LinkData, base: Fit, steps: tuple, current: Fit, fit_id
     stands). It is not added on top of them: beside another friction it absorbs what the recording does
     not carry (the session's Coulomb cable without its bend column, whose wrap varies with the pose: a
     pretension paid there)."""
-    alone = general_form(d, base, list(base.names), fit_idx, hold_idx, seed)
+    alone = general_form(d, base, list(base.names), fit_idx, hold_idx, seed, hold=baseline_shapes(base.names))
     if alone is base or not generalised(base, alone) or not _pays(alone, base):
         return steps, current
     if current is base or (alone.rmse_hold * (1 + PARSIMONY) < current.rmse_hold
@@ -660,15 +698,17 @@ def _pays(pick: Fit | None, current: Fit, floor: float = 0.0) -> bool:
     return floor > 0 and pick.rmse_hold * NEAR_ACCEPT <= current.rmse_hold and pick.rmse_hold <= NEAR_FLOOR * floor
 
 
-def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:
+def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: slice, seed: int,
+                 hold: tuple = ()) -> Fit:
     """`pick` with the general form of the effects it adds (ParamSpec.shape: backlash's elastic part, wide
     play, growth with position and start) when that form pays: held-out RMSE lower by more than PARSIMONY
     and a better information criterion. A shape parameter that ends on its plain bound is held there and
-    the rest refitted once. Else `pick` as it is."""
+    the rest refitted once. Else `pick` as it is. hold: shape parameters ("effect.param") not freed here (the
+    baseline's own choice, `baseline_shapes`)."""
     # a position-only effect's general form was a candidate of its own (_curved), under the same rule, and so
     # was one whose rules say so (Rules.general_candidate)
     free = tuple(f"{n}.{s.name}" for n in added if not (position_only(n) or get_effect(n).rules.general_candidate)
-                 for s in get_effect(n).params if s.shape)
+                 for s in get_effect(n).params if s.shape and f"{n}.{s.name}" not in hold)
     if not free:
         return pick
     for _ in range(2):

@@ -150,38 +150,76 @@ def forward_step(x_prev, f, x, t_tip, mu_theta, k):
 
 # ------------------------------------------------------------------ the law on a recorded drive (the catalogue's)
 #: the catalogue's capstan_friction kernel: its constants are the sheath's, then PRELOAD [N], INSTANT [N/m]
-#: (the stick stiffness from which on a reversal is a plain switch) and STICK_N (the transitions' exponent,
-#: `stick_transition`); its state the sheath's rows, then T_PREV
-PRELOAD, INSTANT, STICK_N, N_RATE_CONST = N_CONST, N_CONST + 1, N_CONST + 2, N_CONST + 3
+#: (the stick stiffness from which on a reversal is a plain switch), STICK_N and STICK_SPREAD (the transitions'
+#: exponent and spread, `stick_transition`); its state the sheath's rows, then T_PREV
+PRELOAD, INSTANT, STICK_N, STICK_SPREAD, N_RATE_CONST = N_CONST, N_CONST + 1, N_CONST + 2, N_CONST + 3, N_CONST + 4
 T_PREV, N_RATE_STATE = N_STATE, N_STATE + 1
 
 
 @njit
-def stick_transition(f, travel, s, lo, hi, k, n):
-    """Motor force [N] after a travel [m] (>= 0) in the direction s (+1, -1) from f [N] across the band
-    [lo, hi] [N]: the part u of the band crossed from the line the cable left grows as u = (delta /
-    delta_c)^n with the travel delta since it left it, delta_c = (hi - lo) / k the travel across the whole
-    band (k [N/m] the transition's mean stiffness). n = 1: the linear stick, clamp(f + s k travel, lo, hi);
-    n = 1/2: the square-root transition of a friction distributed along the sheath (the stuck part of the
-    cable grows with the tension change, so the travel grows with its square; Kaneko et al. 1991, Agrawal et
-    al. 2010). Exact for any travel: u^(1 / n) advances by travel / delta_c."""
-    if n == 1.0 or hi <= lo:
-        return clamp(f + s * k * travel, lo, hi)
-    band = hi - lo
-    u = clamp((f - lo) / band if s > 0.0 else (hi - f) / band, 0.0, 1.0)
-    u = min(u ** (1.0 / n) + k * travel / band, 1.0) ** n
-    return lo + band * u if s > 0.0 else hi - band * u
+def _band_part(z, a, up):
+    """Part u in [0, 1] of the band [lo, hi] crossed at the friction coordinate z in [0, 1] (`stick_transition`)
+    for the curve's ratio a >= 1 (a = sqrt(hi / lo) for Kaneko's): from lo (up) u = ((1 + (a - 1) z)^2 - 1) /
+    (a^2 - 1), from hi u = (1 - (1 - (1 - 1/a) z)^2) / (1 - 1/a^2); u = z at a = 1."""
+    if abs(a - 1.0) < 1e-9:
+        return z
+    if up:
+        return ((1.0 + (a - 1.0) * z) ** 2 - 1.0) / (a * a - 1.0)
+    b = 1.0 - 1.0 / a
+    return (1.0 - (1.0 - b * z) ** 2) / (1.0 - 1.0 / (a * a))
 
 
 @njit
-def rate_play_step(f, dx, s, lead, F_tip, mu_theta, k, instant, n):
+def _band_coordinate(u, a, up):
+    """The inverse of `_band_part`: z in [0, 1] for u in [0, 1]."""
+    if abs(a - 1.0) < 1e-9:
+        return u
+    if up:
+        return (math.sqrt(max(1.0 + u * (a * a - 1.0), 0.0)) - 1.0) / (a - 1.0)
+    b = 1.0 - 1.0 / a
+    return (1.0 - math.sqrt(max(1.0 - u * (1.0 - 1.0 / (a * a)), 0.0))) / b
+
+
+@njit
+def stick_transition(f, travel, s, lo, hi, k, n, spread=0.0):
+    """Motor force [N] after a travel [m] (>= 0) in the direction s (+1, -1) from f [N] across the band
+    [lo, hi] [N]: the part u of the band crossed from the line the cable left grows with the travel delta
+    since it left it, rho = delta / delta_c, delta_c = (hi - lo) / k the travel across the whole band (k [N/m]
+    the transition's mean stiffness), as u = B_a(rho^n), a = sqrt(hi / lo)^(2 (1 - n) spread).
+
+    spread = 0 (a = 1, B the identity): the power law u = rho^n; n = 1 the linear stick (a lumped
+    compliance), clamp(f + s k travel, lo, hi); n = 1/2 the square-root transition of a narrow band.
+    spread = 1, n = 1/2: Coulomb friction spread uniformly along the sheath (Kaneko et al. 1991): after a
+    reversal the tension changes over a zone growing from the proximal end, where the new and the old
+    exponential profiles meet at the wrap phi_c with e^(2 phi_c) = the proximal tension's ratio to its start,
+    and the motor travel is the cable's stretch change over that zone: from lo, delta ~ lo (sqrt(1 + r) - 1)^2
+    (r the tension's rise over lo), from hi delta ~ hi (1 - sqrt(1 - r))^2; the whole band is crossed when the
+    zone reaches the tip (phi_c = mu Theta), so with a = e^(mu Theta) = sqrt(hi / lo): sqrt(rho) = z,
+    u = B_a(z) with B_a(z) = ((1 + (a - 1) z)^2 - 1) / (a^2 - 1) from lo and (1 - (1 - (1 - 1/a) z)^2) /
+    (1 - 1/a^2) from hi (`_band_part`): steeper leaving the high line than the low one for a wide band.
+    Between and beyond (spread > 1: more curved than a uniform friction's), continuous in n and spread (n = 1:
+    the linear stick whatever the spread). Exact for any travel: rho advances by travel / delta_c."""
+    if n == 1.0 or hi <= lo:
+        return clamp(f + s * k * travel, lo, hi)
+    band = hi - lo
+    a = (hi / lo) ** ((1.0 - n) * spread) if lo > 0.0 and spread > 0.0 else 1.0
+    up = s > 0.0
+    u = clamp((f - lo) / band if up else (hi - f) / band, 0.0, 1.0)
+    z = clamp(_band_coordinate(u, a, up), 0.0, 1.0)
+    z = min(z ** (1.0 / n) + k * travel / band, 1.0) ** n
+    u = clamp(_band_part(z, a, up), 0.0, 1.0)
+    return lo + band * u if up else hi - band * u
+
+
+@njit
+def rate_play_step(f, dx, s, lead, F_tip, mu_theta, k, instant, n, spread):
     """Motor force [N] after a sample of a recorded drive: the forward law's clamp(f + k dx) into the band of
     the tip force F_tip [N], its direction taken from the drive's rate sign s (+1, -1; 0: at rest, f held
     in the band) rather than from the travel dx [m] since the last sample. They differ for a sample after a
     reversal the rate places inside the last interval (a central difference sees the turn half a sample
     before a backward one): then the travel since the turn is `lead` [m] (a fraction of |v| dt) in the new
     direction. k >= instant [N/m] is the limit of an instant switch: the band's side of s. The transition
-    across the band: `stick_transition` of exponent n (1: linear)."""
+    across the band: `stick_transition` of exponent n (1: linear) and spread."""
     lo, hi = capstan_band(F_tip, mu_theta)
     if s == 0.0:
         return clamp(f, lo, hi)
@@ -189,14 +227,14 @@ def rate_play_step(f, dx, s, lead, F_tip, mu_theta, k, instant, n):
         return hi if s > 0.0 else lo
     if dx * s <= 0.0:
         dx = s * lead
-    return stick_transition(f, dx * s, s, lo, hi, k, n)
+    return stick_transition(f, dx * s, s, lo, hi, k, n, spread)
 
 
 @njit
 def capstan_rate_step(st, u, c):
     """The catalogue's capstan_friction step: u = (t [s], x [m], v [m/s], load [N], theta [rad]) one sample of
-    a recorded drive and its tip load; c (N_RATE_CONST,) the sheath's constants, PRELOAD, INSTANT, STICK_N;
-    st (N_RATE_STATE,) one cable's state. Motor force [N] of the sheath's law (`rate_play_step`) on
+    a recorded drive and its tip load; c (N_RATE_CONST,) the sheath's constants, PRELOAD, INSTANT, STICK_N,
+    STICK_SPREAD; st (N_RATE_STATE,) one cable's state. Motor force [N] of the sheath's law (`rate_play_step`) on
     the tension load + preload, read from the preload. The first sample starts on the tip tension (at once on
     the side of the motion for an instant switch)."""
     t, x, v, load, theta = u[0], u[1], u[2], u[3], u[4]
@@ -206,10 +244,11 @@ def capstan_rate_step(st, u, c):
     if st[X] != st[X]:
         f = start_on_tip(load + P, mt, c[STICK_K])
         if c[STICK_K] >= c[INSTANT] and s != 0.0:
-            f = rate_play_step(f, 0.0, s, 0.0, load + P, mt, c[STICK_K], c[INSTANT], c[STICK_N])
+            f = rate_play_step(f, 0.0, s, 0.0, load + P, mt, c[STICK_K], c[INSTANT], c[STICK_N], c[STICK_SPREAD])
     else:
         lead = 0.125 * abs(v) * (t - st[T_PREV])   # a quadratic turn's travel since: |v| dt / 8 on average
-        f = rate_play_step(st[F], x - st[X], s, lead, load + P, mt, c[STICK_K], c[INSTANT], c[STICK_N])
+        f = rate_play_step(st[F], x - st[X], s, lead, load + P, mt, c[STICK_K], c[INSTANT], c[STICK_N],
+                           c[STICK_SPREAD])
     st[F], st[X], st[T_PREV] = f, x, t
     return f - P
 

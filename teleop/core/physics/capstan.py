@@ -23,7 +23,8 @@ from typing import Mapping
 
 import numpy as np
 
-from teleop.core.kernels.sheath import (INSTANT, N_RATE_CONST, PRELOAD, STICK_K, STICK_N, STIFF_STICK_K, Sheath,
+from teleop.core.kernels.sheath import (INSTANT, N_RATE_CONST, PRELOAD, STICK_K, STICK_N, STICK_SPREAD, STIFF_STICK_K,
+                                        Sheath,
                                         capstan_band_loop, capstan_rate_run, capstan_rate_step, capstan_tip_run,
                                         motor_force_run, new_state)
 from teleop.core.kernels.jit import broadcast_call
@@ -97,12 +98,13 @@ def tip2motor_transitions(x, F_tip, mu, theta, k, F0=None):
 def _pack(p: Mapping[str, float]) -> np.ndarray:
     """The step kernel's parameters (kernels.sheath.capstan_rate_step): the sheath's kernel constants for
     friction mu [-] and stick stiffness k [N/m] (the wrap comes with the signals), then the preload [N] and
-    the stick stiffness of an instant switch (k's fit bound) and the transitions' exponent n."""
+    the stick stiffness of an instant switch (k's fit bound), the transitions' exponent n and their spread."""
     c = np.empty(N_RATE_CONST)
     c[:PRELOAD] = Sheath(mu=float(p["mu"]), stick_k=float(p["k"])).constants()
     c[STICK_K] = stick_stiffness(float(p["k"]))
     n = float(p.get("n", 1.0))
     c[PRELOAD], c[INSTANT], c[STICK_N] = p.get("preload", 0.0), math.inf, 1.0 if abs(n - 1.0) < N_LINEAR else n
+    c[STICK_SPREAD] = p.get("spread", 0.0)
     return c
 
 
@@ -172,6 +174,12 @@ PARAMS = (
     ParamSpec("n", "1", 0.2, 2.0, 1.0, "exponent of the stick transitions: the part of the band crossed grows "
               "as (travel / travel across it)^n (1: a linear stick; 1/2: a friction distributed along the "
               "sheath; kernel sheath.stick_transition)"),
+    ParamSpec("spread", "1", 0.0, 2.0, 0.0, "the transitions' curve beyond the power of the travel: the part of "
+              "the band's own ratio in it (0: u = (travel / travel across it)^n; 1 with n = 1/2: Kaneko's friction "
+              "spread uniformly along the sheath, steeper leaving the high line than the low one; above 1 more "
+              "curved; kernel sheath.stick_transition). The baseline's own choice, kept off 0 only where it pays "
+              "on its own (a shape parameter that never makes a finding)",
+              shape=True, alone=True),
 )
 
 
