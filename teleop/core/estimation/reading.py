@@ -53,11 +53,13 @@ class ReadingEstimator:
         self._counts = np.zeros(self.n)
         self._t = np.zeros(self.n)
         self._counts_call = self._counts_dtype = None  # update_arrays' kernel bound to the counts' dtype
+        self._fixed, self._fixed_of = None, (None, None, None)  # its fixed arguments and the states they hold
         self.reset()
 
     def __getstate__(self) -> dict:
         """Pickled without the bound kernel (compiled code does not pickle; bound again at the next call)."""
-        return {**self.__dict__, "_counts_call": None, "_counts_dtype": None}
+        return {**self.__dict__, "_counts_call": None, "_counts_dtype": None, "_fixed": None,
+                "_fixed_of": (None, None, None)}
 
     def _tension1(self, v: float, branch: int) -> float:
         """Tension [N] of `v` counts on `branch` (FsrCalibration.counts_tension1)."""
@@ -101,6 +103,12 @@ class ReadingEstimator:
             t = self.tensions_into(np.ascontiguousarray(counts, dtype=float))
             return t, tc.estimate_into(pose, t, float(dt))[1, :6]
         dt = float(dt)
+        a = self._fixed  # the kernel's fixed arguments held together (built again when reset replaced a state)
+        if a is None or self._fsr is not self._fixed_of[0] or tc.st is not self._fixed_of[1] \
+                or self.deadband_counts != self._fixed_of[2]:
+            a = self._fixed = tc.counts_kernel[0](self._fsr, float(self.deadband_counts), self._table, self._t, tc.cab,
+                                                  tc.c, tc.st, tc.kf, tc.turn, tc.coefs, tc.out)
+            self._fixed_of = (self._fsr, tc.st, self.deadband_counts)
         call = self._counts_call  # the kernel bound to the counts' dtype (jit.bind), the other arguments ours
         if type(counts) is np.ndarray and counts.dtype is self._counts_dtype and counts.ndim == 1 \
                 and counts.flags.c_contiguous:
@@ -109,13 +117,10 @@ class ReadingEstimator:
             c = counts if type(counts) is np.ndarray and counts.dtype in _COUNT_DTYPES and counts.ndim == 1 \
                 and counts.flags.c_contiguous else np.ascontiguousarray(counts, dtype=float).reshape(-1)
             if c.dtype is not self._counts_dtype:
-                call = self._counts_call = bind(tc.counts_kernel, c, self._fsr, self.deadband_counts, self._table,
-                                                self._t, pose, dt, tc.cab, tc.c, tc.st, tc.kf, tc.turn, tc.coefs,
-                                                tc.out)
+                call = self._counts_call = bind(tc.counts_kernel[1], c, a, pose, dt)
                 self._counts_dtype = c.dtype
-        # tensions_into and estimate_into in one compiled call (kernel estimate.counts_dynamic)
-        if call(c, self._fsr, self.deadband_counts, self._table, self._t, pose, dt, tc.cab, tc.c, tc.st, tc.kf,
-                tc.turn, tc.coefs, tc.out):
+        # tensions_into and estimate_into in one compiled call (kernel estimate.counts_dynamic_fixed)
+        if call(c, a, pose, dt):
             self._off_table(c, self._t)  # some counts off the table: converted here, then the estimate
             tc.estimate_into(pose, self._t, dt)
         return self._t, tc.out[1, :6]

@@ -41,8 +41,8 @@ from teleop.core.rendering import Renderer
 ESTIMATE_KERNELS = {"non_compensated": K.estimate_non_compensated, "single": K.estimate_capstan,
                     "double": K.estimate_capstan, "dynamic": K.estimate_dynamic}
 # the loop's estimator behind teleop.core.kernels.estimate.counts_tensions in one call (ReadingEstimator.update_arrays;
-# the others make the two calls)
-COUNTS_KERNELS = {"dynamic": K.counts_dynamic}
+# the others make the two calls): the kernel that holds its fixed arguments together, and the one call
+COUNTS_KERNELS = {"dynamic": (K.fixed_dynamic, K.counts_dynamic_fixed)}
 
 
 class TickComputer:

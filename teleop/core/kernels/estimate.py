@@ -26,7 +26,7 @@ import numpy as np
 from teleop.core.kernels import sheath as SH
 from teleop.core.kernels.friction import dahl_step, direction_step
 from teleop.core.kernels.geometry import cable, platform_offsets, wrap_angle
-from teleop.core.kernels.jit import njit
+from teleop.core.kernels.jit import njit, structure
 from teleop.core.kernels.kalman import kalman_update
 from teleop.core.kernels.linalg import horner
 
@@ -192,3 +192,25 @@ def counts_dynamic(counts, fsr, deadband, table, t, pose, dt, cab, c, st, kf, tu
     if missing == 0:
         estimate_dynamic(pose, t, dt, cab, c, st, kf, turn, coefs, out)
     return missing
+
+
+#: counts_dynamic's arguments but the counts, the pose and dt, by name: the estimator's state, tables and buffers
+DYNAMIC_FIXED = ("fsr", "deadband", "table", "t", "cab", "c", "state", "kf", "turn", "coefs", "out")  # state: st
+# counts_dynamic's fixed arguments held together (jit.structure; the type bound here for numba's cache)
+FixedDynamic = structure(__name__, "FixedDynamic", DYNAMIC_FIXED)
+FixedDynamicType = getattr(FixedDynamic, "numba_type", None)
+
+
+@njit
+def fixed_dynamic(fsr, deadband, table, t, cab, c, st, kf, turn, coefs, out):
+    """A FixedDynamic holding counts_dynamic's arguments but the counts, the pose and dt (the same arrays, not
+    copies), for counts_dynamic_fixed; built by a compiled (cached) call."""
+    return FixedDynamic(fsr, deadband, table, t, cab, c, st, kf, turn, coefs, out)
+
+
+@njit
+def counts_dynamic_fixed(counts, a, pose, dt):
+    """counts_dynamic of the counts, the pose and dt with its other arguments in `a` (fixed_dynamic): four
+    arguments for fourteen (a kernel call unboxes each array argument; the loop estimates every robot frame)."""
+    return counts_dynamic(counts, a.fsr, a.deadband, a.table, a.t, pose, dt, a.cab, a.c, a.state, a.kf, a.turn,
+                          a.coefs, a.out)

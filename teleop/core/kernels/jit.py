@@ -146,7 +146,8 @@ def structure(module: str, name: str, fields) -> type:
     Compiled: a numba structure (numba.experimental.structref; its numba type the class `name + "Type"`); build
     it in a kernel (a cached call: calling the class from Python would compile its constructor in every
     process). The caller binds the class, and the type as `name + "Type"`, at the top of `module` (numba's
-    cache pickles the type by reference). Without numba a plain class with those attributes."""
+    cache pickles the type by reference). Without numba a plain class with those attributes. A field may not be
+    named `st` (the name numba's generated constructor gives the structure it builds)."""
     if _numba is None:
         def __init__(self, *values):
             for field_name, value in zip(fields, values):
