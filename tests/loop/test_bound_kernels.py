@@ -71,3 +71,18 @@ def test_counts_of_another_dtype_rebind():
         ref.tensions_into(counts.astype(float))
         t_ref, w_ref = ref._t, ref.tick.estimate_into(np.zeros(6), ref._t, 1e-3)[1, :6]
         assert np.array_equal(t, t_ref) and np.array_equal(w, w_ref)
+
+
+def test_the_estimators_held_arguments_follow_a_reset_and_a_new_dead_band():
+    g = default_geometry()
+    seq = [np.full(6, 400 + 30 * (k % 5), dtype=np.int64) for k in range(12)]
+    used = ReadingEstimator(g, "dynamic")
+    for c in seq:
+        used.update_arrays(c, np.zeros(6), 1e-3)
+    used.reset()  # replaces the FSR and friction states: the held arguments are built again
+    used.deadband_counts = 3.0
+    fresh = ReadingEstimator(g, "dynamic", deadband_counts=3.0)
+    for c in seq:
+        t, w = used.update_arrays(c, np.zeros(6), 1e-3)
+        t_ref, w_ref = fresh.update_arrays(c, np.zeros(6), 1e-3)
+        assert np.array_equal(t, t_ref) and np.array_equal(w, w_ref)
