@@ -5,8 +5,9 @@
     python scripts/benchmarks.py list               # the bench names and their commands
 
 `run` writes docs/benchmarks/<name>.json as {"command", "date", "machine": {"nproc", "cpu", "python"},
-"result": the bench's own JSON}. `render` reads every such file and writes one table per benchmark (the
-figures, then the command, machine and date they come from); a bench without a file is listed as not run.
+"load": the 1-minute load average before and after the run, "result": the bench's own JSON}. `render` reads
+every such file and writes one table per benchmark (the figures, then the command, machine, date and load they
+come from); a bench without a file is listed as not run.
 The figures are read from the result by the functions below; a key a result lacks is left out of its table.
 """
 
@@ -99,7 +100,19 @@ def sim_rows(r: dict) -> list[Row]:
                   ("real-time factor (CPU)", _fmt(r.get("realtime_factor_cpu"), "x", 3)),
                   ("budget", _fmt(r.get("budget_factor"), "x")), ("pass", _fmt(r.get("pass"))),
                   ("batch path real-time factor", _fmt(_get(r, "batch", "realtime_factor"), "x", 3)),
-                  ("trajectory hash", _fmt(_get(r, "trajectory", "hash")))])
+                  ("trajectory sha256", _fmt(_get(r, "trajectory", "sha256")))]
+                 # each stage's time a tick at its median: less moved by other processes than the factors
+                 + [(f"stage {name} p50", _fmt(st["per_tick_us"]["p50"], "us", 3))
+                    for name, st in sorted((r.get("stages") or {}).items(), key=lambda kv: _stage_order(kv[0]))
+                    if isinstance(st, dict) and (st.get("per_tick_us") or {}).get("p50")])
+
+
+SIM_STAGES = ("stylus", "map", "kinematics", "pybullet_step", "physics_other", "cable_sensor", "robot_io", "estimate",
+              "render", "write", "record", "loop_other")  # teleop bench sim's stages in the data flow's order
+
+
+def _stage_order(name: str) -> int:
+    return SIM_STAGES.index(name) if name in SIM_STAGES else len(SIM_STAGES)
 
 
 def _rates(s: dict | None, prefix: str = "") -> list[Row]:
@@ -262,6 +275,11 @@ def machine() -> dict:
     return {"nproc": os.cpu_count(), "cpu": cpu, "python": platform.python_version()}
 
 
+def _load() -> float | None:
+    """The 1-minute load average (None where the system has none)."""
+    return round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None
+
+
 def run(names: list[str]) -> int:
     """Run each named bench with --json and write its wrapped result to docs/benchmarks/<name>.json."""
     DATA.mkdir(parents=True, exist_ok=True)
@@ -273,6 +291,7 @@ def run(names: list[str]) -> int:
             argv = [*bench.args, "--json", str(out)]
             print(f"[{name}] {shlex.join(bench.args)}", flush=True)
             date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+            load0 = _load()
             proc = subprocess.run(argv, cwd=REPO, stdout=subprocess.DEVNULL)
             if proc.returncode != 0 or not out.exists():
                 print(f"[{name}] failed (exit {proc.returncode}); nothing written", file=sys.stderr)
@@ -280,6 +299,8 @@ def run(names: list[str]) -> int:
                 continue
             result = json.loads(out.read_text())
         record = {"command": shlex.join(bench.args), "date": date, "machine": machine(), "result": result}
+        if load0 is not None:  # the machine's load around the run: other processes sharing the cores
+            record["load"] = [load0, _load()]
         (DATA / f"{name}.json").write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
     return status
 
@@ -290,7 +311,9 @@ def render_table(bench: Bench, record: dict) -> str:
     lines = [f"## {bench.name}", "", bench.what[0].upper() + bench.what[1:] + ".", "", "| figure | value |", "|---|---|"]
     lines += [f"| {label} | {value} |" for label, value in bench.rows(record["result"])]
     lines += ["", f"Command: `{record['command']} --json F`; machine: {m.get('nproc')} cores, {m.get('cpu')}, "
-                  f"Python {m.get('python')}; date: {record['date']}.", ""]
+                  f"Python {m.get('python')}; date: {record['date']}"
+              + (f"; load average (1 min) {record['load'][0]:g} before, {record['load'][1]:g} after" if "load" in record
+                 else "") + ".", ""]
     return "\n".join(lines)
 
 
