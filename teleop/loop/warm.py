@@ -41,7 +41,7 @@ from teleop.core.kernels import tap as KTap
 from teleop.core.kernels import tension as KT
 from teleop.core.kernels.geometry import forward_kinematics
 from teleop.core.kernels.safety import all_finite, all_finite2
-from teleop.core.kernels.tap import sim_log_row, tap_row
+from teleop.core.kernels.tap import sim_log, sim_log_row_fixed, tap_row
 from teleop.core.kinematics import FREE_AXIAL, check_lengths, lengths2pose, pose2lengths, poses2lengths, rotation_zyx, \
     structure_matrix
 from teleop.core.mapping import MappingParams
@@ -269,10 +269,11 @@ def _tap(s) -> None:
         tap_row(np.zeros(29 * 16), o, w, 0, 0.0, 0, 0, 0, np.zeros(7, dtype=np.int64), True, 0.0, np.zeros(3),
                 np.zeros(3), np.eye(3), 1, True, True, np.zeros(6), L, True, 0.0, 0, c6, c6, L, 1, 0, True, L,
                 np.zeros(6), np.zeros(6), 0.0, 0.0, 0.0, 0.0, np.zeros(3))
+    logs = sim_log(np.zeros(7, dtype=np.int64), np.zeros((1, 12), dtype=np.int64), np.zeros((1, 6)),
+                   np.zeros((1, n + 1)), np.zeros((1, n), dtype=np.int64))
     for j in (0, -1):  # teleop bench sim's log: a tick with a reading and one without
-        sim_log_row(0, 0, np.zeros(7, dtype=np.int64), 0, 0, 0, 0, np.zeros((1, 12), dtype=np.int64), np.zeros(3),
-                    np.zeros(3), np.zeros((1, 6)), j, L, np.zeros(n, dtype=np.int64), np.zeros(6),
-                    np.zeros((1, n + 1)), np.zeros((1, n), dtype=np.int64))
+        sim_log_row_fixed(0, 0, logs, 0, 0, 0, 0, np.zeros(3), np.zeros(3), j, L, np.zeros(n, dtype=np.int64),
+                          np.zeros(6))
 
 
 def _around(s) -> None:

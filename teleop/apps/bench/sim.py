@@ -68,7 +68,7 @@ from teleop.apps.argtypes import add_geometry_option, geometry_of, input_file
 from teleop.core.errors import InputError
 from teleop.core.geometry import Geometry
 from teleop.core.kernels.jit import bind
-from teleop.core.kernels.tap import sim_log_row
+from teleop.core.kernels.tap import sim_log, sim_log_row_fixed
 from teleop.core.mapping import POKE_WORKSPACE_MAX, MappingParams
 from teleop.io.outputs import write_json
 from teleop.loop import LoopParams, State, Teleop
@@ -243,18 +243,19 @@ def bench_sim(seconds: float = 60.0, seed: int = 0, pad: str = "z60", substeps: 
                 t0 = pc()
                 x = tp.tick(clock_t[0])
                 t1 = pc()
-                # the tick's row of every log in one compiled call (kernel tap.sim_log_row)
+                # the tick's row of every log in one compiled call (kernel tap.sim_log_row_fixed: the logs held
+                # together, tap.sim_log)
                 r = x.reading
                 if log_row is None:  # the log's kernel bound to its argument types (jit.bind): the bench's arrays
-                    log_row = bind(sim_log_row, k, t1 - t0, tp.stage_ns, ka[0], pa[0], sa[0], ra[0], ns_log,
-                                   stylus.p, x.F, pF_log, -1, no_L, no_counts, no_L, Lf_log, counts_log)
+                    logs = sim_log(tp.stage_ns, ns_log, pF_log, Lf_log, counts_log)
+                    log_row = bind(sim_log_row_fixed, k, t1 - t0, logs, ka[0], pa[0], sa[0], ra[0], stylus.p, x.F, -1,
+                                   no_L, no_counts, no_L)
                 if r is not None:
-                    log_row(k, t1 - t0, tp.stage_ns, ka[0], pa[0], sa[0], ra[0], ns_log, stylus.p, x.F, pF_log, j,
-                            r.commanded_lengths, r.fsr_counts, r.wrench_truth, Lf_log, counts_log)
+                    log_row(k, t1 - t0, logs, ka[0], pa[0], sa[0], ra[0], stylus.p, x.F, j, r.commanded_lengths,
+                            r.fsr_counts, r.wrench_truth)
                     j += 1
                 else:
-                    log_row(k, t1 - t0, tp.stage_ns, ka[0], pa[0], sa[0], ra[0], ns_log, stylus.p, x.F, pF_log, -1,
-                            no_L, no_counts, no_L, Lf_log, counts_log)
+                    log_row(k, t1 - t0, logs, ka[0], pa[0], sa[0], ra[0], stylus.p, x.F, -1, no_L, no_counts, no_L)
                 enabled += tp.state == enabled_state
             wall_ns, cpu = pc() - wall0, time.process_time() - cpu0
         finally:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from teleop.core.kernels.jit import njit
+from teleop.core.kernels.jit import njit, structure
 
 # the signals' order in `o` (teleop.loop.tap.COLUMNS names them)
 (TICK, T, STATE, LATENESS, TICK_US, STAGES, T_DEVICE, CP, CV, ORIENT, BUTTONS, PRESENT, COMMANDED, SETPOINT, JP, NEW,
@@ -114,3 +114,24 @@ def sim_log_row(k, tick_ns, stage_ns, sub0, sub1, sub2, sub3, ns_log, p, F, pF_l
             Lf_log[j, i] = L[i]
             counts_log[j, i] = counts[i]
         Lf_log[j, n] = -wrench[2]
+
+
+#: sim_log_row's arguments that stay the same arrays tick after tick, by name: the tick's stage timers, the logs
+SIM_LOG_FIXED = ("stage_ns", "ns_log", "pF_log", "Lf_log", "counts_log")
+# sim_log_row's fixed arguments held together (jit.structure; the type bound here for numba's cache)
+SimLog = structure(__name__, "SimLog", SIM_LOG_FIXED)
+SimLogType = getattr(SimLog, "numba_type", None)
+
+
+@njit
+def sim_log(stage_ns, ns_log, pF_log, Lf_log, counts_log):
+    """A SimLog holding sim_log_row's fixed arguments (the same arrays, not copies), for sim_log_row_fixed; built by
+    a compiled (cached) call."""
+    return SimLog(stage_ns, ns_log, pF_log, Lf_log, counts_log)
+
+
+@njit
+def sim_log_row_fixed(k, tick_ns, a, sub0, sub1, sub2, sub3, p, F, j, L, counts, wrench):
+    """sim_log_row with its fixed arguments in `a` (sim_log): one argument for five."""
+    sim_log_row(k, tick_ns, a.stage_ns, sub0, sub1, sub2, sub3, a.ns_log, p, F, a.pF_log, j, L, counts, wrench,
+                a.Lf_log, a.counts_log)
