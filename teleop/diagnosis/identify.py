@@ -57,7 +57,8 @@ MIN_FIT_RATE_DT = 0.01  # ... but never decimated below 100 Hz (reversal timing)
 
 def record(d: LinkData) -> LinkRecord:
     """What an effect's rules (physics Rules) read of link data d."""
-    return LinkRecord(d.u, d.y, d.x, d.theta, d.temperature, d.u if d.link.through_spring else d.y, d.resolution_s)
+    return LinkRecord(d.u, d.y, d.x, d.theta, d.temperature, d.u if d.link.through_spring else d.y, d.resolution_s,
+                      d.load)
 
 
 def fixed_params(d: LinkData, name: str, general: bool = False, direction: float = 1.0) -> dict:
@@ -729,20 +730,22 @@ def general_form(d: LinkData, pick: Fit, added: list, fit_idx: slice, hold_idx: 
 def _alone_pays(d: LinkData, f: Fit, pick: Fit, free: tuple, fit_idx: slice, hold_idx: slice, seed: int) -> Fit:
     """The general form `f` (shape parameters `free` fitted from `pick`), or, where a freed parameter that
     must pay on its own (ParamSpec.alone) does not (the form refitted with it at its default is within
-    PARSIMONY of `f` on held-out data, and pays over `pick` as a general form must), that refit."""
+    PARSIMONY of `f` on held-out data, and pays over `pick` as a general form must), that refit; a parameter
+    dropped so stays held at its default in the next one's refit."""
+    dropped = ()
     for key in free:
         name, par = key.split(".", 1)
         spec = get_effect(name).spec(par)
         if not spec.alone or dict(f.model.effects)[name][par] == spec.default:
             continue
-        rest = tuple(k for k in free if k != key)
+        rest = tuple(k for k in free if k != key and k not in dropped)
         try:
             g = fit_chain(d, pick.model, (), fit_idx, hold_idx, seed=seed, free_shape=rest) if rest else pick
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             continue
         pays = g.rmse_hold * (1 + PARSIMONY) <= pick.rmse_hold and delta_bic(g, pick) < 0
         if pays and g.rmse_hold <= f.rmse_hold * (1 + PARSIMONY) and not g.at_bound:
-            f = g
+            f, dropped = g, dropped + (key,)
     return f
 
 

@@ -14,9 +14,9 @@ the diagnosis names, the sheath's friction coefficient its baseline capstan fits
 play it fits on the position link against the dead zone of Kaneko's closed form at the mean tip tension
 (`dead_zone_uniform` over the bent length BENT L, where the friction is: the straight rest carries the tip's
 tension on either branch and adds no dead zone; it grows with the tension) and, where the play's general form grows with the tension
-(backlash's `tension`: under a spring the tip position is the tension), its width at the 5th and 95th
-percentile of the tip tension against Kaneko's there, and per channel the held-out RMSE over the noise the
-case added (the noise floor).
+(backlash's `tension`: under a spring the tip position is the tension; its `load_tension`: under an
+external force the recorded tip force), its width at the 5th and 95th percentile of the tip tension against
+Kaneko's there, and per channel the held-out RMSE over the noise the case added (the noise floor).
 """
 
 from __future__ import annotations
@@ -175,13 +175,22 @@ def input_floor(rec, noise: dict) -> float:
 
 def play_against_kaneko(finding: dict, rec, setup: dict, load: str) -> dict:
     """A backlash finding on tip_pos against Kaneko's dead zone: its width in motor travel [m] (`width_input`,
-    else the tip's) over `dead_zone_uniform` at the mean tip tension; where its width grows with the tension
-    (`tension`) under a spring, also its width at the tip positions of the 5th and 95th percentile tip
-    tension (the spring law fitted on the recording) over Kaneko's there."""
+    else the tip's) over `dead_zone_uniform` at the mean tip tension; where its width grows with the tension,
+    also its width at the 5th and 95th percentile tip tension over Kaneko's there: under a spring through
+    the tip's position (`tension`; the spring law fitted on the recording gives the position of each
+    tension), under an external force through the recorded tip force itself (`load_tension`)."""
     p = finding["params"]
     w = float(p.get("width_input", p["width"])["value"])
     out = {"play_width_m": w, "dead_zone_mean_m": setup["dead_zone_mean_m"],
            "play_over_dead_zone": w / max(setup["dead_zone_mean_m"], 1e-300)}
+    if "load_tension" in p and load != "spring" and "tip_force" in rec.channels:
+        c, ref = float(p["load_tension"]["value"]), float(p["load"]["value"])
+        q = np.percentile(rec.channels["tip_force"], [5, 95])
+        wq = w * np.maximum(1.0 + c * (np.abs(q) - ref) / max(ref, 1e-300), 0.0)
+        out["play_load_tension"] = c
+        out["play_width_range_m"] = [float(v) for v in wq]
+        out["play_over_dead_zone_range"] = [float(a / max(b, 1e-300))
+                                            for a, b in zip(wq, setup["dead_zone_range_m"])]
     if "tension" in p and load == "spring" and "tip_force" in rec.channels:
         ch = rec.channels
         tension, ref = float(p["tension"]["value"]), float(p["x_ref"]["value"])

@@ -26,8 +26,18 @@ solved in closed form (kernels.tension_play); Kaneko's tension = 1 / (x_ref - th
 the tip position this is the quasi-static distributed model itself, not an approximation of it: the tip
 moves only on a branch where the whole profile slides, and there its stretch is that branch's.
 
-With elastic = tail = grow = tension = start = 0 it is the plain play. The physics is one step kernel
-(kernels.tension_play.backlash_step: the plain play kernels.effects.plain_play_step, or the general one over
+Load tension (a tendon pulling an external force: the tension is no function of the tip's position): where
+the link records the tip load T (the `load` channel: the tip force), the main play's half-width grows with
+its magnitude, width / 2 (1 + load_tension (|T| - load) / load), `load` the magnitude at which it is `width`
+(a fit holds it at the record's mean |T|; where no load is recorded it stands in for it, and nothing grows).
+Kaneko's dead zone is proportional to the cable's tension, the load plus any pretension P: load_tension =
+load / (load + P), within [0, 1] (1: no pretension); a dead zone shrinking with the load is no sheath's. The
+spring's `tension` is the special case where the tip's position is the only proxy of T: both enter one
+half-width, r1 (1 + load_tension (|T| - load) / load + tension (z - x_ref)), one closed form. The elastic
+stretch common to both branches (linear in T) is cable_compliance's, not the play's.
+
+With elastic = tail = grow = tension = load_tension = start = 0 it is the plain play. The physics is one
+step kernel (kernels.tension_play.backlash_step: the plain play kernels.effects.plain_play_step, or the general one over
 kernels.friction.play_mix_step); the array form is the catalogue's driver loop over it.
 """
 
@@ -51,7 +61,8 @@ def backlash(x: np.ndarray, width: float, y0: float | None = None) -> np.ndarray
     play's position before x[0] at y0 (default: x[0])."""
     x = np.asarray(x, dtype=float)
     state = np.array([np.nan if y0 is None else float(y0), np.nan])
-    return drive_kernel(KERNEL, state, x.reshape(-1, 1), pack(BACKLASH.check({"width": width})))
+    p = BACKLASH.check({"width": width})
+    return drive_kernel(KERNEL, state, np.column_stack([x, np.full(x.shape, p["load"])]), pack(p))
 
 
 def mix_layout(p: Mapping[str, float]) -> tuple[float, float, float, float]:
@@ -64,15 +75,17 @@ def mix_layout(p: Mapping[str, float]) -> tuple[float, float, float, float]:
 def is_plain(p: Mapping[str, float]) -> bool:
     """True when the general form's parameters are all at the plain play's values."""
     return (p["elastic"] == 0.0 and p["tail"] == 0.0 and p["grow"] == 0.0 and p["start"] == 0.0
-            and p["tension"] == 0.0)
+            and p["tension"] == 0.0 and p["load_tension"] == 0.0)
 
 
 def pack(p: Mapping[str, float]) -> tuple:
     """The step kernel's parameters (kernels.tension_play.backlash_step): mix_layout, grow, start, x_ref,
-    whether the form is plain (fixed with the parameters: decided once, not per sample) and b = width
-    tension / 2 (within +-TENSION_B_MAX)."""
+    whether the form is plain (fixed with the parameters: decided once, not per sample), b = width
+    tension / 2 (within +-TENSION_B_MAX), c = load_tension / load [1/N] (0 at a zero load) and the load's
+    reference magnitude."""
     b = min(max(0.5 * p["width"] * p["tension"], -TENSION_B_MAX), TENSION_B_MAX)
-    return mix_layout(p) + (p["grow"], p["start"], p["x_ref"], float(is_plain(p)), b)
+    c = p["load_tension"] / p["load"] if p["load"] > 0 else 0.0
+    return mix_layout(p) + (p["grow"], p["start"], p["x_ref"], float(is_plain(p)), b, c, p["load"])
 
 
 KERNEL = Kernel(backlash_step, backlash_run, state=(np.nan, np.nan), pack=pack)
@@ -98,6 +111,13 @@ PARAMS = (ParamSpec("width", "m", 1e-8, 100.0, 5e-4, "total play (dead band) wid
                     "with its position z (a spring's tension; Kaneko: 1 / (x_ref - the slack tip position); 1/rad "
                     "for a rotary joint; general form)", shape=True, log=True, tiny=1.0,
                     alone=True),
+          ParamSpec("load_tension", "1", 0.0, 2.0, 0.0, "the main play's width grows as (1 + load_tension "
+                    "(|T| - load) / load) with the tip load T the link records (an external force's tension; "
+                    "Kaneko: load / (load + the cable's pretension), 1 without one; general form)", shape=True,
+                    alone=True),
+          ParamSpec("load", "N", 0.0, 1e9, 0.0, "the tip load's magnitude at which the main play is `width` wide "
+                    "(fits hold it at the record's mean |load|); where the link records no load it stands in "
+                    "for it (N m for a torque; general form)", shape=True),
           ParamSpec("start", "1", -1.0, 1.0, 0.0, "where in its band the play began (-1 .. 1, 0 centred; "
                     "general form)", shape=True, state=True))
 
@@ -118,8 +138,10 @@ class BacklashStep(KernelStep):
 
 
 def _hold(rec, known, direction) -> dict:
-    """The general form's width (and its growth with the tension) refers to the record's mean tip position."""
-    return {"x_ref": float(np.mean(rec.tip))}
+    """The general form's width (and its growth with the tension) refers to the record's mean tip position
+    and its mean load magnitude (none recorded: 0, where the stand-in load gives no growth)."""
+    return {"x_ref": float(np.mean(rec.tip)),
+            "load": float(np.mean(np.abs(rec.load))) if rec.load is not None else 0.0}
 
 
 BACKLASH = register(Effect(
@@ -127,9 +149,10 @@ BACKLASH = register(Effect(
     link="position",
     doc="play operator: tip = clamp(tip_prev, motor - width/2, motor + width/2); general form: an elastic "
         "part, a wider slow play, a lag growing with position and a dead zone growing with the tension "
-        "(a tendon in a sheath)",
+        "(the tip's position under a spring, the recorded tip load under a force: a tendon in a sheath)",
     params=PARAMS,
     inputs=("x",),
+    optional=("load",),
     output="x",
     guess=_guess,
     kernel=KERNEL,

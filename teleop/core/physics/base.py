@@ -282,7 +282,8 @@ class LinkRecord:
     """What an effect's diagnosis rules read of one link's recording: (n,) arrays in SI units, None where
     the channel is not recorded. u, y: the link's input and output; x: the drive position; tip: the tip's
     travel (the link's output, or its input where the tip is read through a spring); resolution_s [s]: the
-    shortest time scale the inputs resolve."""
+    shortest time scale the inputs resolve; load: the link's load channel (a position link's tip force),
+    None where it has none."""
 
     u: np.ndarray
     y: np.ndarray
@@ -291,6 +292,7 @@ class LinkRecord:
     temperature: np.ndarray | None
     tip: np.ndarray
     resolution_s: float = 0.0
+    load: np.ndarray | None = None
 
 
 def moves(x: np.ndarray) -> np.ndarray:
