@@ -31,9 +31,11 @@ def arduino_build(tmp_path_factory):
     return build.build_firmware(out), build.build_harness(out)
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def mega(arduino_build):
-    """One emulated Mega2560 running the firmware for the whole session."""
+    """One emulated Mega2560 running the firmware for this directory's tests, stopped after them: a running
+    emulator keeps taking CPU (it paces the firmware against the wall clock, waking every 50 us of emulated
+    time) from the rest of the suite."""
     elf, harness = arduino_build
     with EmulatedMega(harness, elf) as emulated:
         yield emulated
