@@ -352,6 +352,7 @@ class SimRobot(ContextDevice):
         self._fixed_fsr = None if self._fused_fsr is None else fixed_fsr(*self._fused_fsr)
         self._bound_fsr = self._bound_cables = self._bound_counts = None  # read's kernel, bound at the first reading
         self._dt = p.dt  # [s] a reading's period (read's: a property call less)
+        self._noisy = p.noise_counts > 0  # ADC noise drawn (read's: _noise_row's test)
         self._n, self._substeps = n, p.substeps  # cables, physics steps a reading (read's: lookups less)
         self.is_open = True
 
@@ -417,7 +418,11 @@ class SimRobot(ContextDevice):
                                     self._substeps)
         n = self._n
         t_tip, f, steps, counts = np.empty(n), np.empty(6), np.empty(n, np.int64), np.empty(n, np.int64)
-        noise, k = self._noise_row()  # this reading's ADC noise [counts]: noise[k]
+        noise, k = self._nbuf, self._nbuf_i  # this reading's ADC noise [counts]: noise[k] (_noise_row written out)
+        if self._noisy and k < len(noise):
+            self._nbuf_i = k + 1
+        else:
+            noise, k = self._noise_row()
         fused = self._fused
         if fused is not None:  # the distributed cable and its FSRs in the same call (kernel reading_cables)
             out = np.empty((fused[-1], n))  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
@@ -491,12 +496,13 @@ class SimRobot(ContextDevice):
         fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + self._dt)  # distal FBGs (sim_sensors)
         self.t += self._dt
         self.seq += 1
-        extras = {"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose.copy()}
+        # the pose and the commanded lengths as they are, no copies: the robot replaces those arrays (a new array
+        # each command, each pose that moved) and never writes one in place
+        extras = {"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose}
         if t_motor is not None:
             extras["t_motor"] = t_motor
-        return RobotReading(t=self.t, seq=self.seq, fsr_counts=counts, position_steps=steps,
-                            commanded_lengths=self.L_cmd.copy(), status=_STATUS[self.stopped],
-                            boot_id=self.boot_id, wrench_truth=f, fbg_pm=fbg, extras=extras)
+        return RobotReading(self.t, self.seq, counts, steps, self.L_cmd, _STATUS[self.stopped], self.boot_id, f,
+                            extras, fbg)
 
     def _noise_row(self) -> tuple:
         """(block, k): the next row of ADC noise [counts] is block[k] (the row _noise_rows(1)[0] would be, without

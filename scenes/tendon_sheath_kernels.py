@@ -31,9 +31,11 @@ Arrays of c cables (the TendonSheath's, written in place):
     out (O_ROWS + taps, c)  a tick's motor force [N], tip load force [N], tip travel [m], Newton iterations,
                          then the tension [N] at each tap (a sensor there): an element's tension, or at a node
                          the tension between its two elements' (`node_tension`)
-How the cables share a step: one after the other, each iterating until its own convergence (a cable's numbers
-do not depend on the others'), with the sweeps' carried values in registers (running them in lockstep, node by
-node across cables, carried those values through memory and was slower).
+How the cables share a step: each iterates until its own convergence (a cable's numbers do not depend on the
+others'), GROUP cables at a time through the same Newton sweeps, node by node, each one's carried values in
+registers (`cables_step`: the CPU overlaps the group's chains of dependent operations; the numbers are those of
+one cable after the other, operation for operation). A lockstep over all cables whose carried values went
+through memory was slower.
 Compiled with IEEE division (jit.njit ieee_division: no zero test per division in the Newton sweeps; every
 divisor here is nonzero by construction, and a non-finite tension would reach the loop's finiteness checks).
 """
@@ -146,6 +148,42 @@ def node_tension_rows(T, j, bl, br, out):
 
 
 @njit(ieee_division=True)
+def node_row(Tl, al, Tr, ar, bl, br, mi, x, zi, izs, vi, h, cf, s1h, s2h):
+    """A node's residual R_i [N], its Jacobian's diagonal d [N/m] and friction coefficient phi [-] (without a
+    tip load): tensions Tl, Tr [N] and stiffnesses al, ar [N/m] of the elements before and after it, their
+    bends bl, br [rad], the node's inertia mi [N/m], step x = du_i [m], bristle state zi [m], 1 / zs izs
+    [1/m], last step's velocity vi [m/s]."""
+    zn, dz = bristle(zi, x, izs)
+    phi = cf * zn - s1h * zi + s2h * x
+    dphi = cf * max(dz, 0.0) + s2h
+    n = 0.5 * (Tl * bl + Tr * br)  # normal force n'_i
+    res = mi * (x - h * vi) - Tl + Tr + n * phi
+    d = mi + al + ar + n * dphi + 0.5 * phi * (br * ar - bl * al)
+    return res, d, phi
+
+
+@njit(ieee_division=True)
+def eliminate(res, d, phi, al, ar, bl, br, cp, rp):
+    """The node's row eliminated against the row before it (Thomas algorithm, forward): (cp, rp) of this
+    row from the last row's (cp, rp)."""
+    lo = -al * (1.0 - 0.5 * phi * bl)
+    iden = 1.0 / (d - lo * cp)
+    return -ar * (1.0 + 0.5 * phi * br) * iden, (-res - lo * rp) * iden
+
+
+@njit(ieee_division=True)
+def kinked(x, dn):
+    """The Newton step s [m] of a node at step x [m] whose solved delta is dn [m]: dn, or -x when dn would
+    carry x across 0 (friction's kink: it stops on it)."""
+    if (x > 0.0 and x + dn < 0.0) or (x < 0.0 and x + dn > 0.0):
+        return -x
+    return dn
+
+
+GROUP = 3  # cables whose Newton sweeps run interleaved (independent chains of operations for the CPU to overlap)
+
+
+@njit(ieee_division=True)
 def cables_step(S, cab, p, h):
     """One backward-Euler step h [s] of every cable: cab[:, C_DU0] the motor's travel over the step [m],
     cab[:, C_A] f_ext [N] (MODE_SPRING) or the tip's travel over the step [m] (MODE_POSITION), S[S_B] the
@@ -153,11 +191,15 @@ def cables_step(S, cab, p, h):
     and tip load force [N] in cab[:, C_FM], cab[:, C_FL] and adds the Newton iterations to cab[:, C_IT].
 
     A Newton iteration is two sweeps over the nodes: the first evaluates node i's tensions, friction and
-    residual and eliminates its row at once (Thomas algorithm, forward), the second substitutes back and
-    updates du. The Stribeck curve, fixed over the step, is evaluated once a node and step (as 1 / zs).
-    After the last update one sweep takes the tensions and bristle states at the converged du.
-    One cable after the other, each iterating until its own convergence (the sweeps' carried values stay
-    in registers)."""
+    residual (`node_row`) and eliminates its row at once (Thomas algorithm, forward: `eliminate`), the second
+    substitutes back and updates du (`kinked`). The Stribeck curve, fixed over the step, is evaluated once a
+    node and step (as 1 / zs). After the last update one sweep takes the tensions and bristle states at the
+    converged du.
+    Each cable iterates until its own convergence (a cable's numbers do not depend on the others'). The cables
+    go GROUP at a time through the same sweeps, node by node, each one's carried values in registers: a
+    cable's sweep is one chain of dependent operations (a division a node), and the CPU overlaps the chains
+    of the group's cables; a cable that has converged sits out its group's further iterations. The arrays are
+    indexed in place (S[row, c, i]; no views: a view costs two reference count updates)."""
     nc = S.shape[1]
     N = S.shape[2] - 1
     k = p[P_K]
@@ -169,6 +211,7 @@ def cables_step(S, cab, p, h):
     cf = s0 + s1h
     ih = 1.0 / h
     mh = p[P_M] / (h * h)  # an interior node's inertia per travel over the step [N/m]
+    mt = 0.5 * mh  # the tip node's
     mu_c, mu_s, v_s = p[P_MU_C], p[P_MU_S], p[P_V_S]
     izs_c = s0 / mu_c if mu_c > 0.0 else 0.0
     v_peak = STRIBECK_SPAN * v_s  # past it g(v) = mu_c (stribeck_curve)
@@ -177,96 +220,130 @@ def cables_step(S, cab, p, h):
     spring = int(p[P_MODE]) == MODE_SPRING
     last = N if spring else N - 1
     for c in range(nc):
-        # this cable's rows: travel, velocity, bristle state, step, 1 / zs, the eliminated upper diagonal and
-        # right-hand side (then the element tensions), bends
-        u, v, z, du, izs = S[S_U, c], S[S_V, c], S[S_Z, c], S[S_DU, c], S[S_IZS, c]
-        cpv, rv, b = S[S_CP, c], S[S_R, c], S[S_B, c]
-        t0 = cab[c, C_T0]
-        fa = cab[c, C_A]
-        du[0] = cab[c, C_DU0]
+        S[S_DU, c, 0] = cab[c, C_DU0]
         if not spring:
-            du[N] = fa
+            S[S_DU, c, N] = cab[c, C_A]
         for i in range(N + 1):
+            vi = S[S_V, c, i]
             if 0 < i <= last:
-                du[i] = h * v[i]  # predictor: the last step's velocity
+                S[S_DU, c, i] = h * vi  # predictor: the last step's velocity
             # 1 / zs: sigma0 / mu_c past the Stribeck peak (no division there: most nodes, most steps)
-            if abs(v[i]) > v_peak:
-                izs[i] = izs_c
+            if abs(vi) > v_peak:
+                S[S_IZS, c, i] = izs_c
             else:
-                g = stribeck_curve(v[i], mu_c, mu_s, v_s)
-                izs[i] = s0 / g if g > 0.0 else 0.0
-        its = 0
-        while True:
-            # forward sweep: node i's residual R_i and its row of the tridiagonal Jacobian, eliminated at once;
-            # the first element's tension starts it
-            Tl, al = taut(t0, k, u[0] + du[0] - u[1] - du[1])
-            cp = 0.0
-            rp = 0.0
-            for i in range(1, last + 1):
-                bl = b[i - 1]
-                if i < N:
-                    Tr, ar = taut(t0, k, u[i] + du[i] - u[i + 1] - du[i + 1])
-                    br = b[i]
-                    mi = mh
-                else:
-                    Tr = 0.0
-                    ar = 0.0
-                    br = 0.0
-                    mi = 0.5 * mh
-                x = du[i]
-                zi = z[i]
-                zn, dz = bristle(zi, x, izs[i])
-                phi = cf * zn - s1h * zi + s2h * x
-                dphi = cf * max(dz, 0.0) + s2h
-                n = 0.5 * (Tl * bl + Tr * br)  # normal force n'_i
-                res = mi * (x - h * v[i]) - Tl + Tr + n * phi
-                d = mi + al + ar + n * dphi + 0.5 * phi * (br * ar - bl * al)
-                if i == N:  # MODE_SPRING: the load on the tip node
-                    res += kl * (u[N] + x - rest) + fa
-                    d += kl
-                lo = -al * (1.0 - 0.5 * phi * bl)
-                iden = 1.0 / (d - lo * cp)
-                cp = -ar * (1.0 + 0.5 * phi * br) * iden
-                rp = (-res - lo * rp) * iden
-                cpv[i] = cp
-                rv[i] = rp
-                Tl = Tr
-                al = ar
-            # back substitution (the ends' travel is known: their delta is 0); a step that would carry du
-            # across 0 (friction's kink) stops on it
-            big = 0.0
-            dn = 0.0
+                g = stribeck_curve(vi, mu_c, mu_s, v_s)
+                S[S_IZS, c, i] = s0 / g if g > 0.0 else 0.0
+    for c0 in range(0, nc, GROUP):
+        # the group's cables (a missing one repeats the first and is never active)
+        c1 = c0 + 1 if c0 + 1 < nc else c0
+        c2 = c0 + 2 if c0 + 2 < nc else c0
+        a0, a1, a2 = True, c0 + 1 < nc, c0 + 2 < nc
+        t00, t01, t02 = cab[c0, C_T0], cab[c1, C_T0], cab[c2, C_T0]
+        it0 = it1 = it2 = 0
+        while a0 or a1 or a2:
+            # forward sweeps: the first element's tension starts each
+            Tl0, al0 = taut(t00, k, S[S_U, c0, 0] + S[S_DU, c0, 0] - S[S_U, c0, 1] - S[S_DU, c0, 1])
+            Tl1, al1 = taut(t01, k, S[S_U, c1, 0] + S[S_DU, c1, 0] - S[S_U, c1, 1] - S[S_DU, c1, 1])
+            Tl2, al2 = taut(t02, k, S[S_U, c2, 0] + S[S_DU, c2, 0] - S[S_U, c2, 1] - S[S_DU, c2, 1])
+            cp0 = rp0 = cp1 = rp1 = cp2 = rp2 = 0.0
+            for i in range(1, N):  # interior nodes
+                if a0:
+                    Tr, ar = taut(t00, k, S[S_U, c0, i] + S[S_DU, c0, i] - S[S_U, c0, i + 1] - S[S_DU, c0, i + 1])
+                    bl, br = S[S_B, c0, i - 1], S[S_B, c0, i]
+                    res, d, phi = node_row(Tl0, al0, Tr, ar, bl, br, mh, S[S_DU, c0, i], S[S_Z, c0, i],
+                                           S[S_IZS, c0, i], S[S_V, c0, i], h, cf, s1h, s2h)
+                    cp0, rp0 = eliminate(res, d, phi, al0, ar, bl, br, cp0, rp0)
+                    S[S_CP, c0, i] = cp0
+                    S[S_R, c0, i] = rp0
+                    Tl0, al0 = Tr, ar
+                if a1:
+                    Tr, ar = taut(t01, k, S[S_U, c1, i] + S[S_DU, c1, i] - S[S_U, c1, i + 1] - S[S_DU, c1, i + 1])
+                    bl, br = S[S_B, c1, i - 1], S[S_B, c1, i]
+                    res, d, phi = node_row(Tl1, al1, Tr, ar, bl, br, mh, S[S_DU, c1, i], S[S_Z, c1, i],
+                                           S[S_IZS, c1, i], S[S_V, c1, i], h, cf, s1h, s2h)
+                    cp1, rp1 = eliminate(res, d, phi, al1, ar, bl, br, cp1, rp1)
+                    S[S_CP, c1, i] = cp1
+                    S[S_R, c1, i] = rp1
+                    Tl1, al1 = Tr, ar
+                if a2:
+                    Tr, ar = taut(t02, k, S[S_U, c2, i] + S[S_DU, c2, i] - S[S_U, c2, i + 1] - S[S_DU, c2, i + 1])
+                    bl, br = S[S_B, c2, i - 1], S[S_B, c2, i]
+                    res, d, phi = node_row(Tl2, al2, Tr, ar, bl, br, mh, S[S_DU, c2, i], S[S_Z, c2, i],
+                                           S[S_IZS, c2, i], S[S_V, c2, i], h, cf, s1h, s2h)
+                    cp2, rp2 = eliminate(res, d, phi, al2, ar, bl, br, cp2, rp2)
+                    S[S_CP, c2, i] = cp2
+                    S[S_R, c2, i] = rp2
+                    Tl2, al2 = Tr, ar
+            if spring:  # the tip node, the load on it: k_load (u_N - rest) + f_ext
+                for c, a, Tl, al in ((c0, a0, Tl0, al0), (c1, a1, Tl1, al1), (c2, a2, Tl2, al2)):
+                    if a:
+                        x = S[S_DU, c, N]
+                        res, d, phi = node_row(Tl, al, 0.0, 0.0, S[S_B, c, N - 1], 0.0, mt, x, S[S_Z, c, N],
+                                               S[S_IZS, c, N], S[S_V, c, N], h, cf, s1h, s2h)
+                        res += kl * (S[S_U, c, N] + x - rest) + cab[c, C_A]
+                        d += kl
+                        cp = S[S_CP, c, N - 1]
+                        rp = S[S_R, c, N - 1]
+                        cp, rp = eliminate(res, d, phi, al, 0.0, S[S_B, c, N - 1], 0.0, cp, rp)
+                        S[S_CP, c, N] = cp
+                        S[S_R, c, N] = rp
+            # back substitutions (the ends' travel is known: their delta is 0)
+            dn0 = dn1 = dn2 = big0 = big1 = big2 = 0.0
             for i in range(last, 0, -1):
-                dn = rv[i] - cpv[i] * dn
-                x = du[i]
-                s = dn
-                if (x > 0.0 and x + s < 0.0) or (x < 0.0 and x + s > 0.0):
-                    s = -x
-                du[i] = x + s
-                big = max(big, abs(s))
-            its += 1
-            if big < tol or its >= max_iter:
-                break
-        cab[c, C_IT] += its
+                if a0:
+                    dn0 = S[S_R, c0, i] - S[S_CP, c0, i] * dn0
+                    x = S[S_DU, c0, i]
+                    s = kinked(x, dn0)
+                    S[S_DU, c0, i] = x + s
+                    big0 = max(big0, abs(s))
+                if a1:
+                    dn1 = S[S_R, c1, i] - S[S_CP, c1, i] * dn1
+                    x = S[S_DU, c1, i]
+                    s = kinked(x, dn1)
+                    S[S_DU, c1, i] = x + s
+                    big1 = max(big1, abs(s))
+                if a2:
+                    dn2 = S[S_R, c2, i] - S[S_CP, c2, i] * dn2
+                    x = S[S_DU, c2, i]
+                    s = kinked(x, dn2)
+                    S[S_DU, c2, i] = x + s
+                    big2 = max(big2, abs(s))
+            if a0:
+                it0 += 1
+                a0 = not (big0 < tol or it0 >= max_iter)
+            if a1:
+                it1 += 1
+                a1 = not (big1 < tol or it1 >= max_iter)
+            if a2:
+                it2 += 1
+                a2 = not (big2 < tol or it2 >= max_iter)
+        cab[c0, C_IT] += it0
+        if c1 != c0:
+            cab[c1, C_IT] += it1
+        if c2 != c0:
+            cab[c2, C_IT] += it2
+    for c in range(nc):
         # the converged step: tensions, friction of the motor node (it adds to the motor's force: the proximal
         # gauge between motor and sheath) and of the tip node (the reaction of a held tip), the state
+        t0 = cab[c, C_T0]
         for j in range(N):
-            rv[j] = taut(t0, k, u[j] + du[j] - u[j + 1] - du[j + 1])[0]
-        du0 = du[0]
-        z0 = bristle(z[0], du0, izs[0])[0]
-        cab[c, C_FM] = rv[0] * (1.0 + 0.5 * b[0] * (cf * z0 - s1h * z[0] + s2h * du0))
+            S[S_R, c, j] = taut(t0, k, S[S_U, c, j] + S[S_DU, c, j] - S[S_U, c, j + 1] - S[S_DU, c, j + 1])[0]
+        du0, zm = S[S_DU, c, 0], S[S_Z, c, 0]
+        z0 = bristle(zm, du0, S[S_IZS, c, 0])[0]
+        cab[c, C_FM] = S[S_R, c, 0] * (1.0 + 0.5 * S[S_B, c, 0] * (cf * z0 - s1h * zm + s2h * du0))
+        duN, zN = S[S_DU, c, N], S[S_Z, c, N]
         if spring:
-            cab[c, C_FL] = kl * (u[N] + du[N] - rest) + fa
+            cab[c, C_FL] = kl * (S[S_U, c, N] + duN - rest) + cab[c, C_A]
         else:
-            zN = bristle(z[N], du[N], izs[N])[0]
-            phiN = cf * zN - s1h * z[N] + s2h * du[N]
-            Tt = rv[N - 1]
-            cab[c, C_FL] = Tt - 0.5 * Tt * b[N - 1] * phiN - 0.5 * mh * (du[N] - h * v[N])
+            zt = bristle(zN, duN, S[S_IZS, c, N])[0]
+            phiN = cf * zt - s1h * zN + s2h * duN
+            Tt = S[S_R, c, N - 1]
+            cab[c, C_FL] = Tt - 0.5 * Tt * S[S_B, c, N - 1] * phiN - 0.5 * mh * (duN - h * S[S_V, c, N])
         for i in range(N + 1):
-            x = du[i]
-            z[i] = bristle(z[i], x, izs[i])[0]
-            v[i] = x * ih
-            u[i] += x
+            x = S[S_DU, c, i]
+            S[S_Z, c, i] = bristle(S[S_Z, c, i], x, S[S_IZS, c, i])[0]
+            S[S_V, c, i] = x * ih
+            S[S_U, c, i] += x
 
 
 @njit(ieee_division=True)
