@@ -43,7 +43,8 @@ WORK = [("teleop.apps.protocols.palpation", "run_test"), ("teleop.apps.protocols
         ("devices.arduino.build", "build_firmware"),
         ("teleop.apps.bench.cable", "fig9"), ("teleop.apps.bench.cable", "fig11"), ("teleop.apps.bench.cable", "fig13"),
         ("teleop.apps.bench.cable", "fig10b"), ("teleop.apps.bench.seed", "run_figures"),
-        ("teleop.apps.campaign.runner", "run_campaign")]
+        ("teleop.apps.campaign.runner", "run_campaign"),
+        ("teleop.apps.bench.session_diagnosis", "bench_session_diagnosis")]
 # A new long command: add where its work begins here, or the fuzzer runs that work for real on every valid
 # command line it draws (slow, though still checked for tracebacks and one-line errors).
 
