@@ -4,12 +4,13 @@ report (cross-file part included) the same bytes as in this process."""
 import subprocess
 import sys
 
-from teleop.diagnosis.generator import make_case
+from teleop.diagnosis.generator import GenConfig, make_case
 
 
 def test_two_recordings_on_a_local_cluster_give_the_in_process_report(tmp_path):
-    a = make_case(1008, "backlash", "rig", seed=11).write(tmp_path / "a.csv")
-    b = make_case(1016, "coulomb_friction", "rig", seed=11).write(tmp_path / "b.csv")
+    short = GenConfig(fs_hz=200.0, duration_s=5.0)  # each is diagnosed twice, once in each process
+    a = make_case(1008, "backlash", "rig", seed=11, cfg=short).write(tmp_path / "a.csv")
+    b = make_case(1016, "coulomb_friction", "rig", seed=11, cfg=short).write(tmp_path / "b.csv")
     out = {}
     for sched in ("none", "local:2"):
         r = subprocess.run([sys.executable, "-m", "teleop.apps.cli", "diagnose", "a.csv", "b.csv", "--seed", "3",
