@@ -1,11 +1,16 @@
 """Test-wide settings: hypothesis runs derandomised (same examples every run) with no deadline; and how the
-suite shares out over pytest-xdist's workers (pyproject.toml addopts: `-n 2 --dist loadgroup`).
+suite shares out over pytest-xdist's workers (pyproject.toml addopts: `-n 3 --dist loadgroup`).
 
-Every test is free to run on either worker, except:
+Every test is free to run on any worker, except:
 - REALTIME: tests that pace on the wall clock or time out on it (the live view at 100 Hz, Foxglove Studio in
   Chromium, paced sessions asserting their state, stop signals and SIGKILLed sessions, the simavr firmware
   over a pty with its watchdog, the robot process, real Dask clusters) run one after the other on one
-  worker, never two at once; the other worker meanwhile runs the rest.
+  worker, never two at once; the other workers meanwhile run the rest. Three workers on the two cores: the
+  paced tests mostly wait, and a third worker uses the core they leave. A worker whose first test is not a
+  paced one lowers its priority (nice, for the rest of its life and its child processes'), so that the paced
+  tests keep a core when they want one. The paced tests are the largest group, so pytest-xdist hands them
+  out first (--dist loadgroup orders the groups by size): their worker starts with one and keeps its
+  priority.
 - tests that share a module- or session-scoped fixture of the suite's own (a recorded session, a built
   firmware) stay together on one worker, so that the fixture is made once, not once per worker.
 `-n 0` runs the suite in one process (the groups are then ignored).
@@ -47,6 +52,14 @@ REALTIME = (
 )
 
 
+NICE_BESIDE_REALTIME = 10  # the priority the other workers drop to (CFS: about 1/9 the weight of nice 0)
+
+
+def _group(item) -> str | None:
+    mark = item.get_closest_marker("xdist_group")
+    return None if mark is None else (mark.args[0] if mark.args else mark.kwargs.get("name"))
+
+
 def _shared_fixture_scope(item) -> str | None:
     """Node id of the widest module- or session-scoped fixture of the suite's own that `item` uses, if any
     (pytest's own, like tmp_path_factory, and this file's are left out: every worker has its own anyway)."""
@@ -86,6 +99,18 @@ def pytest_xdist_node_collection_finished(node, ids):
 
 def pytest_collection_finish(session):
     _warmed()  # -n 0
+
+
+_first_test = True  # this process has not run a test yet
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    global _first_test
+    if _first_test and hasattr(item.config, "workerinput"):  # a pytest-xdist worker's first test
+        if _group(item) != REALTIME_GROUP:
+            os.nice(NICE_BESIDE_REALTIME)
+    _first_test = False
 
 
 def pytest_unconfigure(config):
