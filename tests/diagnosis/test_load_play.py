@@ -123,5 +123,6 @@ def test_diagnosis_names_the_load_play_and_kanekos_numbers(tmp_path):
     T_ref = p["load"]["value"]
     assert T_ref == pytest.approx(np.mean(F), rel=0.01)                  # held at the mean load
     assert p["load_tension"]["value"] == pytest.approx(1.0, rel=0.15)   # width proportional to T: Kaneko's
+    assert p.get("take_up", {"value": 0.0})["value"] == 0.0              # a sharp take-up: no rounding pays
     assert p["width_input"]["value"] == pytest.approx(kaneko_dead_zone(T_ref), rel=0.1)
     assert doc["channels"]["tip_pos"]["rmse_model"] < 10 * sigma

@@ -121,4 +121,5 @@ def test_diagnosis_names_the_tension_play_and_kanekos_numbers(tmp_path):
     T_ref = T0 + KS * x_ref                         # the spring law at the play's reference position
     assert p["width_input"]["value"] == pytest.approx(kaneko_dead_zone(T_ref), rel=0.1)
     assert p["tension"]["value"] == pytest.approx(KS / T_ref, rel=0.15)   # 1 / (x_ref - the slack position)
+    assert p.get("take_up", {"value": 0.0})["value"] == 0.0              # a sharp take-up: no rounding pays
     assert doc["channels"]["tip_pos"]["rmse_model"] < 1.3 * sigma

@@ -16,7 +16,8 @@ play it fits on the position link against the dead zone of Kaneko's closed form 
 tension on either branch and adds no dead zone; it grows with the tension) and, where the play's general form grows with the tension
 (backlash's `tension`: under a spring the tip position is the tension; its `load_tension`: under an
 external force the recorded tip force), its width at the 5th and 95th percentile of the tip tension against
-Kaneko's there, and per channel the held-out RMSE over the noise the case added (the noise floor).
+Kaneko's there, its take-up length where it rounds the take-up (backlash's `take_up`: the plant's pre-sliding
+along the sheath), and per channel the held-out RMSE over the noise the case added (the noise floor).
 """
 
 from __future__ import annotations
@@ -178,11 +179,14 @@ def play_against_kaneko(finding: dict, rec, setup: dict, load: str) -> dict:
     else the tip's) over `dead_zone_uniform` at the mean tip tension; where its width grows with the tension,
     also its width at the 5th and 95th percentile tip tension over Kaneko's there: under a spring through
     the tip's position (`tension`; the spring law fitted on the recording gives the position of each
-    tension), under an external force through the recorded tip force itself (`load_tension`)."""
+    tension), under an external force through the recorded tip force itself (`load_tension`); where it
+    rounds its take-up, the take-up length in motor travel [m] (take_up times the half-width)."""
     p = finding["params"]
     w = float(p.get("width_input", p["width"])["value"])
     out = {"play_width_m": w, "dead_zone_mean_m": setup["dead_zone_mean_m"],
            "play_over_dead_zone": w / max(setup["dead_zone_mean_m"], 1e-300)}
+    if float(p.get("take_up", {"value": 0.0})["value"]) > 0:
+        out["play_take_up_m"] = 0.5 * w * float(p["take_up"]["value"])
     if "load_tension" in p and load != "spring" and "tip_force" in rec.channels:
         c, ref = float(p["load_tension"]["value"]), float(p["load"]["value"])
         q = np.percentile(rec.channels["tip_force"], [5, 95])
@@ -250,6 +254,8 @@ def distributed_text(summary: dict, rows: list[dict]) -> str:
         if "play_over_dead_zone_range" in r:
             lo, hi = r["play_over_dead_zone_range"]
             extra += f" ({lo:.2f}x, {hi:.2f}x at the 5th, 95th percentile tension)"
+        if "play_take_up_m" in r:
+            extra += f", taken up over {1e6 * r['play_take_up_m']:.3g} um"
         if "tip_pos_over_floor_with_input" in r:
             rn += f" (tip_pos {r['tip_pos_over_floor_with_input']:.2f}x the floor with the smoothed motor encoder's noise)"
         lines.append(f"  case {r['index']} ({r['load']}, {r['cable']}, ratio {r['capstan_ratio']:.2f}, "

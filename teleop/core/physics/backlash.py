@@ -36,7 +36,15 @@ spring's `tension` is the special case where the tip's position is the only prox
 half-width, r1 (1 + load_tension (|T| - load) / load + tension (z - x_ref)), one closed form. The elastic
 stretch common to both branches (linear in T) is cable_compliance's, not the play's.
 
-With elastic = tail = grow = tension = load_tension = start = 0 it is the plain play. The physics is one
+Take-up (pre-sliding along the sheath): the sharp play's tip stands until an envelope reaches it and then
+follows at a corner; a sheath whose friction builds over a pre-sliding travel (Dahl's exponential approach,
+the partial-sliding zone of Kaneko's transmission before the whole profile slides) rounds that corner. With
+`take_up` > 0 the main play moves before its envelope reaches it, at the envelope's rate times e^(-D / lam),
+D its distance to the envelope, lam = take_up width / 2 the take-up length: over the dead zone the tip all
+but stands, and it joins the envelope over a travel of a few lam (kernels.tension_play.take_up_gap, exact over
+a sample); its steady lag is the sharp play's. take_up = 0 is the sharp take-up, bit for bit.
+
+With elastic = tail = grow = tension = load_tension = take_up = start = 0 it is the plain play. The physics is one
 step kernel (kernels.tension_play.backlash_step: the plain play kernels.effects.plain_play_step, or the general one over
 kernels.friction.play_mix_step); the array form is the catalogue's driver loop over it.
 """
@@ -60,7 +68,7 @@ def backlash(x: np.ndarray, width: float, y0: float | None = None) -> np.ndarray
     """(n,) tip position [m or rad] from motor position x (n,) with play of total width [same unit], the
     play's position before x[0] at y0 (default: x[0])."""
     x = np.asarray(x, dtype=float)
-    state = np.array([np.nan if y0 is None else float(y0), np.nan])
+    state = np.array([np.nan if y0 is None else float(y0), np.nan, np.nan, np.nan])
     p = BACKLASH.check({"width": width})
     return drive_kernel(KERNEL, state, np.column_stack([x, np.full(x.shape, p["load"])]), pack(p))
 
@@ -75,20 +83,22 @@ def mix_layout(p: Mapping[str, float]) -> tuple[float, float, float, float]:
 def is_plain(p: Mapping[str, float]) -> bool:
     """True when the general form's parameters are all at the plain play's values."""
     return (p["elastic"] == 0.0 and p["tail"] == 0.0 and p["grow"] == 0.0 and p["start"] == 0.0
-            and p["tension"] == 0.0 and p["load_tension"] == 0.0)
+            and p["tension"] == 0.0 and p["load_tension"] == 0.0 and p["take_up"] == 0.0)
 
 
 def pack(p: Mapping[str, float]) -> tuple:
     """The step kernel's parameters (kernels.tension_play.backlash_step): mix_layout, grow, start, x_ref,
     whether the form is plain (fixed with the parameters: decided once, not per sample), b = width
-    tension / 2 (within +-TENSION_B_MAX), c = load_tension / load [1/N] (0 at a zero load) and the load's
-    reference magnitude."""
+    tension / 2 (within +-TENSION_B_MAX), c = load_tension / load [1/N] (0 at a zero load), the load's
+    reference magnitude and the take-up length take_up width / 2 [m or rad]."""
     b = min(max(0.5 * p["width"] * p["tension"], -TENSION_B_MAX), TENSION_B_MAX)
     c = p["load_tension"] / p["load"] if p["load"] > 0 else 0.0
-    return mix_layout(p) + (p["grow"], p["start"], p["x_ref"], float(is_plain(p)), b, c, p["load"])
+    return mix_layout(p) + (p["grow"], p["start"], p["x_ref"], float(is_plain(p)), b, c, p["load"],
+                            0.5 * p["width"] * p["take_up"])
 
 
-KERNEL = Kernel(backlash_step, backlash_run, state=(np.nan, np.nan), pack=pack)
+#: state: the main and the wide play, the main play's envelopes at the last sample (a rounded take-up's)
+KERNEL = Kernel(backlash_step, backlash_run, state=(np.nan, np.nan, np.nan, np.nan), pack=pack)
 
 
 def _guess(signals: Signals, y: np.ndarray) -> dict:
@@ -118,6 +128,10 @@ PARAMS = (ParamSpec("width", "m", 1e-8, 100.0, 5e-4, "total play (dead band) wid
           ParamSpec("load", "N", 0.0, 1e9, 0.0, "the tip load's magnitude at which the main play is `width` wide "
                     "(fits hold it at the record's mean |load|); where the link records no load it stands in "
                     "for it (N m for a torque; general form)", shape=True),
+          ParamSpec("take_up", "1", 0.0, 1.0, 0.0, "the main play's take-up length over its half-width: the tip "
+                    "joins the motion over a travel of a few take_up width / 2 after the dead zone instead of at a "
+                    "corner (pre-sliding along the sheath; 0: the sharp take-up; general form)", shape=True,
+                    alone=True),
           ParamSpec("start", "1", -1.0, 1.0, 0.0, "where in its band the play began (-1 .. 1, 0 centred; "
                     "general form)", shape=True, state=True))
 
@@ -139,9 +153,11 @@ class BacklashStep(KernelStep):
 
 def _hold(rec, known, direction) -> dict:
     """The general form's width (and its growth with the tension) refers to the record's mean tip position
-    and its mean load magnitude (none recorded: 0, where the stand-in load gives no growth)."""
-    return {"x_ref": float(np.mean(rec.tip)),
-            "load": float(np.mean(np.abs(rec.load))) if rec.load is not None else 0.0}
+    and its mean load magnitude (none recorded: 0, where the stand-in load gives no growth, and load_tension,
+    which then changes nothing, is held at its plain 0)."""
+    if rec.load is None:
+        return {"x_ref": float(np.mean(rec.tip)), "load": 0.0, "load_tension": 0.0}
+    return {"x_ref": float(np.mean(rec.tip)), "load": float(np.mean(np.abs(rec.load)))}
 
 
 BACKLASH = register(Effect(

@@ -28,6 +28,10 @@ def test_play_against_kaneko_reads_the_width_in_motor_travel():
     out = play_against_kaneko(finding, None, {"dead_zone_mean_m": 5e-4}, "force")
     assert out["play_width_m"] == 1e-3 and out["play_over_dead_zone"] == pytest.approx(2.0)
     assert "play_over_dead_zone_range" not in out            # no tension growth reported without it
+    assert "play_take_up_m" not in out                       # nor a take-up length at a sharp take-up
+    finding["params"]["take_up"] = {"value": 0.2}
+    rounded = play_against_kaneko(finding, None, {"dead_zone_mean_m": 5e-4}, "force")
+    assert rounded["play_take_up_m"] == pytest.approx(0.2 * 1e-3 / 2)   # in motor travel, over the half-width
 
 
 def test_play_against_kaneko_reads_the_width_growing_with_the_recorded_force():
