@@ -771,8 +771,11 @@ FOREIGN = ("periodic in position",)
 
 def foreign(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
     """True when the effect `pick` adds to `current` acts where no catalogue effect does (FOREIGN), or is a
-    position-only effect that a sinusoid in position beats (`periodic_beats`)."""
+    position-only effect that a sinusoid in position beats (`periodic_beats`); never when all it adds is
+    periodic in position itself (Rules.periodic: a transmission error is that map, named)."""
     new = _new(current, pick)
+    if new and all(get_effect(n).rules.periodic for n in new):
+        return False
     if periodic_beats(d, current, pick, fit_idx, hold_idx):
         return True
     y0 = predict(d, current.model)
@@ -795,7 +798,7 @@ def periodic_beats(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_id
     contribution is by construction a function of position, so its location cannot tell it from a
     pulley's eccentricity; its shape can, where it fits clearly better (a spring's curvature standing in
     for a late load sensor fits no better than the sinusoid)."""
-    return (any(position_only(n) for n in _new(current, pick))
+    return (any(position_only(n) and not get_effect(n).rules.periodic for n in _new(current, pick))
             and periodic_rmse(d, current.model, fit_idx, hold_idx) < pick.rmse_hold * (1 + PARSIMONY))
 
 

@@ -341,6 +341,8 @@ class Rules:
     finding: False for a law that is only ever a baseline, or a change with no physical cause to name.
     position_only: a function of the drive position alone (told apart from a load that follows the
     position, and from a periodic force, by its shape only).
+    periodic: its contribution is itself periodic in the drive position (a transmission error): the
+    diagnosis does not hold that location against it as physics outside the catalogue.
     starts: fit starts when the effect is added (parameters with basins of their own).
     gain_restarts: factors on the baseline gain to refit from when it is the first effect of its own link
     (an effect that flattens the affine gain, as a wide play does).
@@ -380,6 +382,7 @@ class Rules:
     not_beside: tuple[str, ...] = ()
     finding: bool = True
     position_only: bool = False
+    periodic: bool = False
     starts: int = 1
     gain_restarts: tuple[float, ...] = ()
     hold: Callable[[LinkRecord, Mapping[str, float], float], dict] | None = None

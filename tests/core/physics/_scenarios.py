@@ -39,6 +39,9 @@ def scenario(name: str) -> Scenario:
     load = 3.0 + 1.5 * np.sin(2 * np.pi * 0.13 * t)
     if name == "backlash":
         return Scenario(Signals(t=t, x=x), {"width": 0.8e-3}, 10e-6)
+    if name == "transmission_error":
+        return Scenario(Signals(t=t, x=x), {"a1": 40e-6, "b1": -25e-6, "a2": 15e-6, "b2": 20e-6, "period": 3e-3},
+                        2e-6)
     if name == "transport_delay":
         return Scenario(Signals(t=t, x=x), {"delay": 0.03}, 10e-6)
     if name == "first_order_lag":
