@@ -17,7 +17,7 @@ import numpy as np
 from teleop.diagnosis.identify import (Fit, LinkResult, added, fit_chain, identify_link, rms, simulation_baseline,
                                       with_plain)
 from teleop.core.physics.links import LinkData, is_exact, predict
-from teleop.diagnosis.links import find_links, link_data
+from teleop.diagnosis.links import exact_turn_rate, find_links, link_data
 from teleop.diagnosis.locate import locate, noise_level
 from teleop.diagnosis.peer import arx_rmse
 from teleop.diagnosis.sindy_peer import sindy_rmse
@@ -269,11 +269,18 @@ def sensor_correction(res: LinkResult) -> np.ndarray | None:
 
 def exact_rate(d: LinkData, fit_idx: slice, hold_idx: slice, baseline: tuple, seed: int) -> LinkData:
     """`d` with the rate convention of its exact drive that the held-out part prefers: the central difference
-    of the catalogue's array forms or the backward one of a per-sample simulation (at a reversal they differ
-    by one sample, and an operator's tremor reverses a command hundreds of times). The probe: the baseline
-    with the simplest rate law on it (Rules.rate_probe: Coulomb friction), fitted each way."""
+    of the catalogue's array forms, the backward one of a per-sample simulation (at a reversal they differ
+    by one sample, and an operator's tremor reverses a command hundreds of times), or the drive's rate at the
+    sample, its turns placed between samples (`links.exact_turn_rate`: a recording of a continuous drive,
+    whose friction switched when the drive turned; tried where its signs differ from the central
+    difference's). The probe: the baseline with the simplest rate law on it (Rules.rate_probe: Coulomb
+    friction), fitted each way; a tie keeps the earlier convention."""
     best, pick = math.inf, d
-    for cand in (d, dataclasses.replace(d, backward=True, cache={})):
+    cands = [d, dataclasses.replace(d, backward=True, cache={})]
+    located = exact_turn_rate(d.x, d.t)
+    if located is not None:   # the rate at each sample, its turns placed between samples (links.exact_turn_rate)
+        cands.append(dataclasses.replace(d, v=located, cache={}))
+    for cand in cands:
         base = simulation_baseline(cand, fit_idx, hold_idx, baseline, seed)
         try:
             r = fit_chain(cand, base.model, RATE_PROBE, fit_idx, hold_idx, seed=seed).rmse_hold
@@ -286,6 +293,9 @@ def exact_rate(d: LinkData, fit_idx: slice, hold_idx: slice, baseline: tuple, se
 
 def _drive_rate(d: LinkData) -> str:
     """How the link's drive rate was taken (links.clean_motion; a noisy drive's turns: links.located_rate)."""
+    if d.v is not None and is_exact(d.x) and (located := exact_turn_rate(d.x, d.t)) is not None and np.array_equal(
+            located, d.v):   # a noisy drive's smoothed position may pass as exact: its rate is links.located_rate's
+        return "turns located (exact drive)"
     if d.v is not None or not is_exact(d.x):
         return "central, smoothed"
     return "backward (exact drive)" if d.backward else "central (exact drive)"

@@ -158,6 +158,60 @@ def _locate(x: np.ndarray, t: np.ndarray, tc: float, W: int, deg: int, sigma: fl
     return tc, se / max(abs(2.0 * p[2]), 1e-300) * W * dt
 
 
+KINK_DEGREE = 4       # the jerk-limited turn's pieces: powers 3 .. KINK_DEGREE of the time from the turn
+KINK_S = 0.1          # half window [s] of its fit
+KINK_SEARCH = 20      # its time is searched within this many samples of the smooth fit's
+
+
+def _kink_basis(tau: np.ndarray, hi: int) -> np.ndarray:
+    """(m, 1 + 2 (hi - 2)) the jerk-limited turn's columns at times tau from it: 1, then (-tau)_+^k and
+    tau_+^k for k = 3 .. hi (each leg its own curve, rate and its rate of change zero at the turn)."""
+    left, right = np.maximum(-tau, 0.0), np.maximum(tau, 0.0)
+    return np.column_stack([np.ones_like(tau)] + [left ** k for k in range(3, hi + 1)]
+                           + [right ** k for k in range(3, hi + 1)])
+
+
+def _kink_rss(x: np.ndarray, t: np.ndarray, tc: float, W: int, hi: int) -> float:
+    """Residual sum of squares of the jerk-limited turn at time tc fitted to x within W samples of it."""
+    sl, tau = _window(t, tc, W)
+    A = _kink_basis(tau, hi)
+    p = np.linalg.lstsq(A, x[sl], rcond=None)[0]
+    r = A @ p - x[sl]
+    return float(np.dot(r, r))
+
+
+def _locate_kink(x: np.ndarray, t: np.ndarray, tc: float, cap: int, sigma: float) -> tuple[float, float, float]:
+    """(time [s], standard error [s], the fit's gain over a smooth quintic [chi-square]) of a jerk-limited turn
+    near tc: the rate rises from it as the square of the time, each leg at its own rate (an S-curve motion
+    profile's stop, a rounded triangle), so its drive has a kink in the third derivative no polynomial
+    follows, and a smooth fit's stationary point misplaces it by milliseconds. The pieces of degree
+    KINK_DEGREE are fitted over KINK_S (at most cap samples) on either side; the time is where their residual
+    is least (grids of narrowing span from KINK_SEARCH samples about tc, then a parabola through the least
+    three); the gain is a smooth quintic's residual there less the turn's, over the noise's variance (the same
+    number of coefficients)."""
+    dt = float(t[1] - t[0])
+    W = int(min(cap, KINK_S / dt))
+    if W < 8:
+        return math.nan, math.inf, -math.inf
+    best, se = tc, dt
+    for span in (KINK_SEARCH * dt, 2.0 * dt, 0.2 * dt, 0.02 * dt):
+        grid = best + np.linspace(-span, span, 21)
+        f = np.array([_kink_rss(x, t, g, W, KINK_DEGREE) for g in grid])
+        if span == 2.0 * dt:
+            # the standard error from the residual's curvature in the time over +-2 samples (finer, the knot
+            # crossing each sample makes it rough): RSS(t) ~ RSS_min + sigma^2 (t - t_min)^2 / se^2
+            c2 = float(np.polyfit((grid - best) / dt, f, 2)[0])
+            se = sigma * dt / math.sqrt(c2) if c2 > 0 else dt
+        i = int(np.clip(np.argmin(f), 1, grid.size - 2))
+        best = float(grid[i])
+    h = float(grid[1] - grid[0])
+    den = f[i + 1] - 2.0 * f[i] + f[i - 1]
+    if den > 0:
+        best += 0.5 * h * (f[i - 1] - f[i + 1]) / den
+    sl, tau = _window(t, best, W)
+    return best, se, (_fit_turn(x[sl], tau, 5)[1] - _kink_rss(x, t, best, W, KINK_DEGREE)) / (sigma * sigma)
+
+
 def turn_times(x: np.ndarray, t: np.ndarray, xs: np.ndarray, sigma: float,
                width: int) -> tuple[np.ndarray, np.ndarray, float]:
     """(times [s] of a noisy drive's turns, each located between samples; their standard errors [s]; the
@@ -199,8 +253,57 @@ def turn_times(x: np.ndarray, t: np.ndarray, xs: np.ndarray, sigma: float,
             t2, sd2 = _locate(x, t, tc, W2, 2, sigma)
             if math.isfinite(t2):
                 tc, sd = t2, sd2
+        # a jerk-limited turn (the rate rising as the square of the time from it, each leg its own way):
+        # where its pieces fit better than a smooth quintic by more than TURN_LACK, they place it
+        tk, sk, gain = _locate_kink(x, t, tc, cap, sigma)
+        if math.isfinite(tk) and gain > TURN_LACK and abs(tk - float(t[e])) < 0.5 * cap * dt:
+            tc, sd = tk, sk
         out[j], err[j] = tc, sd
     return out, err, first
+
+
+EXACT_LEG = 6        # samples on each side of an exact drive's extreme whose interpolant is extrapolated to it
+EXACT_CLEAR = 0.1    # one side's extrapolation error below this fraction of the other's: the extreme is on it
+EXACT_REST = 1e-6    # a joint interpolant's rate at the extreme below this fraction of the legs' mean rate: rest
+
+
+def exact_turn_rate(x: np.ndarray, t: np.ndarray) -> np.ndarray | None:
+    """(n,) the rate [x's unit/s] of an exact drive x (n,) with the sign at each strict extreme sample set by
+    where the turn lies, or None where that changes no sign of the central difference. At a turn the extreme
+    sample is the only one whose side is in doubt (the turn lies within a sample of it); the central
+    difference takes it from the two neighbours, right for a turn symmetric to second order, wrong by up to
+    a sample where the legs differ (a drive whose speed rises from the turn as a power of the time, faster
+    one way than the other). Here the interpolant of EXACT_LEG samples of each leg is extrapolated to the
+    extreme: a sample on one leg's own curve (the other's error above 1 / EXACT_CLEAR of it) lies on that
+    side of the turn; where both legs reach it alike (a smooth turn) the sign is that of the rate of the
+    joint interpolant of the five samples about it, 0 (at rest) where that is within EXACT_REST of the legs'
+    rate. The magnitude stays the central difference's. Legs that are not monotone over EXACT_LEG samples
+    (an operator's tremor) keep the central difference."""
+    n, m = x.shape[0], EXACT_LEG
+    v = np.gradient(x, t)
+    dx = np.diff(x)
+    out = v.copy()
+    for j in (np.flatnonzero(dx[:-1] * dx[1:] < 0) + 1).tolist():
+        if j < m or j + m >= n:
+            continue
+        left, right = dx[j - m:j], dx[j:j + m]
+        if np.any(left * dx[j - 1] <= 0) or np.any(right * dx[j] <= 0):
+            continue
+        tau = (t[j - m:j + m + 1] - t[j]) / (t[j] - t[j - 1])
+        xc = x[j - m:j + m + 1] - x[j]
+        e_left = abs(float(np.polyval(np.polyfit(tau[:m], xc[:m], m - 1), 0.0)))
+        e_right = abs(float(np.polyval(np.polyfit(tau[m + 1:], xc[m + 1:], m - 1), 0.0)))
+        new = math.copysign(1.0, dx[j])
+        if min(e_left, e_right) < EXACT_CLEAR * max(e_left, e_right):
+            s = -new if e_left < e_right else new
+        else:
+            mid = slice(m - 2, m + 3)
+            rate = float(np.polyval(np.polyder(np.polyfit(tau[mid], xc[mid], 4)), 0.0))
+            leg = 0.5 * (abs(float(np.mean(left))) + abs(float(np.mean(right))))
+            s = 0.0 if abs(rate) <= EXACT_REST * leg else math.copysign(1.0, rate)
+        mag = abs(v[j]) if v[j] != 0.0 else 0.5 * abs(dx[j]) / float(t[j + 1] - t[j])
+        out[j] = s * mag
+    return None if np.array_equal(np.sign(out), np.sign(v)) else out
 
 
 def located_rate(x: np.ndarray, t: np.ndarray, xs: np.ndarray, width: int) -> np.ndarray:

@@ -26,7 +26,8 @@ def force_baseline(made, tmp_path):
 
 
 CASES = [(1.2, "sine", None), (3.0, "sines", None), (5.0, "sine", None), (2.0, "sine", 8e4), (4.5, "sines", 8e4),
-         (5.0, "triangle", 8e4)]
+         (5.0, "triangle", 8e4), (5.0, "triangle", None)]   # the last: an instant switch at turns no central
+                                                              # difference places (links.exact_turn_rate)
 
 
 @pytest.mark.parametrize("tip", [True, False], ids=["tip sensor", "spring law"])

@@ -19,7 +19,8 @@ from teleop.core.kernels.sheath import stick_transition
 from teleop.core.physics.links import clean_motion, noise_sigma, predict
 from teleop.diagnosis.diagnose import PROJECT_BASELINE, split
 from teleop.diagnosis.identify import PARSIMONY, rms, simulation_baseline
-from teleop.diagnosis.links import find_links, link_data, smooth, smooth_width, turn_times
+from teleop.diagnosis.links import (_locate, exact_turn_rate, find_links, link_data, smooth, smooth_width,
+                                    turn_times)
 from teleop.io.recording_io import read_interchange
 from tests.diagnosis._independent import Case, drive, make, plant_case, write_csv
 
@@ -60,6 +61,52 @@ def test_a_slow_turn_in_noise_is_one_turn():
     w = smooth_width(x, 1e-3)
     turns, _, _ = turn_times(x, t, smooth(x, w), noise_sigma(x), w)
     assert turns.size == _true_turns(case, t).size
+
+
+def test_jerk_limited_turns_are_located_by_their_pieces():
+    """A rounded triangle's turns (the rate rising as the square of the time from each, each leg at its own
+    rate: a kink in the drive's third derivative) are placed by the two pieces, not by a smooth polynomial's
+    stationary point, which misses them by milliseconds."""
+    case = Case(drive="triangle", enc_noise=2e-6, seconds=10.0, freq=1.0, seed=4)
+    made = make(case)
+    x, t = made.channels["motor_pos"], made.t
+    w = smooth_width(x, 1e-3)
+    sigma = noise_sigma(x)
+    turns, err, _ = turn_times(x, t, smooth(x, w), sigma, w)
+    truth = _true_turns(case, t)
+    assert turns.size == truth.size
+    miss = np.abs(turns - truth) / 1e-3                        # [samples]
+    # the smooth fit alone (a cubic's stationary point from each turn's neighbourhood) misses them by more
+    smooth_miss = []
+    for tt in truth:
+        tc, _ = _locate(x, t, float(tt), 20, 3, sigma)
+        smooth_miss.append(abs(tc - tt) / 1e-3 if math.isfinite(tc) else np.inf)
+    assert np.mean(miss) < 1.5 < np.mean(smooth_miss), (np.mean(miss), np.mean(smooth_miss))
+    assert np.all(err > 0)
+
+
+def test_an_exact_drive_turns_where_its_rate_does():
+    """An exact drive's extreme sample is the one whose side of the turn is in doubt: on a rounded triangle the
+    central difference puts some on the wrong side (the legs leave the turn at different rates); the legs'
+    own interpolants put every one where the drive's rate has it."""
+    for seed in (2, 12, 22, 32, 42):
+        case = Case(drive="triangle", seconds=10.0, freq=1.0, seed=seed)
+        made = make(case)
+        x, t = made.channels["motor_pos"], made.t
+        v_true = drive(case, t)[1]
+        moving = np.abs(v_true) > 1e-12
+        central = np.gradient(x, t)
+        located = exact_turn_rate(x, t)
+        wrong_c = np.sum((np.sign(central) != np.sign(v_true)) & moving)
+        wrong_l = np.sum((np.sign(located if located is not None else central) != np.sign(v_true)) & moving)
+        assert wrong_l == 0, (seed, wrong_l, wrong_c)
+        if seed == 42:
+            assert wrong_c > 0                                   # the check can fail
+        if located is not None:
+            assert np.array_equal(np.abs(located), np.abs(central))   # magnitudes are the central difference's
+    # a sine's turns, symmetric to second order: no sign changes
+    t = np.arange(0.0, 5.0, 1e-3)
+    assert exact_turn_rate(3e-3 * np.sin(2 * np.pi * 0.73 * t + 0.2), t) is None
 
 
 def _floor(made, tmp_path):
