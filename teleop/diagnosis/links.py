@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.signal import savgol_coeffs, savgol_filter
 
 from teleop.core.errors import InputError
 from teleop.core.physics.base import REGISTRY, get_effect
@@ -36,6 +37,42 @@ def smooth_width(x: np.ndarray, dt: float) -> int:
     v99 = float(np.percentile(np.abs(np.gradient(smooth(x, lo | 1), dt)), 99))
     need = sigma / (RATE_NOISE * v99 * dt) if v99 > 0 else 0.0
     return int(min(max(lo, need), hi)) | 1
+
+
+INPUT_WIDTHS = 12   # candidate widths of an input's smoothing, geometric from 3 samples to SMOOTH_MAX_S
+
+
+def smooth_input(x: np.ndarray, dt: float) -> tuple[np.ndarray, int]:
+    """(smoothed x, width [samples]) for a position link's input, which the tip follows by its value: of the
+    raw samples and the local-line (`smooth`) and local-quadratic (Savitzky-Golay, degree 2) smoothings of
+    odd widths up to SMOOTH_MAX_S, the one with the least mean squared error, estimated by leave-one-out
+    cross-validation on the interior samples (a linear smoother's leave-one-out residual is (x - s) / (1 -
+    h0), h0 its centre weight; its mean square is the noise variance plus the smoothing's squared error; the
+    raw samples' error is the noise variance, `noise_sigma`). A local line biases a curved input by about
+    (w dt)^2 / 24 times its curvature, which a fast drive read by an exact encoder passes to the tip far
+    above the encoder's noise; a local quadratic has no such term, at 2.25 times the line's noise variance
+    at one width. An exact signal is not smoothed. The estimate assumes white noise: a sensor whose noise is
+    correlated over many samples would be smoothed too little, so loads and force inputs keep `smooth_width`'s
+    rate-noise width."""
+    n = x.shape[0]
+    if is_exact(x) or n < 32:
+        return x, 1
+    sigma2 = noise_sigma(x) ** 2
+    hi = max(5, int(round(SMOOTH_MAX_S / dt)))
+    best, out, width = sigma2, x, 1
+    for w in sorted({int(v) | 1 for v in np.geomspace(3, hi, INPUT_WIDTHS)}):
+        half = w // 2
+        if w > n // 4:
+            break
+        cands = [(smooth(x, w), 1.0 / w)]
+        if w >= 5:
+            cands.append((savgol_filter(x, w, 2, mode="interp"), float(savgol_coeffs(w, 2)[half])))
+        for s, h0 in cands:
+            r = (x - s)[half:n - half] / (1.0 - h0)
+            err = float(np.mean(r * r)) - sigma2
+            if err < best:
+                best, out, width = err, s, w
+    return out, width
 
 
 def find_links(rec: Recording) -> list[Link]:
@@ -306,9 +343,43 @@ def exact_turn_rate(x: np.ndarray, t: np.ndarray) -> np.ndarray | None:
     return None if np.array_equal(np.sign(out), np.sign(v)) else out
 
 
+STOP_QUANTA = 8.0   # a lattice drive held on one reading for more than this many times its time per count on
+                    # either side has stopped (a smooth turn holds its extreme reading 1.4-5x as long as its
+                    # neighbours, a pause before a stroke's turn tens of times)
+
+
+def lattice_stops(x: np.ndarray) -> np.ndarray:
+    """(n,) True on the samples of a drive x (n,) read on an encoder's lattice that lie in a stop: a run of at
+    least 3 equal readings longer than STOP_QUANTA times the time per count of the runs either side of it
+    (the count over their length: the speed entering and leaving it, the slower of the two). The smoothed
+    drive's rate moves through such a run (half a smoothing width into each end, round-off with a sign
+    between), where the catalogue's rate laws would read motion and a Stribeck friction its breakaway peak.
+    A noisy drive seldom repeats a reading: none. The first and last runs of the record are not judged."""
+    n = x.shape[0]
+    dx = np.diff(x)
+    moved = np.abs(dx[dx != 0])
+    out = np.zeros(n, dtype=bool)
+    if moved.size == 0:
+        return out
+    q = float(moved.min())
+    start = np.flatnonzero(np.r_[True, dx != 0])          # first sample of each run of equal readings
+    length = np.diff(np.r_[start, n])
+    if start.size < 4:
+        return out
+    i = np.arange(1, start.size - 2)
+    v_in = np.abs(x[start[i]] - x[start[i - 1]]) / length[i - 1]
+    v_out = np.abs(x[start[i + 2]] - x[start[i + 1]]) / length[i + 1]
+    v = np.minimum(v_in, v_out)
+    stop = i[(v > 0) & (length[i] >= 3) & (length[i] > STOP_QUANTA * q / np.maximum(v, 1e-300))]
+    for j in stop.tolist():
+        out[start[j]:start[j] + length[j]] = True
+    return out
+
+
 def located_rate(x: np.ndarray, t: np.ndarray, xs: np.ndarray, width: int) -> np.ndarray:
     """(n,) the rate of a noisy drive x (n,) (smoothed: xs, `smooth` of width) with its direction switched at
-    its located turns (`turn_times`): the smoothed rate's magnitude, 0 where links.clean_motion finds a stop,
+    its located turns (`turn_times`): the smoothed rate's magnitude, 0 where links.clean_motion or, on an
+    encoder's lattice, `lattice_stops` finds a stop,
     and between turns the sign of the stretch (a sample at t after a turn at t0 < t moves the new way). A
     sample within TURN_REST standard errors of a turn (and within REST_MAX of a sample) is at rest (0: the
     drive's rate there is zero within what the recording resolves, and the catalogue's rate laws hold their
@@ -323,7 +394,7 @@ def located_rate(x: np.ndarray, t: np.ndarray, xs: np.ndarray, width: int) -> np
     near = np.where(np.abs(turns[np.minimum(near + 1, turns.size - 1)] - t) < np.abs(turns[near] - t),
                     np.minimum(near + 1, turns.size - 1), near)
     rest = np.abs(t - turns[near]) <= np.minimum(TURN_REST * err[near], REST_MAX * float(np.median(np.diff(t))))
-    return np.where((vc == 0.0) | rest, 0.0, sign * np.abs(vc))
+    return np.where((vc == 0.0) | rest | lattice_stops(x), 0.0, sign * np.abs(vc))
 
 
 def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_input: bool = False) -> LinkData:
@@ -349,7 +420,14 @@ def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_i
     v = None
     if x is not None and widths[-1] > 1:   # a noisy drive: its turns located between samples
         v = located_rate(ch[link.drive], rec.t, x, widths[-1])
-    u = ch[link.input] if raw_input else sm(link.input)
+
+    def sm_input(name):
+        s, w = smooth_input(ch[name], dt)
+        widths.append(w)
+        return s
+
+    # a position link's input by the least-error smoothing (the tip follows its value); others by the rate rule
+    u = ch[link.input] if raw_input else (sm_input(link.input) if link.kind == "position" else sm(link.input))
     load = sm(link.load) if link.load else None
     temp = sm("temperature") if "temperature" in ch else None
     return LinkData(link, rec.t, u, ch[link.output], x, load, temp, ch.get("bend_angle"), max(widths) * dt,

@@ -259,8 +259,9 @@ def _baseline_starts(rec, index, gain, offset, direction) -> list:
     out = []
     for g_s, c_s, mu_theta, pre in starts:
         band = 2.0 * float(np.mean(np.abs(g_s * rec.u + pre))) * math.sinh(max(mu_theta, 0.02))
-        p0 = {"mu": min(mu_theta / th, 1.4), "theta": PARAMS[1].default, "preload": float(pre),
-              "n": 0.5}
+        # every parameter present (a start's missing one is its default in the fit, but a report lists each)
+        p0 = {**{s.name: s.default for s in PARAMS}, "mu": min(mu_theta / th, 1.4), "theta": PARAMS[1].default,
+              "preload": float(pre), "n": 0.5}
         # a stick crossing the band over 5 % of the travel on a distributed friction's curve (the linear
         # stick is the baseline's plain start), and the instant switch (k's upper bound: from a finite start a
         # fit stalls short of it where a few samples at the turns still cross the band late)
