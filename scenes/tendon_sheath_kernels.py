@@ -183,6 +183,30 @@ def kinked(x, dn):
 GROUP = 3  # cables whose Newton sweeps run interleaved (independent chains of operations for the CPU to overlap)
 
 
+@njit(ieee_division=True, inline=True)
+def sweep_node(S, c, i, t0, k, Tl, al, cp, rp, mh, h, cf, s1h, s2h):
+    """One interior node i of cable c in a forward sweep: (Tr, ar, cp, rp), the right element's tension and
+    tautness carried to the next node and the elimination's running pair, also written to S."""
+    Tr, ar = taut(t0, k, S[S_U, c, i] + S[S_DU, c, i] - S[S_U, c, i + 1] - S[S_DU, c, i + 1])
+    bl, br = S[S_B, c, i - 1], S[S_B, c, i]
+    res, d, phi = node_row(Tl, al, Tr, ar, bl, br, mh, S[S_DU, c, i], S[S_Z, c, i], S[S_IZS, c, i],
+                           S[S_V, c, i], h, cf, s1h, s2h)
+    cp, rp = eliminate(res, d, phi, al, ar, bl, br, cp, rp)
+    S[S_CP, c, i] = cp
+    S[S_R, c, i] = rp
+    return Tr, ar, cp, rp
+
+
+@njit(ieee_division=True, inline=True)
+def back_node(S, c, i, dn, big):
+    """One node i of cable c in a back substitution: (dn, big), its Newton update and the largest so far."""
+    dn = S[S_R, c, i] - S[S_CP, c, i] * dn
+    x = S[S_DU, c, i]
+    s = kinked(x, dn)
+    S[S_DU, c, i] = x + s
+    return dn, max(big, abs(s))
+
+
 @njit(ieee_division=True)
 def cables_step(S, cab, p, h):
     """One backward-Euler step h [s] of every cable: cab[:, C_DU0] the motor's travel over the step [m],
@@ -248,32 +272,11 @@ def cables_step(S, cab, p, h):
             cp0 = rp0 = cp1 = rp1 = cp2 = rp2 = 0.0
             for i in range(1, N):  # interior nodes
                 if a0:
-                    Tr, ar = taut(t00, k, S[S_U, c0, i] + S[S_DU, c0, i] - S[S_U, c0, i + 1] - S[S_DU, c0, i + 1])
-                    bl, br = S[S_B, c0, i - 1], S[S_B, c0, i]
-                    res, d, phi = node_row(Tl0, al0, Tr, ar, bl, br, mh, S[S_DU, c0, i], S[S_Z, c0, i],
-                                           S[S_IZS, c0, i], S[S_V, c0, i], h, cf, s1h, s2h)
-                    cp0, rp0 = eliminate(res, d, phi, al0, ar, bl, br, cp0, rp0)
-                    S[S_CP, c0, i] = cp0
-                    S[S_R, c0, i] = rp0
-                    Tl0, al0 = Tr, ar
+                    Tl0, al0, cp0, rp0 = sweep_node(S, c0, i, t00, k, Tl0, al0, cp0, rp0, mh, h, cf, s1h, s2h)
                 if a1:
-                    Tr, ar = taut(t01, k, S[S_U, c1, i] + S[S_DU, c1, i] - S[S_U, c1, i + 1] - S[S_DU, c1, i + 1])
-                    bl, br = S[S_B, c1, i - 1], S[S_B, c1, i]
-                    res, d, phi = node_row(Tl1, al1, Tr, ar, bl, br, mh, S[S_DU, c1, i], S[S_Z, c1, i],
-                                           S[S_IZS, c1, i], S[S_V, c1, i], h, cf, s1h, s2h)
-                    cp1, rp1 = eliminate(res, d, phi, al1, ar, bl, br, cp1, rp1)
-                    S[S_CP, c1, i] = cp1
-                    S[S_R, c1, i] = rp1
-                    Tl1, al1 = Tr, ar
+                    Tl1, al1, cp1, rp1 = sweep_node(S, c1, i, t01, k, Tl1, al1, cp1, rp1, mh, h, cf, s1h, s2h)
                 if a2:
-                    Tr, ar = taut(t02, k, S[S_U, c2, i] + S[S_DU, c2, i] - S[S_U, c2, i + 1] - S[S_DU, c2, i + 1])
-                    bl, br = S[S_B, c2, i - 1], S[S_B, c2, i]
-                    res, d, phi = node_row(Tl2, al2, Tr, ar, bl, br, mh, S[S_DU, c2, i], S[S_Z, c2, i],
-                                           S[S_IZS, c2, i], S[S_V, c2, i], h, cf, s1h, s2h)
-                    cp2, rp2 = eliminate(res, d, phi, al2, ar, bl, br, cp2, rp2)
-                    S[S_CP, c2, i] = cp2
-                    S[S_R, c2, i] = rp2
-                    Tl2, al2 = Tr, ar
+                    Tl2, al2, cp2, rp2 = sweep_node(S, c2, i, t02, k, Tl2, al2, cp2, rp2, mh, h, cf, s1h, s2h)
             if spring:  # the tip node, the load on it: k_load (u_N - rest) + f_ext
                 for c, a, Tl, al in ((c0, a0, Tl0, al0), (c1, a1, Tl1, al1), (c2, a2, Tl2, al2)):
                     if a:
@@ -291,23 +294,11 @@ def cables_step(S, cab, p, h):
             dn0 = dn1 = dn2 = big0 = big1 = big2 = 0.0
             for i in range(last, 0, -1):
                 if a0:
-                    dn0 = S[S_R, c0, i] - S[S_CP, c0, i] * dn0
-                    x = S[S_DU, c0, i]
-                    s = kinked(x, dn0)
-                    S[S_DU, c0, i] = x + s
-                    big0 = max(big0, abs(s))
+                    dn0, big0 = back_node(S, c0, i, dn0, big0)
                 if a1:
-                    dn1 = S[S_R, c1, i] - S[S_CP, c1, i] * dn1
-                    x = S[S_DU, c1, i]
-                    s = kinked(x, dn1)
-                    S[S_DU, c1, i] = x + s
-                    big1 = max(big1, abs(s))
+                    dn1, big1 = back_node(S, c1, i, dn1, big1)
                 if a2:
-                    dn2 = S[S_R, c2, i] - S[S_CP, c2, i] * dn2
-                    x = S[S_DU, c2, i]
-                    s = kinked(x, dn2)
-                    S[S_DU, c2, i] = x + s
-                    big2 = max(big2, abs(s))
+                    dn2, big2 = back_node(S, c2, i, dn2, big2)
             if a0:
                 it0 += 1
                 a0 = not (big0 < tol or it0 >= max_iter)

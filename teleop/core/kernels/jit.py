@@ -94,7 +94,7 @@ if _numba is not None:
 _warned = []
 
 
-def njit(fn=None, *, ieee_division: bool = False):
+def njit(fn=None, *, ieee_division: bool = False, inline: bool = False):
     """Compile `fn` with numba (nopython, cached on disk, no GIL held); without numba return it as is.
 
     ieee_division: a float division by zero gives inf or nan as in numpy (numba's error_model "numpy")
@@ -103,14 +103,20 @@ def njit(fn=None, *, ieee_division: bool = False):
     whose callers check the outputs' finiteness anyway. `@njit(ieee_division=True)` (compiled only; the
     Python fallback raises as Python does).
 
+    inline: the kernel's body is inlined into its compiled callers (numba's inline="always", at the IR: no call,
+    no reference counting of its array arguments per call), for a small helper called per element of a hot
+    loop with arrays among its arguments.
+
     With no writable cache location at all (read-only package, unwritable NUMBA_CACHE_DIR and home) numba
     refuses `cache=True`; the kernel then compiles in memory at its first call (one warning line)."""
     if fn is None:
-        return lambda f: njit(f, ieee_division=ieee_division)
+        return lambda f: njit(f, ieee_division=ieee_division, inline=inline)
     if _numba is None:
         fn.py_func = fn
         return fn
     opts = {"nogil": True, "error_model": "numpy"} if ieee_division else {"nogil": True}
+    if inline:
+        opts["inline"] = "always"
     try:
         return _numba.njit(cache=True, **opts)(fn)
     except RuntimeError as exc:  # "cannot cache function ...: no locator available"
