@@ -12,7 +12,7 @@ import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter
 
 from teleop.core.errors import InputError
-from teleop.core.physics.base import REGISTRY, get_effect
+from teleop.core.physics.base import REGISTRY, get_effect, moves
 from teleop.core.physics.links import Link, LinkData, LinkModel, clean_motion, is_exact, noise_sigma
 from teleop.io.recording_io import Recording
 
@@ -357,11 +357,11 @@ def lattice_stops(x: np.ndarray) -> np.ndarray:
     A noisy drive seldom repeats a reading: none. The first and last runs of the record are not judged."""
     n = x.shape[0]
     dx = np.diff(x)
-    moved = np.abs(dx[dx != 0])
+    moved = moves(x)
     out = np.zeros(n, dtype=bool)
     if moved.size == 0:
         return out
-    q = float(moved.min())
+    q = float(moved.min())   # the lattice's count (as noise_sigma reads it)
     start = np.flatnonzero(np.r_[True, dx != 0])          # first sample of each run of equal readings
     length = np.diff(np.r_[start, n])
     if start.size < 4:
