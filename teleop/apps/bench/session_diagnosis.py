@@ -44,7 +44,7 @@ from teleop.core.physics import get_effect
 from teleop.core.physics.links import Link, LinkModel
 from teleop.diagnosis.diagnose import diagnose
 from teleop.io.model_io import load_model, save_model
-from teleop.io.outputs import check_output, write_json
+from teleop.io.outputs import write_json
 from teleop.io.recording import TOPIC_ROBOT, read_session
 from teleop.io.recording_io import read_interchange
 from teleop.loop.devices_by_url import open_device
@@ -195,8 +195,6 @@ def run(args) -> int:
     if len({name for name, _ in effects}) != len(effects):
         raise InputError("--effect: each effect at most once")
     geometry_of(args)  # a bad --geometry: one line before the session
-    if args.json:
-        check_output(args.json, "--json")  # an unwritable --json: one line before the session
     if args.out:
         work = Path(args.out).absolute()  # the child commands' arguments never start with '-'
         if work.exists() and not work.is_dir():
