@@ -30,6 +30,7 @@ Reading a recording into a link's data is the diagnosis's (teleop.diagnosis.link
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -307,34 +308,86 @@ def elastic_force(d: LinkData, m: LinkModel, sig: Signals | None = None) -> np.n
     return m.gain * np.maximum(d.u, 0.0)
 
 
+STAGES = 48   # predict's memo: the stage outputs kept per LinkData (least recently used dropped)
+
+
+def _stage(d: LinkData, key, run):
+    """run() (a tuple of arrays), memoised in d.cache under `key` (hashable: the chain up to this stage and
+    what enters it). A fit's finite-difference Jacobian moves one parameter at a time, and the chain's
+    stages before that parameter's effect see the same inputs: their outputs are taken from the memo, bit
+    for bit what run() would give (kept read-only, so no caller can change them)."""
+    memo = d.cache.get("stages")
+    if memo is None:
+        memo = d.cache["stages"] = OrderedDict()
+    try:
+        out = memo.get(key)
+    except TypeError:   # a parameter value that is not hashable: not memoised
+        return run()
+    if out is not None:
+        memo.move_to_end(key)
+        return out
+    out = run()
+    for a in out:
+        if isinstance(a, np.ndarray):
+            a.flags.writeable = False
+    memo[key] = out
+    if len(memo) > STAGES:
+        memo.popitem(last=False)
+    return out
+
+
+def _apply(name: str, sig: Signals, p: dict) -> tuple:
+    return (get_effect(name).apply(sig, p),)
+
+
 def predict(d: LinkData, m: LinkModel) -> np.ndarray:
-    """The link's output (n,) under model `m` (baseline plus its effect chain)."""
+    """The link's output (n,) under model `m` (baseline plus its effect chain). The effects' outputs are
+    memoised per link data (`_stage`): the key is what each stage's output depends on (the referred
+    input's gain and offset where they enter it, direction, load sign, and each effect's name and
+    parameters up to it)."""
     sig = effect_signals(d, m)
     kind = d.link.kind
     sensor = [(n, p) for n, p in m.effects if get_effect(n).link == "sensor"]
     chain = [(n, p) for n, p in m.effects if get_effect(n).link != "sensor"]
+    key = (kind, m.direction, m.load_sign)
     if kind == "position":
+        if not d.link.through_spring:
+            key += (m.gain, m.offset)
         z = sig.x
         for i, (name, p) in enumerate(chain):
-            z = get_effect(name).apply(sig, p)
             # as Signals.replace, unchecked; the rate is derived only where a later effect reads it (the
             # fitting loop runs this tens of thousands of times)
             later = {c for n, _ in chain[i + 1:] for c in get_effect(n).inputs + get_effect(n).optional}
-            sig = fast_replace(sig, x=z, v=np.gradient(z, sig.t) if "v" in later else None)
+            key = (key, name, tuple(p.items()), "v" in later)
+
+            def run(sig=sig, name=name, p=p, rate="v" in later):
+                z = get_effect(name).apply(sig, p)
+                return z, (np.gradient(z, sig.t) if rate else None)
+            z, v = _stage(d, key, run)
+            sig = fast_replace(sig, x=z, v=v)
         y = m.gain * z + m.offset if d.link.through_spring else z
+        key = (key, m.gain, m.offset)
     elif kind == "force":
+        key += (m.gain,)
         z = sig.load
         for name, p in chain:
-            z = get_effect(name).apply(sig, p)
+            key = (key, name, tuple(p.items()))
+            z, = _stage(d, key, lambda sig=sig, name=name, p=p: _apply(name, sig, p))
             sig = fast_replace(sig, load=z)
         y = z + m.offset
+        key = (key, m.offset)
     else:
         y = elastic_force(d, m, sig)
         for name, p in chain:
             if not is_contact_law(name):
                 y = get_effect(name).apply(fast_replace(sig, force=y), p)
         y = y + m.offset
+        key = None
     for name, p in sensor:
         sig = fast_replace(sig, force=y)
-        y = get_effect(name).apply(sig, p)
-    return y
+        if key is None:
+            y = get_effect(name).apply(sig, p)
+        else:
+            key = (key, name, tuple(p.items()))
+            y, = _stage(d, key, lambda sig=sig, name=name, p=p: _apply(name, sig, p))
+    return y if y.flags.writeable else y.copy()   # the caller's own array, never the memo's
