@@ -70,7 +70,8 @@ class PoseFollower:
         worst, moved, bad = self._bound(L, self._fixed)
         if bad >= 0:
             check_lengths(L, self.geom)
-        self._check(worst)
+        if not worst <= self.max_residual:  # _check's test (this runs every tick)
+            self._check(worst)
         return self._q if moved else None
 
     def _check(self, worst: float) -> None:

@@ -326,6 +326,7 @@ class SimRobot(ContextDevice):
         self._v, self._tip = np.asarray(self.geom.v, dtype=float), np.asarray(self.geom.tip, dtype=float)
         self._term_out = (self._v, float(self.geom.theta0), self._tip, self._off, self._A, self._theta, self._tip_off,
                           self._target)  # where PoseFollower.follow writes a new pose's terms
+        self._terms_at = (self._tip_off, self._target)  # _terms once the commanded pose's terms are written
         kc = np.empty(KS.N_READING_CONST)  # the constants of kernel sim.reading: the sheath's first
         kc[:SH.N_CONST] = p.sheath.constants()
         kc[[KS.T_MIN, KS.T_MAX, KS.STEPS_PER_M]] = self.geom.t_min, self.geom.t_max, self.spec.steps_per_m
@@ -350,6 +351,8 @@ class SimRobot(ContextDevice):
             self._rich is None else None  # reading_cables_fsr's arguments that stay the same objects
         # ... held together, one argument of the reading's call (reading_cables_fsr_fixed)
         self._fixed_fsr = None if self._fused_fsr is None else fixed_fsr(*self._fused_fsr)
+        self._out_shape = None if self._fused is None else (self._fused[-1], n)  # a tick's cable output (read)
+        self._sheath = None if self._fused is None else self._cables.sheath  # its clock advances each reading
         self._bound_fsr = self._bound_cables = self._bound_counts = None  # read's kernel, bound at the first reading
         self._dt = p.dt  # [s] a reading's period (read's: a property call less)
         self._noisy = p.noise_counts > 0  # ADC noise drawn (read's: _noise_row's test)
@@ -379,7 +382,7 @@ class SimRobot(ContextDevice):
         # tool offset, tip target): one kernel call (PoseFollower.follow raises as check_lengths)
         pose = self._fk.follow(L if self._play is None else self._realize(L), self._term_out)
         if pose is not None:
-            self.pose, self._terms = pose.copy(), (self._tip_off, self._target)
+            self.pose, self._terms = pose.copy(), self._terms_at
         self.L_cmd = L
 
     def _realize(self, L: np.ndarray) -> np.ndarray:
@@ -406,7 +409,7 @@ class SimRobot(ContextDevice):
             g = self.geom
             KS.pose_target(self.pose, g.r, g.B, self._v, float(g.theta0), self._tip, self._off, self._A,
                            self._theta, self._tip_off, self._target)
-            self._terms = (self._tip_off, self._target)
+            self._terms = self._terms_at
         return self._terms
 
     def read(self) -> RobotReading:
@@ -425,17 +428,17 @@ class SimRobot(ContextDevice):
             noise, k = self._noise_row()
         fused = self._fused
         if fused is not None:  # the distributed cable and its FSRs in the same call (kernel reading_cables)
-            out = np.empty((fused[-1], n))  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
+            out = np.empty(self._out_shape)  # the tick's cable output: motor force, taps (O_ROWS, TAP_*)
             # the kernel bound to this robot's argument types at its first reading (jit.bind: the arrays are the
             # robot's own; F the world's tuple of floats, anything else goes through numba's dispatch)
             if self._fused_fsr is not None:  # the FSR alone (params.fsr): its counts in the call
                 L = self.L_cmd
-                Lc = L if self._play is None else self._L_real
                 call = self._bound_fsr if type(F) is tuple else reading_cables_fsr_fixed
                 if call is None:
-                    call = self._bound_fsr = bind(reading_cables_fsr_fixed, self._fixed_fsr, F, L, Lc, noise, k, f,
+                    call = self._bound_fsr = bind(reading_cables_fsr_fixed, self._fixed_fsr, F, L, L, noise, k, f,
                                                   t_tip, steps, out, counts)
-                status = call(self._fixed_fsr, F, L, Lc, noise, k, f, t_tip, steps, out, counts)
+                status = call(self._fixed_fsr, F, L, L if self._play is None else self._L_real, noise, k, f, t_tip,
+                              steps, out, counts)
                 done = status == OK
             else:
                 args = (self._tip_off, F, self._A, self._theta, self.L_home, self.L_cmd, self._kc, f, t_tip, steps,
@@ -447,7 +450,7 @@ class SimRobot(ContextDevice):
                 status = call(*args)
                 done = status == OK and self._rich is None and self._fsr is None
             if done:  # the usual case: no motor position, no lumped sheath, the FSRs' counts from the call
-                self._cables.sheath.t += self._dt
+                self._sheath.t += self._dt
                 return self._reading(counts, steps, f, tip, t_tip, out[TAP_FSR],
                                      None if self._fbg is None else out[TAP_FBG], out[O_MOTOR])
         p, g = self.params, self.geom
@@ -474,7 +477,7 @@ class SimRobot(ContextDevice):
         # the FSRs' counts came with the kernel call (not those of the FSR alone, params.fsr)
         counted = status == OK and (direct or fused is not None) and self._fsr is None
         if fused is not None and status == OK:  # the cable's tick was in the call: its output rows
-            self._cables.sheath.t += self._dt
+            self._sheath.t += self._dt
             t_fsr, t_fbg, t_motor = out[TAP_FSR], out[TAP_FBG], out[O_MOTOR]
         elif self._cables is not None:  # the distributed cable in place of the lumped sheath
             t_fsr, t_fbg, t_motor = self._cables.step(self.L_cmd if self._play is None else self._L_real, t_tip,
@@ -493,16 +496,16 @@ class SimRobot(ContextDevice):
         """The reading's record (read's end): the distal FBGs' wavelengths from t_fbg (unused without FBGs), the
         cable's tension at the motor t_motor (extras "t_motor"; None: a plant without one), the clock and
         sequence advanced one reading."""
-        fbg = None if self._fbg is None else self._fbg.read(t_fbg, self.t + self._dt)  # distal FBGs (sim_sensors)
-        self.t += self._dt
-        self.seq += 1
+        t = self.t + self._dt
+        fbg = None if self._fbg is None else self._fbg.read(t_fbg, t)  # distal FBGs (sim_sensors)
+        self.t = t
+        self.seq = seq = self.seq + 1
         # the pose and the commanded lengths as they are, no copies: the robot replaces those arrays (a new array
         # each command, each pose that moved) and never writes one in place
         extras = {"t_tip": t_tip, "t_fsr": t_fsr, "tip": tip, "pose": self.pose}
         if t_motor is not None:
             extras["t_motor"] = t_motor
-        return RobotReading(self.t, self.seq, counts, steps, self.L_cmd, _STATUS[self.stopped], self.boot_id, f,
-                            extras, fbg)
+        return RobotReading(t, seq, counts, steps, self.L_cmd, _STATUS[self.stopped], self.boot_id, f, extras, fbg)
 
     def _noise_row(self) -> tuple:
         """(block, k): the next row of ADC noise [counts] is block[k] (the row _noise_rows(1)[0] would be, without
