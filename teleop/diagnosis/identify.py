@@ -226,7 +226,49 @@ def fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_
               starts: int = 1, seed: int = 0, freeze: bool = False, free_shape: tuple = ()) -> Fit:
     """Fit baseline gain/offset and the parameters of effects `names` (appended to start's chain);
     freeze: keep the parameters of start's effects but their states (ParamSpec.state; a quick screen of an
-    addition); free_shape: general form parameters ("effect.param") fitted as well (see held_params)."""
+    addition); free_shape: general form parameters ("effect.param") fitted as well (see held_params).
+    Memoised per link data (`_memo`): the same fit asked for twice (an exact drive's rate probe, then the same
+    candidate in the search) is the same Fit."""
+    key = _memo_key("fit", start, names, fit_idx, hold_idx, starts, seed, freeze, free_shape)
+    return _memo(d, key, lambda: _fit_chain(d, start, names, fit_idx, hold_idx, starts, seed, freeze, free_shape))
+
+
+def _model_key(m: LinkModel) -> tuple:
+    return (m.link, m.gain, m.offset, m.direction, m.load_sign, m.base,
+            tuple((n, tuple(p.items())) for n, p in m.effects))
+
+
+def _memo_key(*parts) -> tuple | None:
+    """A hashable key of fit arguments (models, slices, tuples, numbers), or None where one is not (an index
+    array: not memoised)."""
+    out = []
+    for a in parts:
+        if isinstance(a, LinkModel):
+            a = _model_key(a)
+        elif isinstance(a, slice):
+            a = ("slice", a.start, a.stop, a.step)
+        elif isinstance(a, np.ndarray):
+            return None
+        out.append(a)
+    return tuple(out)
+
+
+def _memo(d: LinkData, key, run):
+    """run(), memoised in d.cache under key (None: not memoised); exceptions are not."""
+    memo = d.cache.setdefault("fits", {})
+    try:
+        if key is not None and key in memo:
+            return memo[key]
+    except TypeError:   # an unhashable parameter value
+        return run()
+    out = run()
+    if key is not None:
+        memo[key] = out
+    return out
+
+
+def _fit_chain(d: LinkData, start: LinkModel, names: tuple, fit_idx: slice, hold_idx: slice, starts: int,
+               seed: int, freeze: bool, free_shape: tuple) -> Fit:
     effects = list(start.effects)
     known = {n for n, _ in effects}
     for name in names:
@@ -403,7 +445,13 @@ def _at_limits(m: LinkModel) -> int:
 
 def simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tuple = (), seed: int = 0) -> Fit:
     """The baseline: the ideal link with the baseline effects `names` that this link's channels allow
-    (e.g. the sheath's capstan friction over the recorded bend), fitted jointly with gain and offset."""
+    (e.g. the sheath's capstan friction over the recorded bend), fitted jointly with gain and offset.
+    Memoised per link data (an exact drive's rate probe fits it before the search does)."""
+    key = _memo_key("baseline", fit_idx, hold_idx, tuple(names), seed)
+    return _memo(d, key, lambda: _simulation_baseline(d, fit_idx, hold_idx, names, seed))
+
+
+def _simulation_baseline(d: LinkData, fit_idx: slice, hold_idx: slice, names: tuple, seed: int) -> Fit:
     base = baseline_fit(d, fit_idx, hold_idx)
     names = tuple(n for n in names if n in applicable(d, baseline=True))
     if not names:
