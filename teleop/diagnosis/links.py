@@ -397,6 +397,24 @@ def located_rate(x: np.ndarray, t: np.ndarray, xs: np.ndarray, width: int) -> np
     return np.where((vc == 0.0) | rest | lattice_stops(x), 0.0, sign * np.abs(vc))
 
 
+RATE_MEMO = 4    # link_data's memo of the noisy drives' located rates (the last this many drives)
+_RATES: list = []
+
+
+def _shared_rate(x: np.ndarray, t: np.ndarray, xs: np.ndarray, width: int) -> np.ndarray:
+    """`located_rate`(x, t, xs, width) (xs: x smoothed over width), memoised on the recorded drive's samples:
+    the links of a recording that share a drive (the spring law's and the force link's motor position) and
+    a link read twice (with and without a correction of another channel) locate its turns once. Read-only."""
+    for x0, t0, w0, v in _RATES:
+        if w0 == width and x0.shape == x.shape and np.array_equal(x0, x) and np.array_equal(t0, t):
+            return v
+    v = located_rate(x, t, xs, width)
+    v.flags.writeable = False
+    _RATES.insert(0, (x.copy(), t.copy(), width, v))
+    del _RATES[RATE_MEMO:]
+    return v
+
+
 def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_input: bool = False) -> LinkData:
     """The arrays of `link` from `rec`; inputs (not the output) are smoothed (see smooth_width), except
     the link's input itself with raw_input (a play operator's dead band filters the input's noise on its
@@ -419,7 +437,7 @@ def link_data(rec: Recording, link: Link, corrections: dict | None = None, raw_i
     x = sm(link.drive) if link.drive and link.kind != "contact" else None
     v = None
     if x is not None and widths[-1] > 1:   # a noisy drive: its turns located between samples
-        v = located_rate(ch[link.drive], rec.t, x, widths[-1])
+        v = _shared_rate(ch[link.drive], rec.t, x, widths[-1])
 
     def sm_input(name):
         s, w = smooth_input(ch[name], dt)
