@@ -8,6 +8,9 @@ from devices.base import DeviceError
 from teleop.core.rendering import clamp_norm
 
 
+_ND, _F64 = np.ndarray, np.dtype(np.float64)
+
+
 def guarded_force(dev, force, who: str) -> tuple:
     """(fx, fy, fz) [N] to apply for servo_cf(force) on `dev` (needs dev.is_open and dev.spec).
 
@@ -16,7 +19,8 @@ def guarded_force(dev, force, who: str) -> tuple:
     """
     if not dev.is_open:
         raise DeviceError(f"{who}: servo_cf() before open()")
-    F = np.asarray(force, dtype=float)
+    # a (3,) float64 array (the loop's every tick, told by type and dtype identity) is read as it is
+    F = force if type(force) is _ND and force.dtype is _F64 else np.asarray(force, dtype=float)
     if F.shape != (3,):
         raise DeviceError(f"{who}: force must have 3 components, got shape {F.shape}")
     x, y, z = F.tolist()
