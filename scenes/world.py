@@ -331,38 +331,11 @@ class PadWorld:
 
     def advance(self, target, steps: int = 1) -> tuple:
         """`steps` steps toward `target` (3,) [m]; (tip (3,) [m] as `tip`, contact force (fx, fy, fz) [N] as
-        `contact_force`): a robot reading's physics in one call.
-
-        One step of the series spring from a state queried at the last step (the simulated robot's every reading)
-        runs written out below: _step_to, _position and _contact_force_tuple's clear-of-the-pad case in one
-        frame, the same pybullet calls with the same arguments in the same order (no Python call per helper)."""
-        n = self._steps
-        if steps != 1 or target is not self._target_ok or self._pos_step != n or self._vel_step != n or \
-                self._graded:
-            step = self._step_to
-            for _ in range(steps):
-                step(target)
-            x, y, z = self._position()  # _touching_point written out (this runs every reading)
-            return np.array([x, y, z + self._r]), self._contact_force_tuple()
-        # _step_to with the series spring (a checked target implies K and the bound kernel), position and
-        # velocity as the last step left them
-        pos = self._pos
-        implicit = self._implicit
-        fc = (self._fc if self._fc_step == n else self._contact_force_tuple()) if implicit else _NO_FORCE
-        f = self._spring(pos, self._vel, target, self._r, self._KDM, self._dtm, fc, implicit)
-        self._push_tip(f, pos, self._world_frame, self._client_id)
-        z0 = self._z_before = pos[2]
-        self._step()
-        self._steps = n = n + 1
-        # _position: the new position and the velocity from the two
-        new = self._tip_pos()[0]
-        x, y, z = new
-        dt = self._dt
-        self._vel, self._vel_step = ((x - pos[0]) / dt, (y - pos[1]) / dt, (z - z0) / dt), n
-        self._pos, self._pos_step = new, n
-        if z < self._z_clear and z0 < self._z_clear:  # _contact_force_tuple's no-contact case
-            self._fc, self._fc_step = _NO_FORCE, n
-            return np.array([x, y, z + self._r]), _NO_FORCE
+        `contact_force`): a robot reading's physics in one call."""
+        step = self._step_to
+        for _ in range(steps):
+            step(target)
+        x, y, z = self._position()  # _touching_point written out (this runs every reading)
         return np.array([x, y, z + self._r]), self._contact_force_tuple()
 
     def _step_to(self, target) -> None:
