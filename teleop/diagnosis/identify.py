@@ -820,7 +820,8 @@ FOREIGN = ("periodic in position",)
 
 
 def foreign(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slice) -> bool:
-    """True when the effect `pick` adds to `current` acts where no catalogue effect does (FOREIGN), or is a
+    """True when the effect `pick` adds to `current` acts where no catalogue effect does (FOREIGN, on the
+    held-out part and on the fit part alike), or is a
     position-only effect that a sinusoid in position beats (`periodic_beats`); never when all it adds is
     periodic in position itself (Rules.periodic: a transmission error is that map, named)."""
     new = _new(current, pick)
@@ -828,8 +829,11 @@ def foreign(d: LinkData, current: Fit, pick: Fit, fit_idx: slice, hold_idx: slic
         return False
     if periodic_beats(d, current, pick, fit_idx, hold_idx):
         return True
-    y0 = predict(d, current.model)
-    return locate(d, d.y - y0, d.y, index=hold_idx, change=_change(d, pick, new)).condition in FOREIGN
+    # a location the record's two parts agree on: the best of many harmonics explains some of any
+    # switching contribution by chance on one part (a tip sensor's hysteresis on strokes), a periodic one on both
+    y0, change = predict(d, current.model), _change(d, pick, new)
+    return all(locate(d, d.y - y0, d.y, index=part, change=change).condition in FOREIGN
+               for part in (hold_idx, fit_idx))
 
 
 def _new(current: Fit, pick: Fit) -> list[str]:
