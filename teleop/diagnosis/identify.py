@@ -44,8 +44,9 @@ from teleop.core.physics import REGISTRY, get_effect
 from teleop.core.physics.base import LinkRecord
 
 ACCEPT = 1.20        # held-out RMSE must fall by >= 20 % for an effect to be named
-ROUND_OFF = 1e-12    # of a channel's range: a residual below it is the float's round-off (an exact encoder's tip
-                     # following an exact motor), where a free-period map or any flexible law fits nothing real
+ROUND_OFF_SHARE = 1e-12  # of a channel's range (scoring.ROUND_OFF is absolute): a residual below it is the float's
+                         # round-off (an exact encoder's tip following an exact motor), where a free-period map or
+                         # any flexible law fits nothing real
 PARSIMONY = 0.08     # candidates within 8 % of the best held-out RMSE count as equally good (a
                      # discontinuous model's switching time is noise-limited: smoother relatives win a
                      # few per cent at reversals without being the physics)
@@ -588,7 +589,7 @@ def _grow(d: LinkData, current: Fit, steps: tuple, pool: list, first_round: int,
     for round_ in range(first_round, MAX_EFFECTS):
         # a held-out RMSE within ACCEPT of the residual's white noise: no addition can pay (none fits below
         # the noise), and fitting them all only gives chance a turn
-        floor = max(noise_level(d.y - predict(d, current.model)), ROUND_OFF * float(np.ptp(d.y)))
+        floor = max(noise_level(d.y - predict(d, current.model)), ROUND_OFF_SHARE * float(np.ptp(d.y)))
         if current.rmse_hold < ACCEPT * floor:
             break
         cands, by_name = [], {}

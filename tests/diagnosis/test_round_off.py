@@ -1,4 +1,4 @@
-"""A channel the baseline fits to the float's round-off carries nothing to find (identify.ROUND_OFF): the
+"""A channel the baseline fits to the float's round-off carries nothing to find (identify.ROUND_OFF_SHARE): the
 generator's Coulomb case with exact encoders on a rigid link has its tip follow the motor to 1e-18 m, where a
 free-period map (transmission_error) fitted the round-off and was named at x2.2-2.5."""
 
