@@ -249,87 +249,6 @@ def _locate_kink(x: np.ndarray, t: np.ndarray, tc: float, cap: int, sigma: float
     return best, se, (_fit_turn(x[sl], tau, 5)[1] - _kink_rss(x, t, best, W, KINK_DEGREE)) / (sigma * sigma)
 
 
-LEG_SHAPES = (4, 6, 8)   # a rest-to-rest leg's rate: t^2 (T - t)^2 times a polynomial of one of these degrees
-LEG_STEP = (8.0, 0.5, 0.05, 0.005)   # spans [samples] of the narrowing grids of a turn's time in its legs' fit
-LEG_SWEEPS = 2       # passes over the turns (each turn's legs end on its neighbours' current times)
-LEG_MOVE = 8.0       # the legs' time of a turn within this many samples of the local kink's, or the kink's kept
-
-
-def _leg_basis(s: np.ndarray, m: int) -> np.ndarray:
-    """(k, m + 2) columns of a rest-to-rest leg's position at s in [0, 1] of its duration: 1 and the integrals
-    from 0 of u^2 (1 - u)^2 u^i, i = 0 .. m (its rate and the rate's rate zero at both ends)."""
-    cols = [np.ones_like(s)]
-    for i in range(m + 1):
-        cols.append(s ** (i + 3) / (i + 3) - 2.0 * s ** (i + 4) / (i + 4) + s ** (i + 5) / (i + 5))
-    return np.column_stack(cols)
-
-
-def _legs_rss(x: np.ndarray, t: np.ndarray, a: float, tc: float, b: float, m: int) -> tuple[float, int]:
-    """(residual sum of squares, degrees of freedom) of the two rest-to-rest legs (`_leg_basis` of degree m)
-    from time a to tc and from tc to b [s] fitted jointly to x on a <= t < b, both through one position at
-    the turn tc (inf where a leg holds too few samples)."""
-    i, k, j = np.searchsorted(t, a), np.searchsorted(t, tc), np.searchsorted(t, b)
-    if min(k - i, j - k) < 3 * (m + 2):
-        return math.inf, 0
-    A = np.zeros((j - i, 2 * m + 3))
-    A[:, 0] = 1.0
-    A[:k - i, 1:m + 2] = _leg_basis((t[i:k] - a) / (tc - a), m)[:, 1:] - _leg_basis(np.ones(1), m)[:, 1:]
-    A[k - i:, m + 2:] = _leg_basis((t[k:j] - tc) / (b - tc), m)[:, 1:]
-    r = A @ np.linalg.lstsq(A, x[i:j], rcond=None)[0] - x[i:j]
-    return float(np.dot(r, r)), j - i - A.shape[1]
-
-
-def _refine_legs(x: np.ndarray, t: np.ndarray, turns: np.ndarray, err: np.ndarray, kink: np.ndarray,
-                 sigma: float) -> None:
-    """Refine in place (turns [s], err [s]) the jerk-limited turns (kink (m,) True) between two others of
-    their kind: a drive that comes to rest at each turn (a rounded triangle, S-curve strokes) is fitted leg by
-    leg from turn to turn, each leg a rate rising from rest and falling back to it (`_leg_basis`, of the least
-    degree in LEG_SHAPES that fits the two to the noise), the two through one position at the turn, and each
-    turn's time is the one whose two legs fit best (grids narrowing over LEG_STEP, a parabola through the
-    least three; LEG_SWEEPS passes, each turn's legs ending on its neighbours' current times). A leg's whole
-    travel informs its ends, where a local fit of the turn has only the few samples about it, whose rate is
-    within the noise (the local fit misses by about a sample, and each sample on the wrong side of a turn costs
-    an instant switch the whole friction band). Kept only where the legs fit to the noise (chi-square within 4
-    standard deviations of its degrees of freedom) and the time stays within LEG_MOVE samples of the local
-    fit's; the standard error from the residual's curvature in the time. The record's first and last turns
-    keep the local fit (their outer legs are cut by the record)."""
-    dt = float(np.median(np.diff(t)))
-    inner = [j for j in range(1, turns.size - 1) if kink[j - 1] and kink[j] and kink[j + 1]]
-    if not inner or sigma <= 0:
-        return
-    start = turns.copy()
-    for _ in range(LEG_SWEEPS):
-        for j in inner:
-            a, b = float(turns[j - 1]), float(turns[j + 1])
-
-            def fit(tc, m):
-                rss, dof = _legs_rss(x, t, a, tc, b, m)
-                return rss, rss / (sigma * sigma) <= dof + 4.0 * math.sqrt(2.0 * max(dof, 1))
-
-            # the simplest leg that fits to the noise at the current time
-            m = next((m for m in LEG_SHAPES if fit(float(turns[j]), m)[1]), None)
-            if m is None:
-                continue
-            best, se = float(turns[j]), float(err[j])
-            for span in LEG_STEP:
-                grid = best + span * dt * np.linspace(-1.0, 1.0, 2 * int(max(span / LEG_STEP[1], 8)) + 1)
-                f = np.array([fit(g, m)[0] for g in grid])
-                if not np.isfinite(f).all():
-                    break
-                if span == LEG_STEP[1]:
-                    c2 = float(np.polyfit((grid - best) / dt, f, 2)[0])
-                    se = sigma * dt / math.sqrt(c2) if c2 > 0 else dt
-                i = int(np.argmin(f))
-                best = float(grid[i])
-            else:
-                h = float(grid[1] - grid[0])
-                den = f[min(i + 1, grid.size - 1)] - 2.0 * f[i] + f[max(i - 1, 0)]
-                if 0 < i < grid.size - 1 and den > 0:
-                    best += 0.5 * h * (f[i - 1] - f[i + 1]) / den
-                if fit(best, m)[1] and abs(best - start[j]) <= LEG_MOVE * dt:
-                    turns[j], err[j] = best, se
-
-
 def turn_times(x: np.ndarray, t: np.ndarray, xs: np.ndarray, sigma: float,
                width: int) -> tuple[np.ndarray, np.ndarray, float]:
     """(times [s] of a noisy drive's turns, each located between samples; their standard errors [s]; the
@@ -338,15 +257,13 @@ def turn_times(x: np.ndarray, t: np.ndarray, xs: np.ndarray, sigma: float,
     the recorded drive x by the stationary point of a local polynomial, whose half window grows (up to
     TURN_MAX_S and half the way to the next turns) while a cubic still fits it (against a quintic: TURN_LACK).
     Where the cubic's own term is within the noise the turn is symmetric and a parabola over twice that window
-    locates it (a cubic's third-order term costs the vertex 2.5x its precision); a jerk-limited turn by its
-    pieces (`_locate_kink`), and one between two others of its kind by the whole legs (`_refine_legs`). An
-    instant switch at a turn costs the whole friction band at each sample put on the wrong side, so the turn
-    must be placed to a small fraction of a sample, which the smoothed rate's sign does not do (its moving
-    average and central difference leave the turn's time to within about a quarter of a sample)."""
+    locates it (a cubic's third-order term costs the vertex 2.5x its precision). An instant switch at a turn
+    costs the whole friction band at each sample put on the wrong side, so the turn must be placed to a small
+    fraction of a sample, which the smoothed rate's sign does not do (its moving average and central
+    difference leave the turn's time to within about a quarter of a sample)."""
     ext, first = _turn_extremes(xs, TURN_HYSTERESIS * sigma / math.sqrt(max(width, 1)))
     dt = float(np.median(np.diff(t)))
     out, err = np.empty(ext.size), np.zeros(ext.size)
-    kink = np.zeros(ext.size, dtype=bool)
     for j, e in enumerate(ext):
         gap = min(e - (ext[j - 1] if j else 0), (ext[j + 1] if j + 1 < ext.size else t.size - 1) - e)
         cap = int(min(0.5 * gap, TURN_MAX_S / dt))
@@ -378,9 +295,7 @@ def turn_times(x: np.ndarray, t: np.ndarray, xs: np.ndarray, sigma: float,
         tk, sk, gain = _locate_kink(x, t, tc, cap, sigma)
         if math.isfinite(tk) and gain > TURN_LACK and abs(tk - float(t[e])) < 0.5 * cap * dt:
             tc, sd = tk, sk
-            kink[j] = True
         out[j], err[j] = tc, sd
-    _refine_legs(x, t, out, err, kink, sigma)
     return out, err, first
 
 

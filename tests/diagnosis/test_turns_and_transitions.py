@@ -85,26 +85,6 @@ def test_jerk_limited_turns_are_located_by_their_pieces():
     assert np.all(err > 0)
 
 
-
-def test_rest_to_rest_turns_are_located_by_their_legs(monkeypatch):
-    """A drive at rest at each turn (the rounded triangle): a turn between two others of its kind is placed by
-    the whole legs either side of it (links._refine_legs), to a fraction of a sample; the local pieces alone
-    (the turn's few samples, whose rate is within the noise) miss by about a sample."""
-    case = Case(drive="triangle", enc_noise=2e-6, seconds=10.0, freq=1.0, seed=5)
-    made = make(case)
-    x, t = made.channels["motor_pos"], made.t
-    w = smooth_width(x, 1e-3)
-    sigma = noise_sigma(x)
-    truth = _true_turns(case, t)
-    turns, err, _ = turn_times(x, t, smooth(x, w), sigma, w)
-    assert turns.size == truth.size
-    miss = (np.abs(turns - truth) / 1e-3)[1:-1]                # [samples], the turns between two others
-    monkeypatch.setattr("teleop.diagnosis.links._refine_legs", lambda *a: None)
-    local, _, _ = turn_times(x, t, smooth(x, w), sigma, w)
-    local_miss = (np.abs(local - truth) / 1e-3)[1:-1]
-    assert np.mean(miss) < 0.4 < np.mean(local_miss), (np.mean(miss), np.mean(local_miss))
-    assert np.median(miss / (err[1:-1] / 1e-3)) < 2.0            # the standard errors are not flattering
-
 def test_an_exact_drive_turns_where_its_rate_does():
     """An exact drive's extreme sample is the one whose side of the turn is in doubt: on a rounded triangle the
     central difference puts some on the wrong side (the legs leave the turn at different rates); the legs'
