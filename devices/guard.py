@@ -5,10 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from devices.base import DeviceError
+from teleop.core.kernels.jit import f64c
 from teleop.core.rendering import clamp_norm
-
-
-_ND, _F64 = np.ndarray, np.dtype(np.float64)
 
 
 def guarded_force(dev, force, who: str) -> tuple:
@@ -19,8 +17,7 @@ def guarded_force(dev, force, who: str) -> tuple:
     """
     if not dev.is_open:
         raise DeviceError(f"{who}: servo_cf() before open()")
-    # a (3,) float64 array (the loop's every tick, told by type and dtype identity) is read as it is
-    F = force if type(force) is _ND and force.dtype is _F64 else np.asarray(force, dtype=float)
+    F = f64c(force)  # the loop's (3,) float64 array as it is
     if F.shape != (3,):
         raise DeviceError(f"{who}: force must have 3 components, got shape {F.shape}")
     x, y, z = F.tolist()

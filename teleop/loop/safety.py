@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from teleop.core.kernels import safety as KS
-from teleop.core.kernels.jit import bind
+from teleop.core.kernels.jit import bind, f64c
 
 
 def beyond(value: float, limit: float, unit: str, op: str = ">") -> str:
@@ -135,12 +135,7 @@ def tension_monitors(rng: TensionRange, stuck: StuckCable, now: float, t, dL, ch
     """`rng.update(now, t)` (when check_range) and, unless it reports, `stuck.update(now, t, dL)`: the loop's
     tension monitors on each estimate, in one compiled call (kernel safety.tension_monitors). The first
     reason, or None. t (n,) tensions [N], dL (n,) length steps [m]."""
-    # float64 contiguous arrays as they are (the loop's, told by type and dtype identity: ascontiguousarray costs
-    # ~0.25 us a call here), anything else converted
-    if not (type(t) is _ND and t.dtype is _F64 and t.flags.c_contiguous):
-        t = np.ascontiguousarray(t, dtype=float)
-    if not (type(dL) is _ND and dL.dtype is _F64 and dL.flags.c_contiguous):
-        dL = np.ascontiguousarray(dL, dtype=float)
+    t, dL = f64c(t), f64c(dL)  # the loop's float64 arrays as they are
     if type(now) is not float:
         now = float(now)
     call = _monitors[0] if t.ndim == 1 and dL.ndim == 1 else KS.tension_monitors

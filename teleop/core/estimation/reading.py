@@ -24,13 +24,12 @@ from teleop.core.estimation.tick import TickComputer
 from teleop.core.estimation.turn import AxisTurnFit, TurnCompensation
 from teleop.core.geometry import Geometry
 from teleop.core.kernels.estimate import counts_tensions
-from teleop.core.kernels.jit import bind
+from teleop.core.kernels.jit import bind, f64c
 from teleop.core.sensors import LOADING, UNLOADING, FsrCalibration, default_fsr_calibration
 
 
 # the counts the compiled path takes as they are (an ADC's integers, or floats; the kernels are warmed for both)
 _COUNT_DTYPES = (np.dtype(np.int64), np.dtype(np.float64))
-_F64 = _COUNT_DTYPES[1]
 
 
 class ReadingEstimator:
@@ -99,8 +98,7 @@ class ReadingEstimator:
         """(tensions (n,) [N], wrench (6,) [N, N m] in {B}) from counts (n,) and pose (6,) float64 arrays: the
         loop's hot path. The results are this estimator's buffers (overwritten by the next update)."""
         tc = self.tick
-        if not (type(pose) is np.ndarray and pose.dtype is _F64 and pose.flags.c_contiguous):  # the loop's is
-            pose = np.ascontiguousarray(pose, dtype=float)
+        pose = f64c(pose)
         if tc.counts_kernel is None:
             t = self.tensions_into(np.ascontiguousarray(counts, dtype=float))
             return t, tc.estimate_into(pose, t, float(dt))[1, :6]

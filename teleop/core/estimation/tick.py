@@ -32,12 +32,10 @@ from teleop.core.estimation.turn import TurnCompensation, turn_arrays
 from teleop.core.geometry import Geometry
 from teleop.core.kernels import estimate as K
 from teleop.core.kernels import sheath as SH
-from teleop.core.kernels.jit import bind
+from teleop.core.kernels.jit import bind, f64c
 from teleop.core.kernels.safety import all_finite2
 from teleop.core.mapping import Follower
 from teleop.core.rendering import Renderer
-
-_F64 = np.dtype(np.float64)
 
 # the compensation step of each estimator (everything else is shared: teleop.core.kernels.estimate)
 ESTIMATE_KERNELS = {"non_compensated": K.estimate_non_compensated, "single": K.estimate_capstan,
@@ -175,11 +173,8 @@ class LoopTick:
         """MAP: the commanded lengths (6,) [m] (a new array) for the stylus position p_stylus (3,) [m], from the
         anchors (6,) (stylus, robot) [m], the previous target pos (3,) [m] (updated in place: float64, contiguous)
         and lengths L_prev (6,) [m] (Follower.step_into)."""
-        # float64 arrays (the loop's, told by type and dtype identity) copied / taken as they are
-        L = L_prev.copy() if type(L_prev) is np.ndarray and L_prev.dtype is _F64 else np.array(L_prev, dtype=float)
-        if not (type(p_stylus) is np.ndarray and p_stylus.dtype is _F64 and p_stylus.flags.c_contiguous):
-            p_stylus = np.ascontiguousarray(p_stylus, dtype=float)
-        self.follower.step_into(p_stylus, anchor, pos, L)
+        L = f64c(L_prev).copy()  # a new array (the loop's float64 lengths copied once)
+        self.follower.step_into(f64c(p_stylus), anchor, pos, L)
         return L
 
     def estimate(self, counts, pose: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
